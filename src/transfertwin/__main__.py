@@ -1,0 +1,5 @@
+"""`python -m transfertwin`."""
+
+from transfertwin.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,223 @@
+"""Command line interface: `transfertwin` / `python -m transfertwin`.
+
+Thin: one function per subcommand that calls the public API. Logging is configured here
+only. Exit codes: 0 success, 2 bad input (one line on stderr, no partial output files),
+1 internal error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import math
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from transfertwin._errors import InputError
+
+__all__ = ["main"]
+
+log = logging.getLogger("transfertwin")
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors and exit code 2."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        raise InputError(message)
+
+
+def _parse_dock_error(text: str):  # -> DockingError
+    from transfertwin.sim import DockingError
+
+    parts = text.split(",")
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        values = []
+    if len(values) != 3:
+        raise InputError(f"--dock-error expects X_MM,Y_MM,THETA_DEG, got {text!r}")
+    return DockingError.from_mm_deg(*values)
+
+
+def _scene(args: argparse.Namespace):  # -> SceneConfig
+    from transfertwin.sim import SceneConfig
+
+    return SceneConfig(mu=args.mu, gap_m=args.gap_mm / 1000.0)
+
+
+def _check_out_path(path: str, suffixes: tuple[str, ...]) -> Path:
+    out = Path(path)
+    if out.suffix.lower() not in suffixes:
+        raise InputError(f"{path}: expected a file ending in {' or '.join(suffixes)}")
+    if out.parent and not out.parent.exists():
+        raise InputError(f"{path}: directory {out.parent} does not exist")
+    return out
+
+
+def cmd_transfer(args: argparse.Namespace) -> int:
+    """One virtual experiment E^V: there and, if that worked, back."""
+    from transfertwin.study import ExperimentSpec, run_experiment, system_for
+
+    image = _check_out_path(args.image, (".png",)) if args.image else None
+    spec = ExperimentSpec(
+        object_ref=args.object,
+        face=args.face,
+        conveyor=args.conveyor,
+        theta_deg=args.theta,
+        docking_error=_parse_dock_error(args.dock_error),
+        scene=_scene(args),
+        seed=args.seed,
+        units=args.units,
+        record=image is not None,
+    )
+    result = run_experiment(spec)
+    if image is not None:
+        from transfertwin.sim._render import render_strip
+
+        system = system_for(spec.object_ref, spec.units, spec.scene)
+        poses = [(f.phase, f.t_s, f.qpos) for f in result.frames]
+        title = (
+            f"{result.object_id} {spec.face} {spec.conveyor} theta={spec.theta_deg} "
+            f"y1={result.y1} y2={result.y2} success={result.success} ({result.status})"
+        )
+        render_strip(system, poses, image, title=title)
+    row = result.row()
+    if args.json:
+        clean = {k: (None if isinstance(v, float) and math.isnan(v) else v) for k, v in row.items()}
+        for key in ("state_pre", "state_end_1", "state_end_2"):
+            clean[key] = json.loads(clean[key]) if clean[key] else None
+        print(json.dumps(clean))
+    else:
+        _print_result(row)
+    return 0
+
+
+def _print_result(row: dict[str, object]) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title="virtual transfer experiment E^V", show_header=False)
+    for key in (
+        "object_id", "face", "conveyor", "theta_deg", "seed", "dock_err_x_mm", "dock_err_y_mm",
+        "dock_err_theta_deg", "status", "y1", "y2", "success", "t_end_1_s", "t_end_2_s",
+        "t_end_s", "message",
+    ):  # fmt: skip
+        value = row[key]
+        text = f"{value:.3f}" if isinstance(value, float) else str(value)
+        table.add_row(key, "-" if value is None or text == "nan" else text)
+    Console().print(table)
+
+
+def cmd_states(args: argparse.Namespace) -> int:
+    """Print the experiment state set (Eq. 6.7–6.10) as CSV."""
+    from transfertwin.ots import experiment_states, filter_theta_step, states_csv
+
+    states = experiment_states()
+    if args.theta_step:
+        states = filter_theta_step(states, args.theta_step)
+    sys.stdout.write(states_csv(states))
+    return 0
+
+
+def cmd_objects_list(args: argparse.Namespace) -> int:
+    """List the built-in cores."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from transfertwin.objects import builtin_ids, core_spec, load_object
+
+    table = Table(title="built-in starter-motor cores")
+    for col in ("id", "length mm", "mass kg", "hulls", "wear"):
+        table.add_column(col)
+    for i, oid in enumerate(builtin_ids(), start=1):
+        obj = load_object(oid)
+        spec = core_spec(i)
+        ext = obj.mesh.extents * 1000
+        table.add_row(
+            oid, f"{ext[0]:.0f}", f"{obj.mass.mass_kg:.2f}", str(len(obj.hulls)),
+            ", ".join(getattr(spec, "wear", ()) or ()) or "-",
+        )  # fmt: skip
+    Console().print(table)
+    return 0
+
+
+def cmd_objects_export(args: argparse.Namespace) -> int:
+    """Write an object's mesh as STL."""
+    from transfertwin.objects import export_object
+
+    out = _check_out_path(args.out, (".stl",))
+    export_object(args.id, out)
+    print(out)
+    return 0
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
+    """The main job on built-in defaults (for now: a short demo of single transfers)."""
+    from transfertwin.study._demo import run_demo
+
+    run_demo(Path(args.out), object_ref=args.object, step_deg=args.theta_step)
+    return 0
+
+
+def _add_transfer(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("transfer", help="run one virtual transfer experiment (E^V)")
+    p.add_argument("--object", required=True, help="built-in core id (o1..o37) or a mesh path")
+    p.add_argument("--units", default="m", help="length unit of a mesh file: m, cm, mm, in")
+    p.add_argument("--face", required=True, help="front or back")
+    p.add_argument("--conveyor", required=True, help="left, right or both")
+    p.add_argument("--theta", required=True, type=int, help="yaw in integer degrees, -179..180")
+    p.add_argument("--dock-error", default="0,0,0", help="X_MM,Y_MM,THETA_DEG (default 0,0,0)")
+    p.add_argument("--mu", type=float, default=0.489, help="dynamic friction (default 0.489)")
+    p.add_argument("--gap-mm", type=float, default=11.88, help="nominal gap (default 11.88)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--image", help="write a strip of frames from t0 to t_end to this PNG")
+    p.set_defaults(func=cmd_transfer)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of every subcommand."""
+    parser = _Parser(prog="transfertwin", description=__doc__.splitlines()[0])
+    parser.add_argument("-v", "--verbose", action="store_true", help="debug logging")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    _add_transfer(sub)
+    p = sub.add_parser("states", help="print the 924 pre-transfer states as CSV")
+    p.add_argument("--theta-step", type=int, default=0, help="keep θ multiples of this")
+    p.set_defaults(func=cmd_states)
+    objects = sub.add_parser("objects", help="built-in cores")
+    osub = objects.add_subparsers(dest="objects_command", required=True, parser_class=_Parser)
+    osub.add_parser("list", help="list built-in cores").set_defaults(func=cmd_objects_list)
+    p = osub.add_parser("export", help="write a core's mesh as STL")
+    p.add_argument("id")
+    p.add_argument("--out", required=True)
+    p.set_defaults(func=cmd_objects_export)
+    p = sub.add_parser("demo", help="main job on built-in defaults: a short transfer demo")
+    p.add_argument("--out", default="out/demo", help="output directory")
+    p.add_argument("--object", default="o1")
+    p.add_argument("--theta-step", type=int, default=45)
+    p.set_defaults(func=cmd_demo)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point; returns the exit code."""
+    try:
+        args = build_parser().parse_args(argv)
+        logging.basicConfig(
+            level=logging.DEBUG if args.verbose else logging.WARNING,
+            format="%(levelname)s %(name)s: %(message)s",
+        )
+        return int(args.func(args))
+    except InputError as exc:
+        print(f"transfertwin: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("transfertwin: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:
+        log.debug("internal error", exc_info=True)
+        print(f"transfertwin: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
+        return 1

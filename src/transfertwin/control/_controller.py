@@ -1,0 +1,166 @@
+"""The OTS controller: one object transfer between two belt units (Sec. 5.4).
+
+The same code drives a physical pair of units and their virtual models; it only talks to
+the `UnitHAL`, `ObjectSensor` and `Clock` protocols. A transfer is the generic loop of
+Eq. 4.11 (`transfertwin.ots.run_transfer`) whose transition u is "let one camera period
+pass with the belts running, then observe", evaluated against the belt system's sets
+(Eq. 5.7–5.10).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from transfertwin.control._hal import Clock, ObjectSensor, UnitHAL
+from transfertwin.ots import (
+    BeltThresholds,
+    Col,
+    Conveyor,
+    Face,
+    Outcome,
+    TransferDirection,
+    TransferTrace,
+    belt_sets,
+    conveyor_of,
+    run_transfer,
+)
+
+__all__ = ["OTSController", "TransferRecord", "belts_for"]
+
+
+def belts_for(conveyor: str) -> tuple[str, ...]:
+    """The belts that conveyor position c runs (Eq. 5.6): left, right or both."""
+    return ("left", "right") if conveyor == "both" else (conveyor,)
+
+
+@dataclass(frozen=True)
+class TransferRecord:
+    """What one OTS did.
+
+    Attributes:
+        direction: TM → TU or TU → TM.
+        conveyor: Conveyor position c that was driven ('left', 'right', 'both').
+        valid: False if the observed initial state was not a pre-transfer state.
+        start_state: The observed state at t_0, (11,) (Eq. 5.4).
+        trace: The state sequence (Eq. 4.11), None when not valid.
+    """
+
+    direction: TransferDirection
+    conveyor: str
+    valid: bool
+    start_state: np.ndarray
+    trace: TransferTrace | None
+
+    @property
+    def y(self) -> int:
+        """Binary OTS result (Eq. 5.11); 0 for an invalid start."""
+        return int(self.trace is not None and self.trace.outcome is Outcome.SUCCESS)
+
+    @property
+    def t_end_s(self) -> float:
+        """t_end (Eq. 4.9) in seconds since the OTS was formed; NaN if not valid."""
+        return float(self.trace.t_end) if self.trace is not None else float("nan")
+
+    @property
+    def end_state(self) -> np.ndarray:
+        """The terminal state s(t_end), or the start state if not valid."""
+        return self.trace.final_state if self.trace is not None else self.start_state
+
+
+class OTSController:
+    """Runs object transfers between a transport module and a transfer unit.
+
+    Args:
+        tm, tu: HALs of the transport module and the transfer unit.
+        sensor: Object state estimate in F_T.
+        clock: Time source.
+        thresholds: State-set thresholds (Eq. 5.7–5.9).
+        belt_speed_m_s: Surface speed of running belts.
+        sample_period_s: Period at which the state is observed and the sets evaluated.
+        on_sample: Optional callback run after every observation (e.g. to record frames).
+    """
+
+    def __init__(
+        self,
+        tm: UnitHAL,
+        tu: UnitHAL,
+        sensor: ObjectSensor,
+        clock: Clock,
+        *,
+        thresholds: BeltThresholds,
+        belt_speed_m_s: float,
+        sample_period_s: float,
+        on_sample: Callable[[], None] | None = None,
+    ) -> None:
+        self.tm, self.tu = tm, tu
+        self.sensor, self.clock = sensor, clock
+        self.thresholds = thresholds
+        self.speed = belt_speed_m_s
+        self.dt = sample_period_s
+        self.on_sample = on_sample
+
+    def state(self, face: str, conveyor: str) -> np.ndarray:
+        """The full state vector (Eq. 5.4) now: sensor reading plus f, c and t."""
+        obs = np.asarray(self.sensor.observe(), dtype=float)
+        s = np.empty(len(Col))
+        s[: Col.F] = obs
+        s[Col.F] = Face[face.upper()]
+        s[Col.C] = Conveyor[conveyor.upper()]
+        s[Col.T] = self.clock.now()
+        if self.on_sample is not None:
+            self.on_sample()
+        return s
+
+    def stop_all(self) -> None:
+        """Stop every belt of both units."""
+        for hal in (self.tm, self.tu):
+            for belt in ("left", "right"):
+                hal.set_belt_speed(belt, 0.0)
+
+    def transfer(
+        self, direction: TransferDirection, face: str, conveyor: str | None = None
+    ) -> TransferRecord:
+        """Form the OTS, check the pre-transfer state, run the belts named by c until a
+        terminal state (Eq. 4.9) or t_max, stop the belts.
+
+        Args:
+            direction: TM → TU (Eq. 6.16) or TU → TM (Eq. 6.17).
+            face: Face f the object lies on.
+            conveyor: Conveyor position c; None derives it from the observed AABB's
+                overlap with the belts (Eq. 5.6).
+        """
+        sets = belt_sets(direction, self.thresholds)
+        self.clock.start()
+        if conveyor is None:
+            obs = np.asarray(self.sensor.observe(), dtype=float)
+            code = int(conveyor_of(obs[Col.Y], obs[Col.SY]))
+            conveyor = Conveyor(code).name.lower()
+        s0 = self.state(face, conveyor)
+        if not bool(sets.pre.contains(s0)):
+            return TransferRecord(direction, conveyor, False, s0, None)
+        sign = 1.0 if direction is TransferDirection.TM_TO_TU else -1.0
+        for hal in (self.tm, self.tu):
+            for belt in belts_for(conveyor):
+                hal.set_belt_speed(belt, sign * self.speed)
+
+        def u(_: np.ndarray) -> np.ndarray:
+            self.clock.wait(self.dt)
+            return self.state(face, conveyor)
+
+        try:
+            trace = run_transfer(
+                s0,
+                u,
+                pre=sets.pre,
+                success=sets.success,
+                failure=sets.failure,
+                dt=self.dt,
+                t_max=self.thresholds.t_max + self.dt,
+                time_index=int(Col.T),
+            )
+        finally:
+            self.stop_all()
+        return TransferRecord(direction, conveyor, True, s0, trace)

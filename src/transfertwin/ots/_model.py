@@ -1,0 +1,226 @@
+"""Transfer process and outcome of a generic OTS (Eq. 4.8–4.11, 5.11).
+
+`run_transfer` iterates a pure state transition function ``u`` (Eq. 4.10) from
+a pre-transfer state until the first terminal state (Eq. 4.9) or a timeout.
+
+Decisions the equations leave open:
+
+* **Overlap of S+ and S-.** Eq. 5.11 assumes the two sets are disjoint. Where a
+  state is in both, the outcome is FAILURE: a success must be free of any
+  failure condition (e.g. an object that lies inside the receiver's belt area
+  but has fallen below the belt surface).
+* **Clock.** The loop owns the clock: state ``i`` is at ``t_i = t0 + i * dt``.
+  With ``time_index`` set, ``t0`` is read from ``s0`` and ``t_i`` is written into
+  that component of every new state, overwriting whatever ``u`` put there, so
+  sets that read time (``t < t_max`` in Eq. 5.8) see the loop clock.
+* **Timeout.** If no terminal state is reached by ``t_max`` (or after
+  ``max_steps`` transitions), the trace ends at the last state with outcome
+  FAILURE and ``timed_out=True``. This also closes the gap between ``t < t_max``
+  (Eq. 5.8) and ``t > t_max`` (Eq. 5.9): a state at exactly ``t_max`` that is
+  neither success nor failure ends the transfer as a failure.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from enum import Enum
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from transfertwin._errors import InputError
+from transfertwin.ots._sets import StateSet, as_state_batch
+
+__all__ = [
+    "NON_TERMINAL",
+    "Outcome",
+    "TransferTrace",
+    "Transition",
+    "ots_outcome",
+    "outcome_codes",
+    "run_transfer",
+]
+
+#: Code used by `outcome_codes` for a state in neither S+ nor S- (Eq. 4.7).
+NON_TERMINAL = -1
+
+#: A pure state transition ``u: S' -> S_o`` (Eq. 4.10); maps ``(d,)`` to ``(d,)``.
+Transition = Callable[[np.ndarray], np.ndarray]
+
+
+class Outcome(Enum):
+    """Result of an object transfer, valued as in Eq. 5.11 (1 success, 0 failure)."""
+
+    SUCCESS = 1
+    FAILURE = 0
+
+    def __int__(self) -> int:
+        return int(self.value)
+
+
+def outcome_codes(states: ArrayLike, success: StateSet, failure: StateSet) -> np.ndarray:
+    """Outcome code of each state (vectorised Eq. 5.11).
+
+    Args:
+        states: Batch ``(N, d)`` or one state ``(d,)``.
+        success: Success set S+ (Eq. 4.5).
+        failure: Failure set S- (Eq. 4.6).
+
+    Returns:
+        int8 array ``(N,)`` (or shape ``()``): 1 for S+ \\ S-, 0 for S-, and
+        `NON_TERMINAL` (-1) for the non-terminal states S' (Eq. 4.7).
+    """
+    batch, single = as_state_batch(states)
+    codes = np.full(batch.shape[0], NON_TERMINAL, dtype=np.int8)
+    codes[success.contains(batch)] = 1
+    codes[failure.contains(batch)] = 0
+    return codes.reshape(()) if single else codes
+
+
+def ots_outcome(state: ArrayLike, success: StateSet, failure: StateSet) -> Outcome:
+    """Outcome of a terminal state (Eq. 5.11); failure wins if in both sets.
+
+    Args:
+        state: One state ``(d,)``.
+        success: Success set S+ (Eq. 4.5).
+        failure: Failure set S- (Eq. 4.6).
+
+    Returns:
+        `Outcome.FAILURE` if the state is in S-, else `Outcome.SUCCESS` if in S+.
+
+    Raises:
+        InputError: If the state is not a single ``(d,)`` vector or is non-terminal.
+    """
+    batch, single = as_state_batch(state)
+    if not single:
+        raise InputError(f"Eq. 5.11: expected one state (d,), got shape {batch.shape}")
+    code = int(outcome_codes(batch, success, failure)[0])
+    if code == NON_TERMINAL:
+        raise InputError("Eq. 5.11: the state is non-terminal (in neither S+ nor S-)")
+    return Outcome(code)
+
+
+@dataclass(frozen=True, eq=False)
+class TransferTrace:
+    """A discrete transfer process s[t_0], ..., s[t_end] (Eq. 4.11).
+
+    Attributes:
+        states: Read-only float array ``(n, d)``; row 0 is the pre-transfer state.
+        times: Read-only float array ``(n,)`` of sample times in seconds.
+        t_end: Time of the last state in seconds (Eq. 4.9, or the timeout).
+        outcome: Outcome of the last state (Eq. 5.11); FAILURE on timeout.
+        timed_out: True if the trace ended without reaching S+ ∪ S-.
+    """
+
+    states: np.ndarray
+    times: np.ndarray
+    t_end: float
+    outcome: Outcome
+    timed_out: bool
+
+    @property
+    def final_state(self) -> np.ndarray:
+        """The last state, shape ``(d,)``."""
+        return self.states[-1]
+
+    @property
+    def n_transitions(self) -> int:
+        """Number of applications of ``u``."""
+        return self.states.shape[0] - 1
+
+
+def _check_clock(dt: float, t0: float, t_max: float, max_steps: int | None) -> None:
+    if not (math.isfinite(dt) and dt > 0.0):
+        raise InputError(f"dt must be a positive finite number of seconds, got {dt}")
+    if not (math.isfinite(t0) and math.isfinite(t_max) and t_max > t0):
+        raise InputError(f"t_max must be finite and after t0 = {t0} s, got {t_max}")
+    if max_steps is not None and (
+        isinstance(max_steps, bool) or not isinstance(max_steps, int) or max_steps < 1
+    ):
+        raise InputError(f"max_steps must be a positive integer or None, got {max_steps!r}")
+
+
+def _apply(u: Transition, state: np.ndarray) -> np.ndarray:
+    try:
+        new = np.array(u(state.copy()), dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"Eq. 4.10: u must return a numeric state: {exc}") from None
+    if new.shape != state.shape:
+        raise InputError(f"Eq. 4.10: u must return shape {state.shape}, got {new.shape}")
+    return new
+
+
+def run_transfer(
+    s0: ArrayLike,
+    u: Transition,
+    *,
+    pre: StateSet,
+    success: StateSet,
+    failure: StateSet,
+    dt: float,
+    t_max: float,
+    time_index: int | None = None,
+    max_steps: int | None = None,
+) -> TransferTrace:
+    """Run the discrete transfer process of Eq. 4.11 to its end (Eq. 4.9).
+
+    Args:
+        s0: Pre-transfer state ``(d,)``; must be in ``pre`` (Eq. 4.8).
+        u: Pure transition ``(d,) -> (d,)`` (Eq. 4.10); applied only to
+            non-terminal states. It receives a copy and may not keep it.
+        pre: Pre-transfer set S_pre (Eq. 4.4).
+        success: Success set S+ (Eq. 4.5).
+        failure: Failure set S- (Eq. 4.6).
+        dt: Time step in seconds (> 0).
+        t_max: Timeout in seconds on the loop clock (absolute, > t0).
+        time_index: Component of the state that holds time in seconds, or
+            ``None`` if the state has no time (then ``t0 = 0``).
+        max_steps: Optional cap on the number of transitions.
+
+    Returns:
+        The trace, ending at the first state in S+ ∪ S- or at the timeout.
+
+    Raises:
+        InputError: If ``s0`` is not a pre-transfer state, the clock parameters
+            are invalid, or ``u`` returns a malformed state.
+    """
+    batch, single = as_state_batch(s0)
+    if not single:
+        raise InputError(f"Eq. 4.8: s0 must be one state (d,), got shape {batch.shape}")
+    state = batch[0].copy()
+    d = state.shape[0]
+    if time_index is not None and not -d <= time_index < d:
+        raise InputError(f"time_index {time_index} is out of range for d = {d}")
+    t0 = float(state[time_index]) if time_index is not None else 0.0
+    _check_clock(dt, t0, t_max, max_steps)
+    if not bool(pre.contains(state)):
+        raise InputError("Eq. 4.8: s0 is not a pre-transfer state (not in S_pre)")
+
+    n_max = max(1, math.ceil((t_max - t0) / dt - 1e-9))
+    if max_steps is not None:
+        n_max = min(n_max, max_steps)
+    states = [state]
+    code = int(outcome_codes(state, success, failure))
+    i = 0
+    while code == NON_TERMINAL and i < n_max:
+        i += 1
+        state = _apply(u, state)
+        if time_index is not None:
+            state[time_index] = t0 + i * dt
+        states.append(state)
+        code = int(outcome_codes(state, success, failure))
+
+    times = t0 + dt * np.arange(len(states), dtype=float)
+    stacked = np.stack(states)
+    stacked.setflags(write=False)
+    times.setflags(write=False)
+    timed_out = code == NON_TERMINAL
+    return TransferTrace(
+        states=stacked,
+        times=times,
+        t_end=float(times[-1]),
+        outcome=Outcome.FAILURE if timed_out else Outcome(code),
+        timed_out=timed_out,
+    )

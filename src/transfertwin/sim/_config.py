@@ -1,0 +1,250 @@
+"""Frozen configuration of the virtual transfer system (SI units).
+
+`PhysicsConfig` is the analogue of the study's simulation-parameter tables (Tables A.3/A.4):
+every MuJoCo option that can change a transfer's outcome lives here, and nowhere else.
+`LayoutConfig` fixes the geometry of the transport module TM^V and the transfer unit TU^V
+in the tip frame F_T (DESIGN.md, "Frames, geometry and defaults"). `SceneConfig` bundles them
+with the instance parameters of Sec. 6.5.2 (friction μ_k and initial gap d_gap).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields, replace
+
+from transfertwin._errors import InputError
+
+__all__ = [
+    "DockingError",
+    "LayoutConfig",
+    "PhysicsConfig",
+    "PlacementConfig",
+    "SceneConfig",
+]
+
+_SOLVERS = ("PGS", "CG", "Newton")
+_CONES = ("pyramidal", "elliptic")
+_INTEGRATORS = ("Euler", "RK4", "implicit", "implicitfast")
+
+
+def _positive(owner: str, **values: float) -> None:
+    for name, value in values.items():
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+            raise InputError(f"{owner}.{name} must be a positive number, got {value!r}")
+
+
+@dataclass(frozen=True)
+class PhysicsConfig:
+    """MuJoCo solver settings (our analogue of the study's Tables A.3/A.4).
+
+    Attributes:
+        timestep_s: Physics step (s).
+        integrator: One of Euler, RK4, implicit, implicitfast.
+        solver: One of PGS, CG, Newton.
+        cone: Friction cone, pyramidal or elliptic.
+        iterations: Main solver iterations.
+        ls_iterations: Line-search iterations.
+        tolerance: Solver tolerance.
+        impratio: Frictional-to-normal impedance ratio (>1 reduces slip).
+        noslip_iterations: Extra no-slip solver iterations (0 disables).
+        multiccd: Multiple contact points per convex pair.
+        condim: Contact dimensionality of object contacts (3: sliding friction; 4 adds
+            torsional, 6 adds rolling).
+        solref: Contact stiffness/damping time constants (s, -).
+        solimp: Contact impedance (d0, dwidth, width, midpoint, power).
+    """
+
+    timestep_s: float = 0.002
+    integrator: str = "implicitfast"
+    solver: str = "Newton"
+    cone: str = "elliptic"
+    iterations: int = 50
+    ls_iterations: int = 20
+    tolerance: float = 1e-8
+    impratio: float = 1.0
+    noslip_iterations: int = 0
+    multiccd: bool = False
+    condim: int = 4
+    solref: tuple[float, float] = (0.004, 1.0)
+    solimp: tuple[float, float, float, float, float] = (0.9, 0.95, 0.001, 0.5, 2.0)
+
+    def __post_init__(self) -> None:
+        _positive("PhysicsConfig", timestep_s=self.timestep_s, tolerance=self.tolerance,
+                  impratio=self.impratio)
+        if self.solver not in _SOLVERS:
+            raise InputError(f"PhysicsConfig.solver must be one of {_SOLVERS}, got {self.solver!r}")
+        if self.cone not in _CONES:
+            raise InputError(f"PhysicsConfig.cone must be one of {_CONES}, got {self.cone!r}")
+        if self.integrator not in _INTEGRATORS:
+            raise InputError(
+                f"PhysicsConfig.integrator must be one of {_INTEGRATORS}, got {self.integrator!r}"
+            )
+        if self.condim not in (1, 3, 4, 6):
+            raise InputError(f"PhysicsConfig.condim must be 1, 3, 4 or 6, got {self.condim!r}")
+        if self.iterations < 1 or self.ls_iterations < 1 or self.noslip_iterations < 0:
+            raise InputError("PhysicsConfig iteration counts must be >= 1 (noslip >= 0)")
+
+
+@dataclass(frozen=True)
+class LayoutConfig:
+    """Geometry of TM^V and TU^V in the tip frame F_T (m).
+
+    F_T: origin at the TM's front tip on the belt surface, x towards the TU, z up.
+    TM belts span x in [-tm_length_m, 0], TU belts x in [d_gap, d_gap + tu_length_m]
+    (nominal pose). Each unit has a *left* (y > 0) and a *right* (y < 0) belt of width
+    `belt_width_m`, separated by `belt_separation_m`. A belt is a flat deck plus a
+    cylinder pulley of radius `pulley_radius_m` at each end, so the belt surface rounds
+    off at the unit's ends: that rounding and the gap make the hand-over hard.
+
+    Attributes:
+        tm_length_m: Length of the TM belts.
+        tu_length_m: Length of the TU belts.
+        belt_width_m: Width of one belt.
+        belt_separation_m: Free space between a unit's left and right belt.
+        pulley_radius_m: End pulley radius (study: not given; 25 mm chosen).
+        belt_speed_m_s: Surface speed of a running belt (study: not given; 0.15 m/s).
+        tip_to_centre_m: Distance from F_T back to the TM centre frame F_D, the point
+            the docking error rotates about (study: not given; 0.40 m chosen).
+        barrier_height_m: Height of the light barriers' beams above the belt surface.
+        barrier_inset_m: Distance of a barrier from its unit's end.
+    """
+
+    tm_length_m: float = 0.65
+    tu_length_m: float = 0.5
+    belt_width_m: float = 0.195
+    belt_separation_m: float = 0.01
+    pulley_radius_m: float = 0.025
+    belt_speed_m_s: float = 0.15
+    tip_to_centre_m: float = 0.40
+    barrier_height_m: float = 0.012
+    barrier_inset_m: float = 0.015
+
+    def __post_init__(self) -> None:
+        _positive(
+            "LayoutConfig",
+            tm_length_m=self.tm_length_m,
+            tu_length_m=self.tu_length_m,
+            belt_width_m=self.belt_width_m,
+            pulley_radius_m=self.pulley_radius_m,
+            belt_speed_m_s=self.belt_speed_m_s,
+            tip_to_centre_m=self.tip_to_centre_m,
+            barrier_height_m=self.barrier_height_m,
+        )
+        if 2 * self.pulley_radius_m >= min(self.tm_length_m, self.tu_length_m):
+            raise InputError("LayoutConfig.pulley_radius_m is too large for the belt length")
+
+    def belt_centre_y(self, belt: str) -> float:
+        """Centre line y (m) of belt 'left' or 'right' in its unit's frame."""
+        offset = 0.5 * (self.belt_separation_m + self.belt_width_m)
+        return offset if belt == "left" else -offset
+
+
+@dataclass(frozen=True)
+class PlacementConfig:
+    """How a pre-transfer state is realised in simulation (DESIGN.md).
+
+    The object is dropped from `drop_height_m` above the belt and settles with all belts
+    stopped for `settle_time_s`. Real placement is never exact: each run draws a small
+    pose perturbation from its seed (`sigma_xy_m`, `sigma_theta_deg`); set both to 0
+    for an exact placement.
+    """
+
+    drop_height_m: float = 0.002
+    settle_time_s: float = 0.6
+    sigma_xy_m: float = 0.002
+    sigma_theta_deg: float = 1.0
+
+    def __post_init__(self) -> None:
+        _positive("PlacementConfig", settle_time_s=self.settle_time_s)
+        if self.drop_height_m < 0 or self.sigma_xy_m < 0 or self.sigma_theta_deg < 0:
+            raise InputError("PlacementConfig heights and sigmas must be >= 0")
+
+
+@dataclass(frozen=True)
+class SceneConfig:
+    """Everything that defines one virtual transfer system instance.
+
+    Attributes:
+        mu: Dynamic friction coefficient between belts and object (study's best 0.489).
+        gap_m: Nominal gap d_gap between the TM tip and the TU's first belt end
+            (study's best 11.88 mm).
+        camera_rate_hz: Rate at which the object's state is sampled and the sets are
+            evaluated (a depth camera's frame rate).
+        t_max_s: Timeout of one OTS (Eq. 5.8/5.9).
+        physics, layout, placement: Sub-configurations.
+    """
+
+    mu: float = 0.489
+    gap_m: float = 0.01188
+    camera_rate_hz: float = 30.0
+    t_max_s: float = 30.0
+    physics: PhysicsConfig = field(default_factory=PhysicsConfig)
+    layout: LayoutConfig = field(default_factory=LayoutConfig)
+    placement: PlacementConfig = field(default_factory=PlacementConfig)
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.mu) and self.mu >= 0):
+            raise InputError(f"SceneConfig.mu must be >= 0, got {self.mu!r}")
+        if not (math.isfinite(self.gap_m) and 0 <= self.gap_m < 0.5):
+            raise InputError(f"gap must be in [0, 500) mm, got {self.gap_m * 1000:g} mm")
+        _positive("SceneConfig", camera_rate_hz=self.camera_rate_hz, t_max_s=self.t_max_s)
+
+    def steps_per_sample(self) -> int:
+        """Physics steps between two camera samples (at least 1)."""
+        return max(1, round(1.0 / (self.camera_rate_hz * self.physics.timestep_s)))
+
+    def with_overrides(self, **changes: object) -> SceneConfig:
+        """`dataclasses.replace` that also accepts dotted names, e.g. ``physics.solver``."""
+        nested: dict[str, dict[str, object]] = {}
+        flat: dict[str, object] = {}
+        for key, value in changes.items():
+            head, _, tail = key.partition(".")
+            if tail:
+                nested.setdefault(head, {})[tail] = value
+            else:
+                flat[key] = value
+        names = {f.name for f in fields(self)}
+        for head, sub in nested.items():
+            if head not in ("physics", "layout", "placement"):
+                raise InputError(f"unknown configuration section {head!r}")
+            current = getattr(self, head)
+            known = {f.name for f in fields(current)}
+            unknown = set(sub) - known
+            if unknown:
+                raise InputError(f"unknown {head} setting(s): {', '.join(sorted(unknown))}")
+            flat[head] = replace(current, **sub)
+        unknown = set(flat) - names
+        if unknown:
+            raise InputError(f"unknown scene setting(s): {', '.join(sorted(unknown))}")
+        return replace(self, **flat)
+
+
+@dataclass(frozen=True)
+class DockingError:
+    """Docking error ξ = (ξx, ξy, ξθ): pose of the docked TM centre F_D in its goal F_D_G.
+
+    Eq. 6.11. Units: metres and radians. A negative ξx means the TM stopped short of its
+    goal, which widens the gap.
+    """
+
+    x_m: float = 0.0
+    y_m: float = 0.0
+    theta_rad: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("x_m", "y_m", "theta_rad"):
+            if not math.isfinite(getattr(self, name)):
+                raise InputError(f"docking error {name} must be finite")
+        if abs(self.x_m) > 0.2 or abs(self.y_m) > 0.2 or abs(self.theta_rad) > math.radians(30):
+            raise InputError(
+                "docking error out of range: |x|,|y| must be <= 200 mm and |theta| <= 30 deg"
+            )
+
+    @classmethod
+    def from_mm_deg(cls, x_mm: float, y_mm: float, theta_deg: float) -> DockingError:
+        """Build from the units used in result tables (mm, mm, degrees)."""
+        return cls(x_mm / 1000.0, y_mm / 1000.0, math.radians(theta_deg))
+
+    def as_mm_deg(self) -> tuple[float, float, float]:
+        """(x_mm, y_mm, theta_deg) for result tables."""
+        return self.x_m * 1000.0, self.y_m * 1000.0, math.degrees(self.theta_rad)

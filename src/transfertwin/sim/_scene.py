@@ -1,0 +1,226 @@
+"""MuJoCo scene builders for TM^V, TU^V and the object (Sec. 5.2.1), over `mujoco.MjSpec`.
+
+World frame = the TM tip frame F_T. The TM is static in the world; the TU is a mocap body,
+so its docked pose (and thereby the docking error) is set per experiment in `MjData`
+without recompiling. Belts are static geoms with `surfacevel`: a deck box moving its top
+surface along the unit's x, and one pulley cylinder at each end spinning with ω = v/r.
+Everything is read back by name.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from transfertwin.sim._config import LayoutConfig, PhysicsConfig, SceneConfig
+
+__all__ = [
+    "BELTS",
+    "BARRIERS",
+    "UNITS",
+    "add_belt",
+    "add_light_barrier",
+    "add_object",
+    "add_unit",
+    "build_spec",
+    "configure_physics",
+]
+
+UNITS = ("tm", "tu")
+BELTS = ("left", "right")
+BARRIERS = ("near", "far")
+
+# Rotation taking a cylinder's local z axis onto world +y (pulley axles run across the belt).
+_Z_TO_Y = np.array([np.cos(-np.pi / 4), np.sin(-np.pi / 4), 0.0, 0.0])
+# Rotation taking a site's z axis onto world -y (light barrier beams run across the belt).
+_Z_TO_MINUS_Y = np.array([np.cos(np.pi / 4), np.sin(np.pi / 4), 0.0, 0.0])
+
+_BELT_RGBA = (0.15, 0.15, 0.17, 1.0)
+_PULLEY_RGBA = (0.45, 0.45, 0.5, 1.0)
+_OBJECT_RGBA = (0.62, 0.52, 0.38, 1.0)
+
+
+@dataclass(frozen=True)
+class UnitGeometry:
+    """A unit's belt span along its own x axis (m): from `x_start` to `x_end`."""
+
+    x_start: float
+    x_end: float
+
+
+def configure_physics(spec: mujoco.MjSpec, physics: PhysicsConfig) -> None:
+    """Write the solver settings of `physics` into `spec.option`."""
+    opt = spec.option
+    opt.timestep = physics.timestep_s
+    opt.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{physics.integrator.upper()}")
+    opt.solver = getattr(mujoco.mjtSolver, f"mjSOL_{physics.solver.upper()}")
+    opt.cone = getattr(mujoco.mjtCone, f"mjCONE_{physics.cone.upper()}")
+    opt.iterations = physics.iterations
+    opt.ls_iterations = physics.ls_iterations
+    opt.tolerance = physics.tolerance
+    opt.impratio = physics.impratio
+    opt.noslip_iterations = physics.noslip_iterations
+    if physics.multiccd:
+        opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_MULTICCD)
+
+
+def add_belt(
+    parent: mujoco.MjsBody,
+    unit: str,
+    belt: str,
+    span: UnitGeometry,
+    layout: LayoutConfig,
+    mu: float,
+) -> None:
+    """Add one belt (deck + two end pulleys) to `parent`, in the unit's frame.
+
+    The top of the belt is at z = 0. Geom names: ``{unit}_{belt}_deck``,
+    ``{unit}_{belt}_pulley_start``, ``{unit}_{belt}_pulley_end``. The belts carry
+    priority 1 so that their friction `mu` governs every contact with the object.
+    """
+    r = layout.pulley_radius_m
+    half_w = 0.5 * layout.belt_width_m
+    y = layout.belt_centre_y(belt)
+    friction = [mu, 0.005, 0.0001]
+    x0, x1 = span.x_start + r, span.x_end - r
+    deck = parent.add_geom(
+        name=f"{unit}_{belt}_deck",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[0.5 * (x1 - x0), half_w, r],
+        pos=[0.5 * (x0 + x1), y, -r],
+        rgba=_BELT_RGBA,
+    )
+    # Any non-zero surface velocity at compile time enables the feature; drives reset it.
+    deck.surfacevel = np.array([layout.belt_speed_m_s, 0, 0, 0, 0, 0], dtype=float)
+    deck.priority = 1
+    deck.friction = friction
+    for end, x in (("start", x0), ("end", x1)):
+        pulley = parent.add_geom(
+            name=f"{unit}_{belt}_pulley_{end}",
+            type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+            size=[r, half_w, 0],
+            pos=[x, y, -r],
+            quat=_Z_TO_Y,
+            rgba=_PULLEY_RGBA,
+        )
+        pulley.surfacevel = np.array([0, 0, 0, 0, 0, layout.belt_speed_m_s / r], dtype=float)
+        pulley.priority = 1
+        pulley.friction = friction
+
+
+def add_light_barrier(
+    parent: mujoco.MjsBody, spec: mujoco.MjSpec, unit: str, which: str, x: float,
+    layout: LayoutConfig,
+) -> None:
+    """Add a light barrier across both belts at unit-frame x: a site and a rangefinder.
+
+    The beam starts just outside the left belt's outer edge and points to -y; the barrier
+    is interrupted when the rangefinder sees a geom closer than the beam length.
+    """
+    y_edge = layout.belt_separation_m / 2 + layout.belt_width_m + 0.01
+    site = parent.add_site(
+        name=f"{unit}_barrier_{which}",
+        pos=[x, y_edge, layout.barrier_height_m],
+        quat=_Z_TO_MINUS_Y,
+        size=[0.003, 0, 0],
+    )
+    sensor = spec.add_sensor(
+        name=f"{unit}_barrier_{which}",
+        type=mujoco.mjtSensor.mjSENS_RANGEFINDER,
+        objtype=mujoco.mjtObj.mjOBJ_SITE,
+        objname=site.name,
+    )
+    sensor.cutoff = 0.0
+    sensor.intprm[0] = 1 << int(mujoco.mjtRayDataField.mjRAYDATA_DIST)
+
+
+def add_unit(spec: mujoco.MjSpec, unit: str, layout: LayoutConfig, mu: float) -> None:
+    """Add TM (static, in the world) or TU (mocap body ``tu``) with both belts and barriers.
+
+    TM's belts span x in [-tm_length, 0] of F_T; the TU's span [0, tu_length] of the TU
+    frame, whose pose in F_T is set per experiment through ``data.mocap_pos/quat``.
+    """
+    if unit == "tm":
+        parent = spec.worldbody
+        span = UnitGeometry(-layout.tm_length_m, 0.0)
+        near, far = span.x_end - layout.barrier_inset_m, span.x_start + layout.barrier_inset_m
+    else:
+        parent = spec.worldbody.add_body(name="tu", mocap=True)
+        span = UnitGeometry(0.0, layout.tu_length_m)
+        near, far = span.x_start + layout.barrier_inset_m, span.x_end - layout.barrier_inset_m
+    for belt in BELTS:
+        add_belt(parent, unit, belt, span, layout, mu)
+    add_light_barrier(parent, spec, unit, "near", near, layout)
+    add_light_barrier(parent, spec, unit, "far", far, layout)
+
+
+def add_object(
+    spec: mujoco.MjSpec,
+    hulls: tuple[np.ndarray, ...],
+    mass_kg: float,
+    com_m: np.ndarray,
+    inertia_kg_m2: np.ndarray,
+    physics: PhysicsConfig,
+) -> None:
+    """Add the free-floating object body ``object`` built from convex hulls.
+
+    Args:
+        spec: Spec to add to.
+        hulls: Convex hull vertex arrays, each (k, 3), in the object frame F_O (m).
+        mass_kg: Mass of the object.
+        com_m: Centre of mass (3,) in F_O.
+        inertia_kg_m2: Inertia tensor (3, 3) about the centre of mass, in F_O axes.
+        physics: For the contact settings (condim, solref, solimp).
+    """
+    body = spec.worldbody.add_body(name="object", pos=[0, 0, 0.5])
+    body.add_freejoint(name="object_free")
+    body.explicitinertial = True
+    body.mass = float(mass_kg)
+    body.ipos = np.asarray(com_m, dtype=float)
+    i = np.asarray(inertia_kg_m2, dtype=float)
+    body.fullinertia = np.array([i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2]])
+    for k, verts in enumerate(hulls):
+        name = f"object_hull_{k}"
+        spec.add_mesh(name=name, uservert=np.asarray(verts, dtype=np.float32).ravel())
+        geom = body.add_geom(
+            name=name,
+            type=mujoco.mjtGeom.mjGEOM_MESH,
+            meshname=name,
+            rgba=_OBJECT_RGBA,
+            condim=physics.condim,
+            friction=[0.0, 0.0, 0.0],
+        )
+        geom.solref = np.asarray(physics.solref, dtype=float)
+        geom.solimp = np.asarray(physics.solimp, dtype=float)
+        geom.contype = 1
+        geom.conaffinity = 1
+        geom.mass = 0.0
+
+
+def build_spec(
+    hulls: tuple[np.ndarray, ...],
+    mass_kg: float,
+    com_m: np.ndarray,
+    inertia_kg_m2: np.ndarray,
+    cfg: SceneConfig,
+) -> mujoco.MjSpec:
+    """The full scene: physics options, TM, TU (mocap), object, a floor and lights.
+
+    The floor lies well below the belts; an object that reaches it has fallen.
+    """
+    spec = mujoco.MjSpec()
+    spec.modelname = "transfertwin_ots"
+    configure_physics(spec, cfg.physics)
+    spec.visual.global_.offwidth = 1920
+    spec.visual.global_.offheight = 1080
+    spec.worldbody.add_geom(
+        name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[3, 3, 0.1],
+        pos=[0, 0, -0.6], rgba=(0.8, 0.8, 0.78, 1),
+    )
+    spec.worldbody.add_light(name="sun", pos=[0, 0, 2.0], dir=[0, 0, -1], castshadow=False)
+    add_unit(spec, "tm", cfg.layout, cfg.mu)
+    add_unit(spec, "tu", cfg.layout, cfg.mu)
+    add_object(spec, hulls, mass_kg, com_m, inertia_kg_m2, cfg.physics)
+    return spec

@@ -1,0 +1,244 @@
+"""A compiled virtual transfer system: TM^V + TU^V + one object, and its virtual HAL.
+
+`VirtualTransferSystem` owns one `MjModel`/`MjData` pair (belt drives live in the model's
+`geom_surfacevel`, so a system is not shared between threads). It exposes the same
+hardware-abstraction surface a real unit has (`MujocoUnitHAL`: belt drives and light
+barriers), a simulated clock, and the state readout of the object (AABB in F_T computed
+from the hull vertices at camera rate).
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from transfertwin.sim._config import DockingError, SceneConfig
+from transfertwin.sim._docking import tu_pose_in_tip_frame
+from transfertwin.sim._scene import BARRIERS, BELTS, UNITS, build_spec
+
+__all__ = [
+    "MujocoUnitHAL",
+    "SimClock",
+    "SimulationUnstable",
+    "VirtualTransferSystem",
+    "object_quat",
+]
+
+
+class SimulationUnstable(RuntimeError):
+    """The physics diverged (non-finite state or solver warnings)."""
+
+
+def object_quat(face: str, theta_rad: float) -> np.ndarray:
+    """Orientation (w, x, y, z) of F_O for a face and yaw (Eq. 5.5).
+
+    'front' is F_O with z up; 'back' is the object turned over by 180° about its x axis.
+    The yaw θ is applied about the world z axis after that.
+    """
+    yaw = np.array([math.cos(theta_rad / 2), 0.0, 0.0, math.sin(theta_rad / 2)])
+    if face == "front":
+        return yaw
+    flip = np.array([0.0, 1.0, 0.0, 0.0])
+    out = np.empty(4)
+    mujoco.mju_mulQuat(out, yaw, flip)
+    return out
+
+
+class SimClock:
+    """Simulated time: `wait` steps the physics."""
+
+    def __init__(self, system: VirtualTransferSystem) -> None:
+        self._system = system
+        self._t0 = 0.0
+
+    def now(self) -> float:
+        """Seconds since the clock was last started."""
+        return float(self._system.data.time) - self._t0
+
+    def start(self) -> None:
+        """Set the clock's zero to the current simulation time."""
+        self._t0 = float(self._system.data.time)
+
+    def wait(self, dt_s: float) -> None:
+        """Advance the simulation by `dt_s` (rounded to whole physics steps, at least 1)."""
+        steps = max(1, round(dt_s / self._system.model.opt.timestep))
+        self._system.step(steps)
+
+
+class MujocoUnitHAL:
+    """Virtual HAL of one unit ('tm' or 'tu'): two belt drives and two light barriers.
+
+    Speeds are surface speeds (m/s) along the unit's own x axis; positive moves objects
+    towards the TU for the TM and away from the TM for the TU.
+    """
+
+    def __init__(self, system: VirtualTransferSystem, unit: str) -> None:
+        if unit not in UNITS:
+            raise ValueError(f"unknown unit {unit!r}")
+        self.name = unit
+        self._system = system
+        model = system.model
+        self._r = system.cfg.layout.pulley_radius_m
+        self._geoms = {
+            belt: {
+                part: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"{unit}_{belt}_{part}")
+                for part in ("deck", "pulley_start", "pulley_end")
+            }
+            for belt in BELTS
+        }
+        self._sensors = {
+            which: model.sensor_adr[
+                mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SENSOR, f"{unit}_barrier_{which}")
+            ]
+            for which in BARRIERS
+        }
+        self._beam_m = 2 * system.cfg.layout.belt_width_m + system.cfg.layout.belt_separation_m
+        self._speeds = dict.fromkeys(BELTS, 0.0)
+
+    def set_belt_speed(self, belt: str, speed_m_s: float) -> None:
+        """Drive `belt` ('left'/'right') at `speed_m_s`; 0 stops it."""
+        if belt not in BELTS:
+            raise ValueError(f"unknown belt {belt!r}")
+        sv = self._system.model.geom_surfacevel
+        ids = self._geoms[belt]
+        sv[ids["deck"]] = (speed_m_s, 0, 0, 0, 0, 0)
+        omega = speed_m_s / self._r
+        sv[ids["pulley_start"]] = (0, 0, 0, 0, 0, omega)
+        sv[ids["pulley_end"]] = (0, 0, 0, 0, 0, omega)
+        self._speeds[belt] = float(speed_m_s)
+
+    def belt_speed(self, belt: str) -> float:
+        """Commanded surface speed of `belt` (m/s)."""
+        return self._speeds[belt]
+
+    def barriers(self) -> dict[str, bool]:
+        """Whether the 'near' and 'far' light barriers are interrupted."""
+        data = self._system.data.sensordata
+        out = {}
+        for which, adr in self._sensors.items():
+            dist = float(data[adr])
+            out[which] = 0.0 <= dist < self._beam_m
+        return out
+
+
+class VirtualTransferSystem:
+    """TM^V, TU^V and one object, compiled once and reused across experiments.
+
+    Args:
+        hulls: Object convex hulls in F_O, each (k, 3) (m).
+        mass_kg, com_m, inertia_kg_m2: Object mass properties in F_O.
+        cfg: Scene configuration.
+    """
+
+    def __init__(
+        self,
+        hulls: tuple[np.ndarray, ...],
+        mass_kg: float,
+        com_m: np.ndarray,
+        inertia_kg_m2: np.ndarray,
+        cfg: SceneConfig,
+    ) -> None:
+        self.cfg = cfg
+        self.model = build_spec(hulls, mass_kg, com_m, inertia_kg_m2, cfg).compile()
+        self.data = mujoco.MjData(self.model)
+        self._body = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "object")
+        self._qadr = self.model.jnt_qposadr[
+            mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_JOINT, "object_free")
+        ]
+        self._vadr = self.model.jnt_dofadr[
+            mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_JOINT, "object_free")
+        ]
+        self._verts = np.concatenate([np.asarray(h, dtype=float) for h in hulls], axis=0)
+        self._com = np.asarray(com_m, dtype=float)
+        self.tm = MujocoUnitHAL(self, "tm")
+        self.tu = MujocoUnitHAL(self, "tu")
+        self.clock = SimClock(self)
+        self.tu_pose = (cfg.gap_m, 0.0, 0.0)
+        self.steps_taken = 0
+
+    # -- set-up ---------------------------------------------------------------------------
+    def reset(self, docking_error: DockingError) -> None:
+        """Stop all belts, clear the state and dock the TU with `docking_error`."""
+        mujoco.mj_resetData(self.model, self.data)
+        for hal in (self.tm, self.tu):
+            for belt in BELTS:
+                hal.set_belt_speed(belt, 0.0)
+        x, y, yaw = tu_pose_in_tip_frame(
+            docking_error, self.cfg.gap_m, self.cfg.layout.tip_to_centre_m
+        )
+        self.tu_pose = (x, y, yaw)
+        self.data.mocap_pos[0] = (x, y, 0.0)
+        self.data.mocap_quat[0] = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+        self.steps_taken = 0
+
+    def place(self, face: str, theta_rad: float, x_m: float, y_m: float) -> None:
+        """Put the object with its AABB centre at (x, y), yaw θ on `face`, just above the belt."""
+        quat = object_quat(face, theta_rad)
+        rot = np.empty(9)
+        mujoco.mju_quat2Mat(rot, quat)
+        pts = self._verts @ rot.reshape(3, 3).T
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        centre = 0.5 * (lo + hi)
+        pos = np.array([x_m - centre[0], y_m - centre[1], -lo[2] + self.cfg.placement.drop_height_m])
+        q = self.data.qpos
+        q[self._qadr : self._qadr + 3] = pos
+        q[self._qadr + 3 : self._qadr + 7] = quat
+        self.data.qvel[self._vadr : self._vadr + 6] = 0.0
+        mujoco.mj_forward(self.model, self.data)
+
+    # -- stepping -------------------------------------------------------------------------
+    def step(self, n: int) -> None:
+        """Advance `n` physics steps; raise `SimulationUnstable` if the state diverges."""
+        mujoco.mj_step(self.model, self.data, nstep=n)
+        self.steps_taken += n
+        warn = self.data.warning
+        bad = warn[mujoco.mjtWarning.mjWARN_BADQACC].number > 0
+        if bad or not np.isfinite(self.data.qpos[self._qadr : self._qadr + 7]).all():
+            raise SimulationUnstable(f"physics diverged at t={self.data.time:.3f} s")
+
+    # -- readout --------------------------------------------------------------------------
+    def object_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """Object body position (3,) and rotation matrix (3, 3) in F_T."""
+        return (
+            self.data.xpos[self._body].copy(),
+            self.data.xmat[self._body].reshape(3, 3).copy(),
+        )
+
+    def object_qpos(self) -> np.ndarray:
+        """The object's free-joint coordinates (7,): position and quaternion."""
+        return self.data.qpos[self._qadr : self._qadr + 7].copy()
+
+    def set_object_qpos(self, qpos: np.ndarray) -> None:
+        """Restore a recorded object pose (for rendering) and recompute kinematics."""
+        self.data.qpos[self._qadr : self._qadr + 7] = qpos
+        mujoco.mj_forward(self.model, self.data)
+
+    def possessing_unit(self, com_xy: np.ndarray) -> int:
+        """0 (TM) or 1 (TU): the side of the gap's centre line the COM projects onto.
+
+        The centre line runs half-way between the TM tip line x = 0 and the TU's near
+        belt end, which the docking error may shift and turn.
+        """
+        tx, ty, yaw = self.tu_pose
+        x_tu_end = tx - (com_xy[1] - ty) * math.tan(yaw)
+        return int(com_xy[0] > 0.5 * x_tu_end)
+
+    def observe(self) -> np.ndarray:
+        """(a, x, y, z, s_x, s_y, s_z, θ) of the object in F_T (Eq. 5.4 without f, c, t).
+
+        The AABB comes from the hull vertices; θ is the yaw of the object's x axis (rad).
+        """
+        pos, rot = self.object_pose()
+        pts = self._verts @ rot.T + pos
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+        com = rot @ self._com + pos
+        theta = math.atan2(rot[1, 0], rot[0, 0])
+        a = self.possessing_unit(com[:2])
+        return np.array([a, *centre, *half, theta])
+
+    def object_speed(self) -> float:
+        """Linear speed (m/s) of the object's body origin."""
+        return float(np.linalg.norm(self.data.qvel[self._vadr : self._vadr + 3]))

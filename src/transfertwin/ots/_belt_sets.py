@@ -21,8 +21,8 @@ Decisions the equations leave open:
   a_post = TM; pre-transfer needs the box within the TU belts; success needs
   a = TM, ``t < t_max``, the box within the TM belts and ``x`` beyond the
   mirror of the success threshold about the TM's tip ``x = tm_x_max``, i.e.
-  ``x < 2 * tm_x_max - x_success`` (-0.2 m by default). The failure set is the
-  same in both directions.
+  ``x < 2 * tm_x_max - x_success`` (-0.2 m by default; ``x_success_return``
+  overrides it). The failure set is the same in both directions.
 """
 
 from __future__ import annotations

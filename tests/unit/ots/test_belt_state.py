@@ -6,7 +6,16 @@ import numpy as np
 import pytest
 
 from transfertwin import InputError
-from transfertwin.ots import ASSET_TM, ASSET_TU, N_COLS, Col, Conveyor, Face, conveyor_of, make_states
+from transfertwin.ots import (
+    ASSET_TM,
+    ASSET_TU,
+    N_COLS,
+    Col,
+    Conveyor,
+    Face,
+    conveyor_of,
+    make_states,
+)
 
 
 def test_eq_5_4_column_order() -> None:

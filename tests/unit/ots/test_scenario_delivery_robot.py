@@ -42,11 +42,13 @@ def lower(s: np.ndarray, *, drift: float = 0.0, step: float = STEP) -> np.ndarra
 PRE = IntersectionSet(
     PossessionSet(ROBOT),
     PredicateSet(
-        lambda s: (np.abs(s[:, ERR]) <= MAX_DOCK_ERR)
-        & (s[:, CONTACT] == 1)
-        & (s[:, HOOKED] == 0)
-        & (s[:, Z] > 0)
-        & (s[:, T] == 0)
+        lambda s: (
+            (np.abs(s[:, ERR]) <= MAX_DOCK_ERR)
+            & (s[:, CONTACT] == 1)
+            & (s[:, HOOKED] == 0)
+            & (s[:, Z] > 0)
+            & (s[:, T] == 0)
+        )
     ),
 )
 SUCCESS = IntersectionSet(

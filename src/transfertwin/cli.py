@@ -162,6 +162,145 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _plan_from_args(args: argparse.Namespace):  # -> StudyPlan
+    from transfertwin.study import PRESETS, ResampledDockingErrors, StudyPlan, parse_objects
+    from transfertwin.study._profile import load_profile
+
+    preset = PRESETS[args.preset]
+    objects = parse_objects(args.objects) if args.objects else preset.objects
+    profile_name, scene = ("default", None)
+    if args.profile:
+        profile_name, scene = load_profile(args.profile)
+    kwargs = {"scene": scene} if scene is not None else {}
+    return StudyPlan(
+        objects=objects,
+        theta_step=args.theta_step if args.theta_step is not None else preset.theta_step,
+        runs=args.runs if args.runs is not None else preset.runs,
+        seed=args.seed,
+        docking=ResampledDockingErrors.from_csv(args.docking_csv),
+        profile_name=profile_name,
+        units=args.units,
+        **kwargs,
+    )
+
+
+def cmd_study_run(args: argparse.Namespace) -> int:
+    """Run (or resume) a full-state study into a SQLite store."""
+    import os
+
+    from rich.console import Console
+
+    from transfertwin.store import SQLiteResultStore
+    from transfertwin.study import run_study, summarize
+
+    plan = _plan_from_args(args)
+    workers = args.workers or (os.cpu_count() or 1)
+    db = Path(args.db)
+    if not db.parent.exists():
+        raise InputError(f"{args.db}: directory {db.parent} does not exist")
+    console = Console(stderr=True)
+    with SQLiteResultStore(db) as store:
+        console.print(
+            f"plan {plan.plan_hash[:12]}: {len(plan.objects)} objects x "
+            f"{len(plan.states())} states x {plan.runs} runs = {plan.n_experiments} experiments, "
+            f"profile {plan.profile_name}, {workers} workers"
+        )
+        outcome = run_study(plan, store, workers=workers, console=console,
+                            max_experiments=args.max_experiments)  # fmt: skip
+        _print_summary(summarize(store.rows()), console)
+        console.print(
+            f"{outcome.ran} new results in {outcome.seconds:.1f} s ({outcome.rate:.2f} exp/s); "
+            f"{store.count()}/{plan.n_experiments} done"
+        )
+    if outcome.interrupted:
+        console.print("interrupted: results so far are stored; rerun the same command to resume")
+        return 130
+    return 0
+
+
+def _print_summary(summaries, console) -> None:
+    from rich.table import Table
+
+    table = Table(title="per-object summary")
+    for col in ("object", "done", "ok", "invalid", "unstable", "error", "success share"):
+        table.add_column(col)
+    for s in summaries:
+        table.add_row(
+            s.object_id, str(s.done), str(s.ok), str(s.by_status.get("invalid", 0)),
+            str(s.by_status.get("unstable", 0)), str(s.by_status.get("error", 0)),
+            f"{s.success_share:.3f}",
+        )  # fmt: skip
+    console.print(table)
+
+
+def cmd_study_status(args: argparse.Namespace) -> int:
+    """Show done/planned and rows by status of a study db."""
+    from transfertwin.store import SQLiteResultStore
+    from transfertwin.study import StudyPlan
+
+    with SQLiteResultStore(args.db, create=False) as store:
+        stored = store.plan()
+        planned = StudyPlan.from_json(stored.plan_json).n_experiments if stored else 0
+        print(f"db: {args.db}")
+        print(f"plan: {stored.plan_hash[:12] if stored else '-'}")
+        print(f"done: {store.count()}/{planned}")
+        for status, n in sorted(store.count_by_status().items()):
+            print(f"  {status}: {n}")
+    return 0
+
+
+def cmd_study_export(args: argparse.Namespace) -> int:
+    """Write the result table of a study db as CSV or Parquet."""
+    from transfertwin.store import SQLiteResultStore, export_results
+
+    out = _check_out_path(args.out, (".csv", ".parquet"))
+    with SQLiteResultStore(args.db, create=False) as store:
+        path = export_results(store.rows(), out)
+    print(path)
+    return 0
+
+
+def cmd_analyze(args: argparse.Namespace) -> int:
+    """Per-state statistics, best/worst states, plots and report of a result table."""
+    from transfertwin.store import read_results
+    from transfertwin.study import analyze
+
+    rows = read_results(args.results)
+    result = analyze(rows, Path(args.out), params={"results": str(args.results)})
+    print(Path(args.out) / "report.html")
+    return 0 if result is not None else 1
+
+
+def _add_study(sub: argparse._SubParsersAction) -> None:
+    study = sub.add_parser("study", help="full-state digital-twin study (Sec. 6.6)")
+    ssub = study.add_subparsers(dest="study_command", required=True, parser_class=_Parser)
+    p = ssub.add_parser("run", help="run or resume a study into a SQLite db")
+    p.add_argument("--db", required=True, help="SQLite result store (created if missing)")
+    p.add_argument("--objects", help="o1,o18,... | all | mesh paths (default: preset)")
+    p.add_argument("--runs", type=int, help="repetitions per state (default: preset)")
+    p.add_argument("--theta-step", type=int, help="keep θ multiples of this (default: preset)")
+    p.add_argument("--preset", choices=("quick", "full"), default="quick")
+    p.add_argument("--workers", type=int, default=0, help="worker processes (default: cores)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--profile", help="physics profile TOML (default: built-in defaults)")
+    p.add_argument("--units", default="m", help="length unit of mesh files")
+    p.add_argument("--docking-csv", help="measured docking errors to resample (default: "
+                   "the shipped calibration experiments)")  # fmt: skip
+    p.add_argument("--max-experiments", type=int, help="stop after this many new results")
+    p.set_defaults(func=cmd_study_run)
+    p = ssub.add_parser("status", help="done/planned and rows by status")
+    p.add_argument("--db", required=True)
+    p.set_defaults(func=cmd_study_status)
+    p = ssub.add_parser("export", help="write the result table as CSV or Parquet")
+    p.add_argument("--db", required=True)
+    p.add_argument("--out", required=True, help="FILE.csv or FILE.parquet")
+    p.set_defaults(func=cmd_study_export)
+    p = sub.add_parser("analyze", help="statistics, best/worst states, plots, report")
+    p.add_argument("results", help="result table: SQLite db, CSV or Parquet")
+    p.add_argument("--out", required=True, help="output directory")
+    p.set_defaults(func=cmd_analyze)
+
+
 def _add_transfer(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("transfer", help="run one virtual transfer experiment (E^V)")
     p.add_argument("--object", required=True, help="built-in core id (o1..o37) or a mesh path")
@@ -184,6 +323,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-v", "--verbose", action="store_true", help="debug logging")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     _add_transfer(sub)
+    _add_study(sub)
     p = sub.add_parser("states", help="print the 924 pre-transfer states as CSV")
     p.add_argument("--theta-step", type=int, default=0, help="keep θ multiples of this")
     p.set_defaults(func=cmd_states)

@@ -1,0 +1,177 @@
+"""The study runner: execute a plan on local workers into a result store, resumably.
+
+Each result is committed as soon as it arrives, keyed by (object, state, run), so an
+interrupted or killed study loses at most the experiments in flight; running the same plan
+on the same store again skips what is done. Workers are processes (``spawn``), each keeping
+its compiled virtual systems between experiments; the parent is the store's only writer.
+"""
+
+from __future__ import annotations
+
+import logging
+import multiprocessing as mp
+import time
+from collections import Counter, defaultdict
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
+
+from rich.console import Console
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+
+from transfertwin._errors import InputError
+from transfertwin.objects import load_object
+from transfertwin.store import ResultStore
+from transfertwin.study._experiment import ExperimentSpec, run_experiment
+from transfertwin.study._plan import StudyPlan
+
+__all__ = ["ObjectSummary", "StudyOutcome", "run_study", "summarize"]
+
+log = logging.getLogger(__name__)
+
+
+def _run_row(spec: ExperimentSpec) -> dict[str, object]:
+    """Worker entry point: one experiment → one result row."""
+    return run_experiment(spec).row()
+
+
+@dataclass(frozen=True)
+class ObjectSummary:
+    """Per-object tally of stored results."""
+
+    object_id: str
+    done: int
+    ok: int
+    successes: int
+    by_status: dict[str, int]
+
+    @property
+    def success_share(self) -> float:
+        """Successes among valid ('ok') experiments."""
+        return self.successes / self.ok if self.ok else float("nan")
+
+
+@dataclass(frozen=True)
+class StudyOutcome:
+    """What a `run_study` call did."""
+
+    planned: int
+    already_done: int
+    ran: int
+    interrupted: bool
+    seconds: float
+
+    @property
+    def rate(self) -> float:
+        """Experiments per second in this call."""
+        return self.ran / self.seconds if self.seconds > 0 else float("nan")
+
+
+def summarize(rows: Iterable[dict[str, object]]) -> list[ObjectSummary]:
+    """Tally result rows per object, in order of first appearance."""
+    counts: dict[str, Counter] = defaultdict(Counter)
+    wins: Counter = Counter()
+    for r in rows:
+        oid = str(r["object_id"])
+        counts[oid][str(r["status"])] += 1
+        if r["status"] == "ok" and r["success"] == 1:
+            wins[oid] += 1
+    return [
+        ObjectSummary(oid, sum(c.values()), c["ok"], wins[oid], dict(c))
+        for oid, c in counts.items()
+    ]
+
+
+def _pending(plan: StudyPlan, done: set[tuple]) -> tuple[int, Iterator[ExperimentSpec]]:
+    object_ids = {ref: load_object(ref, units=plan.units).object_id for ref in plan.objects}
+    if len(set(object_ids.values())) != len(object_ids):
+        ids = ", ".join(sorted(object_ids.values()))
+        raise InputError(f"two objects share an id ({ids}); rename the mesh files")
+    todo = sum(1 for key, _ in plan.specs(object_ids) if key not in done)
+
+    def gen() -> Iterator[ExperimentSpec]:
+        for key, spec in plan.specs(object_ids):
+            if key not in done:
+                yield spec
+
+    return todo, gen()
+
+
+def _progress(console: Console) -> Progress:
+    return Progress(
+        TextColumn("[bold]{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.fields[rate]:>10}"),
+        TimeElapsedColumn(),
+        TextColumn("ETA"),
+        TimeRemainingColumn(),
+        console=console,
+        transient=False,
+    )
+
+
+def _results(specs: Iterator[ExperimentSpec], workers: int) -> Iterator[dict[str, object]]:
+    if workers <= 1:
+        for spec in specs:
+            yield _run_row(spec)
+        return
+    ctx = mp.get_context("spawn")
+    with ctx.Pool(workers) as pool:
+        try:
+            yield from pool.imap_unordered(_run_row, specs, chunksize=2)
+        except BaseException:
+            pool.terminate()
+            raise
+
+
+def run_study(
+    plan: StudyPlan,
+    store: ResultStore,
+    *,
+    workers: int = 1,
+    console: Console | None = None,
+    max_experiments: int | None = None,
+    on_result: Callable[[dict[str, object]], None] | None = None,
+) -> StudyOutcome:
+    """Run every experiment of `plan` not yet in `store`.
+
+    Args:
+        plan: The study plan; stored on first use, and a different plan is refused.
+        store: Result store (single writer: this process).
+        workers: Worker processes; 1 runs in this process.
+        console: Where progress goes (None: a default console).
+        max_experiments: Stop after this many new results (for partial runs/timing).
+        on_result: Called with each stored row.
+
+    Returns:
+        Counts and timing; `interrupted` is True after Ctrl-C (results so far are kept).
+    """
+    console = console or Console(stderr=True)
+    store.init_plan(plan.plan_hash, plan.to_json())
+    done = store.done_keys()
+    todo, specs = _pending(plan, done)
+    if max_experiments is not None:
+        todo = min(todo, max_experiments)
+    ran, interrupted = 0, False
+    t0 = time.perf_counter()
+    with _progress(console) as progress:
+        task = progress.add_task("study", total=todo, rate="")
+        try:
+            for row in _results(specs, workers):
+                ran += store.put([row])
+                if on_result is not None:
+                    on_result(row)
+                speed = progress.tasks[0].speed
+                progress.update(task, advance=1, rate=f"{speed:.2f} exp/s" if speed else "")
+                if max_experiments is not None and ran >= max_experiments:
+                    break
+        except KeyboardInterrupt:
+            interrupted = True
+    return StudyOutcome(plan.n_experiments, len(done), ran, interrupted, time.perf_counter() - t0)

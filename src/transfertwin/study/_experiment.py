@@ -27,6 +27,7 @@ from transfertwin.ots import (
     parse_face,
 )
 from transfertwin.sim import DockingError, SceneConfig, SimulationUnstable, VirtualTransferSystem
+from transfertwin.store import RESULT_COLUMNS
 
 __all__ = [
     "RESULT_COLUMNS",
@@ -39,12 +40,6 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-RESULT_COLUMNS = (
-    "object_id", "face", "conveyor", "theta_deg", "run", "seed",
-    "dock_err_x_mm", "dock_err_y_mm", "dock_err_theta_deg",
-    "y1", "y2", "success", "t_end_s", "status",
-    "t_end_1_s", "t_end_2_s", "message", "state_pre", "state_end_1", "state_end_2",
-)  # fmt: skip
 
 
 @dataclass(frozen=True)

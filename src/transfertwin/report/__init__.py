@@ -1,0 +1,47 @@
+"""Plot data, matplotlib renderers and the HTML report (Fig. 6.6/6.7, 6.20–6.23).
+
+Each plot has a pure data function returning a frozen dataclass and a renderer
+that draws it into a pyplot-free `matplotlib.figure.Figure`; nothing here calls
+``plt.show()``. This layer may import `transfertwin.study` and `transfertwin.ots`.
+"""
+
+from transfertwin.report._binary_polar import (
+    RING_RADIUS,
+    BinaryPoint,
+    BinaryPolar,
+    binary_polar_data,
+    plot_binary_polar,
+)
+from transfertwin.report._figure import figure_png
+from transfertwin.report._html import REPORT_NAME, write_report
+from transfertwin.report._interval_plot import IntervalPlot, interval_plot_data, plot_intervals
+from transfertwin.report._pipeline import analyze_and_report
+from transfertwin.report._polar_full_state import (
+    PolarCurve,
+    PolarFace,
+    PolarFullState,
+    PolarMarker,
+    plot_polar_full_state,
+    polar_full_state_data,
+)
+
+__all__ = [
+    "REPORT_NAME",
+    "RING_RADIUS",
+    "BinaryPoint",
+    "BinaryPolar",
+    "IntervalPlot",
+    "PolarCurve",
+    "PolarFace",
+    "PolarFullState",
+    "PolarMarker",
+    "analyze_and_report",
+    "binary_polar_data",
+    "figure_png",
+    "interval_plot_data",
+    "plot_binary_polar",
+    "plot_intervals",
+    "plot_polar_full_state",
+    "polar_full_state_data",
+    "write_report",
+]

@@ -1,0 +1,61 @@
+"""Renderers draw into pyplot-free figures with the expected axes and save as PNG."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from matplotlib.figure import Figure
+
+from transfertwin.report import (
+    binary_polar_data,
+    figure_png,
+    interval_plot_data,
+    plot_binary_polar,
+    plot_intervals,
+    plot_polar_full_state,
+    polar_full_state_data,
+)
+from transfertwin.study._analysis import select, series_table, state_table
+
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+def rows() -> list[dict]:
+    out = []
+    for t in range(-179, 181, 7):
+        for face in ("front", "back"):
+            conv = "left" if abs(t) <= 25 or abs(t) >= 155 else "both"
+            ok = int((t // 7) % 3 != 0)
+            out.append(dict(object_id="o1", face=face, conveyor=conv, theta_deg=t, success=ok))
+    return out
+
+
+def test_fig_6_20_plot_polar_full_state(tmp_path: Path) -> None:
+    stats = state_table(rows())
+    fig = plot_polar_full_state(
+        polar_full_state_data(series_table(stats, "o1"), select(stats, "o1"))
+    )
+    assert isinstance(fig, Figure)
+    assert [ax.name for ax in fig.axes] == ["polar", "polar"]
+    fig.savefig(tmp_path / "polar.png")
+    assert (tmp_path / "polar.png").read_bytes().startswith(PNG_MAGIC)
+
+
+def test_fig_6_7_plot_binary_polar_into_given_figure() -> None:
+    fig = Figure()
+    out = plot_binary_polar(binary_polar_data(rows(), "o1"), fig=fig)
+    assert out is fig
+    assert len(fig.axes) == 2
+    assert figure_png(fig).startswith(PNG_MAGIC)
+
+
+def test_fig_6_22_plot_intervals(tmp_path: Path) -> None:
+    stats = state_table(rows())
+    fig = plot_intervals(interval_plot_data([select(stats, "o1")], "best"))
+    assert len(fig.axes) == 1
+    fig.savefig(tmp_path / "ci.png")
+    assert (tmp_path / "ci.png").stat().st_size > 0
+    ax = Figure().add_subplot(1, 1, 1)
+    assert (
+        plot_intervals(interval_plot_data([select(stats, "o1")], "worst"), ax=ax) is ax.get_figure()
+    )

@@ -39,7 +39,11 @@ fi
 cmd=${1:-run}
 shift || true
 case "$cmd" in
-    run)  exec .venv/bin/transfertwin demo "$@" ;;
+    run)
+        # The main job: the quick full-state study (resumable), then its analysis/report.
+        mkdir -p out
+        .venv/bin/transfertwin study run --db out/quick.sqlite --preset quick "$@"
+        exec .venv/bin/transfertwin analyze out/quick.sqlite --out out/quick-report ;;
     test) exec .venv/bin/python -m pytest -q "$@" ;;
     exec) exec "$@" ;;
     *) echo "usage: ./dev.sh run|test|exec CMD..." >&2; exit 2 ;;

@@ -262,13 +262,35 @@ def cmd_study_export(args: argparse.Namespace) -> int:
 
 def cmd_analyze(args: argparse.Namespace) -> int:
     """Per-state statistics, best/worst states, plots and report of a result table."""
+    from transfertwin.report import analyze_and_report
     from transfertwin.store import read_results
-    from transfertwin.study import analyze
 
     rows = read_results(args.results)
-    result = analyze(rows, Path(args.out), params={"results": str(args.results)})
-    print(Path(args.out) / "report.html")
-    return 0 if result is not None else 1
+    params: dict[str, object] = {"results": str(args.results), "rows": len(rows)}
+    if Path(args.results).suffix.lower() in (".sqlite", ".sqlite3", ".db"):
+        params.update(_study_params(args.results))
+    _, report = analyze_and_report(rows, Path(args.out), params)
+    print(report)
+    return 0
+
+
+def _study_params(db: str) -> dict[str, object]:
+    """The stored plan of a study db, flattened for the report's parameter table."""
+    import json
+
+    from transfertwin.store import SQLiteResultStore
+
+    with SQLiteResultStore(db, create=False) as store:
+        stored = store.plan()
+    if stored is None:
+        return {}
+    plan = json.loads(stored.plan_json)
+    scene = plan.pop("scene", {})
+    out = {f"plan.{k}": v for k, v in plan.items()}
+    out.update({f"scene.{k}": v for k, v in scene.items() if not isinstance(v, dict)})
+    for section in ("physics", "layout", "placement"):
+        out.update({f"{section}.{k}": v for k, v in scene.get(section, {}).items()})
+    return out
 
 
 def _add_study(sub: argparse._SubParsersAction) -> None:

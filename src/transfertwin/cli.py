@@ -200,6 +200,7 @@ def cmd_study_run(args: argparse.Namespace) -> int:
         raise InputError(f"{args.db}: directory {db.parent} does not exist")
     console = Console(stderr=True)
     with SQLiteResultStore(db) as store:
+        store.init_plan(plan.plan_hash, plan.to_json())  # refuses another plan up front
         console.print(
             f"plan {plan.plan_hash[:12]}: {len(plan.objects)} objects x "
             f"{len(plan.states())} states x {plan.runs} runs = {plan.n_experiments} experiments, "

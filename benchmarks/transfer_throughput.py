@@ -51,8 +51,10 @@ def main() -> None:
 
     ideal = raw_rate / (steps / len(specs))
     ok = sum(r.status == "ok" for r in results)
-    print(f"object {args.object}: {len(specs)} experiments ({ok} ok), "
-          f"{steps / len(specs):.0f} physics steps each")
+    print(
+        f"object {args.object}: {len(specs)} experiments ({ok} ok), "
+        f"{steps / len(specs):.0f} physics steps each"
+    )
     print(f"E^V throughput     : {exp_rate:8.2f} experiments/s")
     print(f"raw mj_step rate   : {raw_rate:8.0f} steps/s  (same model, same run)")
     print(f"engine-bound limit : {ideal:8.2f} experiments/s")

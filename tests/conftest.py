@@ -27,11 +27,20 @@ def box_stl(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def box_hulls(ext=(0.2, 0.09, 0.08)) -> tuple[np.ndarray, ...]:
     """Corner vertices of a box centred at the origin (one convex hull), metres."""
     h = np.asarray(ext) / 2
-    return (np.array([[sx * h[0], sy * h[1], sz * h[2]] for sx in (-1, 1) for sy in (-1, 1)
-                      for sz in (-1, 1)]),)
+    return (
+        np.array(
+            [
+                [sx * h[0], sy * h[1], sz * h[2]]
+                for sx in (-1, 1)
+                for sy in (-1, 1)
+                for sz in (-1, 1)
+            ]
+        ),
+    )
 
 
 def box_inertia(mass: float, ext=(0.2, 0.09, 0.08)) -> np.ndarray:
     """Inertia tensor (3, 3) of a solid box about its centre (analytic)."""
     a, b, c = ext
-    return np.diag([mass / 12 * (b**2 + c**2), mass / 12 * (a**2 + c**2), mass / 12 * (a**2 + b**2)])
+    m = mass / 12
+    return np.diag([m * (b**2 + c**2), m * (a**2 + c**2), m * (a**2 + b**2)])

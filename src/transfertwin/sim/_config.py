@@ -69,8 +69,12 @@ class PhysicsConfig:
     solimp: tuple[float, float, float, float, float] = (0.9, 0.95, 0.001, 0.5, 2.0)
 
     def __post_init__(self) -> None:
-        _positive("PhysicsConfig", timestep_s=self.timestep_s, tolerance=self.tolerance,
-                  impratio=self.impratio)
+        _positive(
+            "PhysicsConfig",
+            timestep_s=self.timestep_s,
+            tolerance=self.tolerance,
+            impratio=self.impratio,
+        )
         if self.solver not in _SOLVERS:
             raise InputError(f"PhysicsConfig.solver must be one of {_SOLVERS}, got {self.solver!r}")
         if self.cone not in _CONES:

@@ -17,8 +17,8 @@ import numpy as np
 from transfertwin.sim._config import LayoutConfig, PhysicsConfig, SceneConfig
 
 __all__ = [
-    "BELTS",
     "BARRIERS",
+    "BELTS",
     "UNITS",
     "add_belt",
     "add_light_barrier",
@@ -111,7 +111,11 @@ def add_belt(
 
 
 def add_light_barrier(
-    parent: mujoco.MjsBody, spec: mujoco.MjSpec, unit: str, which: str, x: float,
+    parent: mujoco.MjsBody,
+    spec: mujoco.MjSpec,
+    unit: str,
+    which: str,
+    x: float,
     layout: LayoutConfig,
 ) -> None:
     """Add a light barrier across both belts at unit-frame x: a site and a rangefinder.
@@ -216,8 +220,11 @@ def build_spec(
     spec.visual.global_.offwidth = 1920
     spec.visual.global_.offheight = 1080
     spec.worldbody.add_geom(
-        name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[3, 3, 0.1],
-        pos=[0, 0, -0.6], rgba=(0.8, 0.8, 0.78, 1),
+        name="floor",
+        type=mujoco.mjtGeom.mjGEOM_PLANE,
+        size=[3, 3, 0.1],
+        pos=[0, 0, -0.6],
+        rgba=(0.8, 0.8, 0.78, 1),
     )
     spec.worldbody.add_light(name="sun", pos=[0, 0, 2.0], dir=[0, 0, -1], castshadow=False)
     add_unit(spec, "tm", cfg.layout, cfg.mu)

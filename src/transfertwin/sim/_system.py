@@ -27,7 +27,7 @@ __all__ = [
 ]
 
 
-class SimulationUnstable(RuntimeError):
+class SimulationUnstable(RuntimeError):  # noqa: N818 - names a state, not an error kind
     """The physics diverged (non-finite state or solver warnings)."""
 
 
@@ -181,7 +181,8 @@ class VirtualTransferSystem:
         pts = self._verts @ rot.reshape(3, 3).T
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         centre = 0.5 * (lo + hi)
-        pos = np.array([x_m - centre[0], y_m - centre[1], -lo[2] + self.cfg.placement.drop_height_m])
+        drop = self.cfg.placement.drop_height_m
+        pos = np.array([x_m - centre[0], y_m - centre[1], -lo[2] + drop])
         q = self.data.qpos
         q[self._qadr : self._qadr + 3] = pos
         q[self._qadr + 3 : self._qadr + 7] = quat

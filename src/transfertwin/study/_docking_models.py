@@ -9,7 +9,7 @@ implements the same protocol.
 from __future__ import annotations
 
 import csv
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import Protocol, runtime_checkable
@@ -47,7 +47,7 @@ class DockingErrorModel(Protocol):
 class FixedDockingError:
     """Every experiment gets the same docking error."""
 
-    error: DockingError = DockingError()
+    error: DockingError = field(default_factory=DockingError)
 
     def sample(self, seed: int) -> DockingError:
         """The fixed error, whatever the seed."""
@@ -132,4 +132,3 @@ def docking_model_from_dict(desc: dict[str, object]) -> DockingErrorModel:
         path = None if source.startswith("builtin:") else source
         return ResampledDockingErrors.from_csv(path)
     raise InputError(f"unknown docking-error model kind {kind!r}")
-

@@ -41,7 +41,6 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 
-
 @dataclass(frozen=True)
 class ExperimentSpec:
     """Everything one E^V needs; picklable.

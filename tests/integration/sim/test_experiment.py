@@ -45,8 +45,9 @@ def test_gap_wider_than_object_is_a_failure(box_stl):
 
 def test_state_outside_the_belts_is_invalid(box_stl):
     # At 60° the 200 x 90 mm box's AABB reaches y = 0.094 + 0.109 > 0.2 m (Eq. 6.1).
-    exact = SceneConfig().with_overrides(**{"placement.sigma_xy_m": 0.0,
-                                            "placement.sigma_theta_deg": 0.0})
+    exact = SceneConfig().with_overrides(
+        **{"placement.sigma_xy_m": 0.0, "placement.sigma_theta_deg": 0.0}
+    )
     r = run_experiment(_spec(box_stl, conveyor="left", theta_deg=60, scene=exact))
     assert r.status == "invalid"
     assert (r.y1, r.y2, r.success) == (None, None, None)

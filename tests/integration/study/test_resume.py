@@ -59,8 +59,9 @@ def test_sigkill_then_resume_equals_uninterrupted_run(tmp_path, box_stl):
     partial = _count(killed)
     assert 10 <= partial < 56
 
-    assert subprocess.run(_cmd(killed, box_stl, 2), capture_output=True, timeout=300).returncode == 0
-    assert subprocess.run(_cmd(clean, box_stl, 1), capture_output=True, timeout=300).returncode == 0
+    for db, workers in ((killed, 2), (clean, 1)):
+        done = subprocess.run(_cmd(db, box_stl, workers), capture_output=True, timeout=300)
+        assert done.returncode == 0, done.stderr
     resumed, reference = _rows(killed), _rows(clean)
     keys = [(r["object_id"], r["face"], r["conveyor"], r["theta_deg"], r["run"]) for r in resumed]
     assert len(keys) == len(set(keys)) == 28 * 2

@@ -6,7 +6,7 @@ import os as _os
 if "MUJOCO_GL" not in _os.environ and not _os.environ.get("DISPLAY"):
     _os.environ["MUJOCO_GL"] = "egl"
 
-from transfertwin._errors import InputError  # noqa: E402
+from transfertwin._errors import InputError
 
 __all__ = ["InputError", "__version__"]
 __version__ = "0.1.0"

@@ -1,0 +1,43 @@
+"""Objects to transfer: meshes, convex hulls, mass properties, procedural starter cores.
+
+Public surface:
+
+- `load_mesh` / `MeshError`: user STL/OBJ/PLY files in metres, checked and repaired.
+- `mass_properties` / `MassProperties`: uniform-density rigid-body properties.
+- `decompose_hulls`: CoACD convex decomposition, cached on disk by content hash.
+- `load_object` / `ObjectModel` / `export_object`: a built-in core or a user mesh,
+  ready for the simulation, in the object frame F_O (+x to the pinion, +y away
+  from the solenoid, +z up on face 'front', origin at the centre of mass).
+- `builtin_ids`, `core_spec` / `CoreSpec`, `generate_core`: the 37 procedural
+  starter-motor cores o1..o37 (the study's object set, Eq. 5.3).
+"""
+
+from transfertwin.objects._builtin import BuiltinDataError, builtin_ids
+from transfertwin.objects._core_spec import BUILTIN_COUNT, CoreSpec, Dent, core_spec
+from transfertwin.objects._cores import generate_core
+from transfertwin.objects._hulls import decompose_hulls, default_cache_dir
+from transfertwin.objects._load import export_object, load_object
+from transfertwin.objects._mass import DEFAULT_DENSITY_KG_M3, MassProperties, mass_properties
+from transfertwin.objects._mesh import UNITS_TO_M, MeshError, load_mesh
+from transfertwin.objects._model import ObjectModel
+
+__all__ = [
+    "BUILTIN_COUNT",
+    "DEFAULT_DENSITY_KG_M3",
+    "UNITS_TO_M",
+    "BuiltinDataError",
+    "CoreSpec",
+    "Dent",
+    "MassProperties",
+    "MeshError",
+    "ObjectModel",
+    "builtin_ids",
+    "core_spec",
+    "decompose_hulls",
+    "default_cache_dir",
+    "export_object",
+    "generate_core",
+    "load_mesh",
+    "load_object",
+    "mass_properties",
+]

@@ -1,0 +1,200 @@
+"""Convex decomposition (CoACD) of a mesh into hulls, cached on disk by content hash.
+
+CoACD's output differs from run to run, so a studied mesh must always get the
+same hulls: the first decomposition is stored as ``<sha256>.npz`` in the cache
+directory and reused afterwards. The key covers the mesh's vertices and faces
+(exact bytes) and the CoACD parameters.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import logging
+import math
+import os
+import zipfile
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import trimesh
+from scipy.spatial import ConvexHull, QhullError
+
+from transfertwin._errors import InputError
+from transfertwin.objects._atomic import write_bytes_atomic
+
+__all__ = [
+    "CACHE_ENV_VAR",
+    "coacd_hulls",
+    "coacd_params",
+    "decompose_hulls",
+    "default_cache_dir",
+    "hull_cache_key",
+    "hulls_from_npz_bytes",
+    "hulls_to_npz_bytes",
+]
+
+logger = logging.getLogger(__name__)
+
+CACHE_ENV_VAR = "TRANSFERTWIN_CACHE"
+"""Environment variable naming the cache root; hulls go to ``$TRANSFERTWIN_CACHE/hulls``."""
+
+_KEY_VERSION = b"transfertwin-hulls-v1"
+_MIN_HULL_VOLUME_M3 = 1e-9  # 1 mm^3: smaller pieces are dropped (no effect on contacts)
+
+
+def default_cache_dir() -> Path:
+    """Hull cache directory: ``$TRANSFERTWIN_CACHE/hulls`` or ``~/.cache/transfertwin/hulls``."""
+    root = os.environ.get(CACHE_ENV_VAR)
+    base = Path(root).expanduser() if root else Path.home() / ".cache" / "transfertwin"
+    return base / "hulls"
+
+
+def coacd_params(threshold: float, max_hulls: int, seed: int) -> dict:
+    """CoACD keyword arguments used by `decompose_hulls` (also the cache-key parameters).
+
+    Args:
+        threshold: Concavity threshold in (0, 1]; smaller gives more, tighter hulls.
+        max_hulls: Upper bound on the number of hulls (>= 1).
+        seed: CoACD's random seed (>= 0).
+
+    Returns:
+        Keyword arguments for `coacd.run_coacd`.
+
+    Raises:
+        InputError: If a value is out of range.
+    """
+    if not (
+        isinstance(threshold, (int, float)) and math.isfinite(threshold) and 0 < threshold <= 1
+    ):
+        raise InputError(f"threshold must be in (0, 1], got {threshold!r}")
+    if isinstance(max_hulls, bool) or not isinstance(max_hulls, int) or max_hulls < 1:
+        raise InputError(f"max_hulls must be an integer >= 1, got {max_hulls!r}")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise InputError(f"seed must be an integer >= 0, got {seed!r}")
+    return {
+        "threshold": float(threshold),
+        "max_convex_hull": int(max_hulls),
+        "seed": int(seed),
+        "preprocess_mode": "auto",
+        "resolution": 2000,
+        "mcts_iterations": 150,
+        "merge": True,
+    }
+
+
+def hull_cache_key(mesh: trimesh.Trimesh, params: dict) -> str:
+    """SHA-256 (hex) of the mesh's exact vertices and faces and the CoACD parameters."""
+    digest = hashlib.sha256(_KEY_VERSION)
+    digest.update(np.ascontiguousarray(mesh.vertices, dtype="<f8").tobytes())
+    digest.update(np.ascontiguousarray(mesh.faces, dtype="<i8").tobytes())
+    digest.update(json.dumps(params, sort_keys=True).encode())
+    return digest.hexdigest()
+
+
+def decompose_hulls(
+    mesh: trimesh.Trimesh,
+    *,
+    cache_dir: Path | None = None,
+    threshold: float = 0.05,
+    max_hulls: int = 24,
+    seed: int = 0,
+) -> tuple[np.ndarray, ...]:
+    """Approximate convex decomposition of a closed mesh, cached on disk.
+
+    Args:
+        mesh: Watertight mesh, vertices in metres.
+        cache_dir: Cache directory (created if missing); default `default_cache_dir`.
+        threshold: CoACD concavity threshold in (0, 1].
+        max_hulls: Upper bound on the number of hulls.
+        seed: CoACD random seed.
+
+    Returns:
+        One read-only float64 array of shape (k_i, 3) per convex hull: the
+        hull's vertices in metres, in the mesh frame.
+
+    Raises:
+        InputError: If a parameter is out of range.
+    """
+    params = coacd_params(threshold, max_hulls, seed)
+    directory = Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    path = directory / f"{hull_cache_key(mesh, params)}.npz"
+    if path.is_file():
+        try:
+            return hulls_from_npz_bytes(path.read_bytes())
+        except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
+            logger.warning("ignoring unreadable hull cache file %s (%s)", path, exc)
+    hulls = coacd_hulls(mesh, params)
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        write_bytes_atomic(path, hulls_to_npz_bytes(hulls, params))
+    except OSError as exc:
+        logger.warning("cannot write hull cache file %s (%s)", path, exc)
+    return hulls
+
+
+def hulls_to_npz_bytes(hulls: Sequence[np.ndarray], meta: dict) -> bytes:
+    """Encode hulls as a compressed ``.npz``: arrays ``hull_000``, … and a JSON string ``meta``."""
+    arrays = {f"hull_{i:03d}": np.asarray(h, dtype="<f8") for i, h in enumerate(hulls)}
+    arrays["meta"] = np.array(json.dumps(meta, sort_keys=True))
+    buffer = io.BytesIO()
+    np.savez_compressed(buffer, **arrays)
+    return buffer.getvalue()
+
+
+def hulls_from_npz_bytes(data: bytes) -> tuple[np.ndarray, ...]:
+    """Decode hulls written by `hulls_to_npz_bytes`.
+
+    Raises:
+        ValueError: If the content holds no hull or a hull of the wrong shape.
+    """
+    with np.load(io.BytesIO(data), allow_pickle=False) as npz:
+        names = sorted(n for n in npz.files if n.startswith("hull_"))
+        hulls = tuple(np.array(npz[n], dtype=np.float64) for n in names)
+    if not hulls or any(h.ndim != 2 or h.shape[1] != 3 or len(h) < 4 for h in hulls):
+        raise ValueError("hull file holds no valid (k, 3) hull arrays")
+    for hull in hulls:
+        hull.setflags(write=False)
+    return hulls
+
+
+def coacd_hulls(mesh: trimesh.Trimesh, params: dict) -> tuple[np.ndarray, ...]:
+    """Run CoACD (no cache) and return the hulls' vertex arrays.
+
+    Hulls flatter or smaller than 1 mm^3 are dropped; each hull's vertices are
+    its convex-hull vertices sorted lexicographically.
+
+    Args:
+        mesh: Watertight mesh, vertices in metres.
+        params: Keyword arguments for `coacd.run_coacd` (see `coacd_params`).
+
+    Returns:
+        Read-only float64 arrays of shape (k_i, 3), metres, mesh frame.
+    """
+    import coacd  # imported lazily: heavy, and not needed when the cache hits
+
+    coacd.set_log_level("error")
+    vertices = np.ascontiguousarray(mesh.vertices, dtype=np.float64)
+    faces = np.ascontiguousarray(mesh.faces, dtype=np.int32)
+    parts = coacd.run_coacd(coacd.Mesh(vertices, faces), **params)
+    hulls = [h for h in (_hull_vertices(np.asarray(v)) for v, _ in parts) if h is not None]
+    if not hulls:
+        logger.warning("CoACD returned no usable hull; using the mesh's convex hull")
+        hulls = [np.asarray(mesh.convex_hull.vertices, dtype=np.float64)]
+    for hull in hulls:
+        hull.setflags(write=False)
+    return tuple(hulls)
+
+
+def _hull_vertices(points: np.ndarray) -> np.ndarray | None:
+    """Vertices of the convex hull of ``points``, sorted; None if flat or tiny."""
+    try:
+        hull = ConvexHull(points)
+    except (QhullError, ValueError):
+        return None
+    if hull.volume < _MIN_HULL_VOLUME_M3:
+        return None
+    vertices = np.asarray(points[hull.vertices], dtype=np.float64)
+    return vertices[np.lexsort(vertices.T[::-1])]

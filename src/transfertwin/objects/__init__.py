@@ -13,7 +13,8 @@ Public surface:
 """
 
 from transfertwin.objects._builtin import BuiltinDataError, builtin_ids
-from transfertwin.objects._core_spec import BUILTIN_COUNT, CoreSpec, Dent, core_spec
+from transfertwin.objects._core_draw import core_spec
+from transfertwin.objects._core_spec import BUILTIN_COUNT, CoreSpec, Dent
 from transfertwin.objects._cores import generate_core
 from transfertwin.objects._hulls import decompose_hulls, default_cache_dir
 from transfertwin.objects._load import export_object, load_object

@@ -1,4 +1,4 @@
-"""Atomic file writes: write a temporary file next to the target, then `os.replace`."""
+"""Atomic file writes: write a temporary file next to the target, then rename or link it."""
 
 from __future__ import annotations
 
@@ -6,15 +6,30 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["write_bytes_atomic"]
+__all__ = ["write_bytes_atomic", "write_bytes_exclusive"]
+
+
+def _temporary_copy(path: Path, data: bytes) -> Path:
+    """Write ``data`` to a flushed, fsync'ed temporary file in ``path``'s directory."""
+    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as handle:
+            os.fchmod(handle.fileno(), 0o644)  # mkstemp creates 0o600
+            handle.write(data)
+            handle.flush()
+            os.fsync(handle.fileno())
+    except BaseException:
+        Path(name).unlink(missing_ok=True)
+        raise
+    return Path(name)
 
 
 def write_bytes_atomic(path: Path, data: bytes) -> None:
     """Write ``data`` to ``path`` so that readers see either the old or the new file.
 
-    The temporary file lives in the target's directory (same file system), is
-    flushed and fsync'ed, then renamed over the target; on any error it is
-    removed and no partial file is left behind.
+    The temporary file lives in the target's directory (same file system) and
+    is renamed over the target with `os.replace`; on any error it is removed
+    and no partial file is left behind.
 
     Args:
         path: Destination file; its directory must exist.
@@ -23,14 +38,39 @@ def write_bytes_atomic(path: Path, data: bytes) -> None:
     Raises:
         OSError: If the directory is not writable or the disk is full.
     """
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    tmp = _temporary_copy(path, data)
     try:
-        with os.fdopen(fd, "wb") as handle:
-            os.fchmod(handle.fileno(), 0o644)  # mkstemp creates 0o600
-            handle.write(data)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(tmp_name, path)
+        os.replace(tmp, path)
     except BaseException:
-        Path(tmp_name).unlink(missing_ok=True)
+        tmp.unlink(missing_ok=True)
         raise
+
+
+def write_bytes_exclusive(path: Path, data: bytes) -> bool:
+    """Create ``path`` with ``data`` atomically unless it exists (first writer wins).
+
+    The complete temporary file is hard-linked to ``path``, which fails if
+    ``path`` exists, so concurrent writers never replace each other's file.
+    Where hard links are unsupported it falls back to `write_bytes_atomic`.
+
+    Args:
+        path: Destination file; its directory must exist.
+        data: The bytes to write.
+
+    Returns:
+        True if this call created ``path``, False if it already existed.
+
+    Raises:
+        OSError: If the directory is not writable or the disk is full.
+    """
+    tmp = _temporary_copy(path, data)
+    try:
+        os.link(tmp, path)
+    except FileExistsError:
+        return False
+    except OSError:
+        os.replace(tmp, path)
+        return True
+    finally:
+        tmp.unlink(missing_ok=True)
+    return True

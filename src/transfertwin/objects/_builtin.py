@@ -15,7 +15,8 @@ import re
 from importlib import resources
 from typing import TYPE_CHECKING
 
-from transfertwin.objects._core_spec import BUILTIN_COUNT, core_spec
+from transfertwin.objects._core_draw import core_spec
+from transfertwin.objects._core_spec import BUILTIN_COUNT
 from transfertwin.objects._cores import mesh_from_stl_bytes
 from transfertwin.objects._hulls import hulls_from_npz_bytes
 from transfertwin.objects._mass import mass_properties

@@ -15,7 +15,7 @@ import numpy as np
 import trimesh
 
 from transfertwin.objects._core_builder import build_core_solid
-from transfertwin.objects._core_spec import core_spec
+from transfertwin.objects._core_draw import core_spec
 from transfertwin.objects._mesh import parse_mesh_bytes
 from transfertwin.objects._stl import stl_bytes
 

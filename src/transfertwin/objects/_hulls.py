@@ -3,7 +3,9 @@
 CoACD's output differs from run to run, so a studied mesh must always get the
 same hulls: the first decomposition is stored as ``<sha256>.npz`` in the cache
 directory and reused afterwards. The key covers the mesh's vertices and faces
-(exact bytes) and the CoACD parameters.
+(exact bytes) and the CoACD parameters. Files are written atomically and the
+first writer wins, so processes that decompose the same mesh at the same time
+all end up with the hulls of the file on disk.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ import trimesh
 from scipy.spatial import ConvexHull, QhullError
 
 from transfertwin._errors import InputError
-from transfertwin.objects._atomic import write_bytes_atomic
+from transfertwin.objects._atomic import write_bytes_exclusive
 
 __all__ = [
     "CACHE_ENV_VAR",
@@ -125,13 +127,17 @@ def decompose_hulls(
         try:
             return hulls_from_npz_bytes(path.read_bytes())
         except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
-            logger.warning("ignoring unreadable hull cache file %s (%s)", path, exc)
+            logger.warning("replacing unreadable hull cache file %s (%s)", path, exc)
+            path.unlink(missing_ok=True)
     hulls = coacd_hulls(mesh, params)
     try:
         directory.mkdir(parents=True, exist_ok=True)
-        write_bytes_atomic(path, hulls_to_npz_bytes(hulls, params))
-    except OSError as exc:
-        logger.warning("cannot write hull cache file %s (%s)", path, exc)
+        if not write_bytes_exclusive(path, hulls_to_npz_bytes(hulls, params)):
+            # another process decomposed the same mesh first: use its hulls, so
+            # that every user of this mesh gets the same ones
+            return hulls_from_npz_bytes(path.read_bytes())
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
+        logger.warning("hull cache file %s not usable (%s)", path, exc)
     return hulls
 
 

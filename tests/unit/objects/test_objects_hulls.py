@@ -12,7 +12,8 @@ from manifold3d import Manifold
 from scipy.spatial import ConvexHull
 
 from transfertwin import InputError
-from transfertwin.objects import decompose_hulls, default_cache_dir
+from transfertwin.objects import _hulls, decompose_hulls, default_cache_dir
+from transfertwin.objects._atomic import write_bytes_atomic, write_bytes_exclusive
 
 
 def _l_shape() -> trimesh.Trimesh:
@@ -114,3 +115,30 @@ def test_invalid_parameters_are_rejected(tmp_path: Path, kwargs: dict) -> None:
     box = trimesh.creation.box(extents=(0.05, 0.05, 0.05))
     with pytest.raises(InputError):
         decompose_hulls(box, cache_dir=tmp_path, **kwargs)
+
+
+def test_concurrent_first_writer_wins(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """If another process stores hulls while CoACD runs here, its hulls are returned."""
+    box = trimesh.creation.box(extents=(0.05, 0.05, 0.05))
+    winner = (np.array([[0, 0, 0], [0.05, 0, 0], [0, 0.05, 0], [0, 0, 0.05]], dtype=float),)
+    ours = (np.array([[0, 0, 0], [0.04, 0, 0], [0, 0.04, 0], [0, 0, 0.04]], dtype=float),)
+
+    def racing_coacd(mesh: trimesh.Trimesh, params: dict) -> tuple[np.ndarray, ...]:
+        path = tmp_path / f"{_hulls.hull_cache_key(mesh, params)}.npz"
+        path.write_bytes(_hulls.hulls_to_npz_bytes(winner, params))
+        return ours
+
+    monkeypatch.setattr(_hulls, "coacd_hulls", racing_coacd)
+    hulls = decompose_hulls(box, cache_dir=tmp_path)
+    np.testing.assert_array_equal(hulls[0], winner[0])
+    assert len(list(tmp_path.iterdir())) == 1
+
+
+def test_write_bytes_exclusive_creates_once(tmp_path: Path) -> None:
+    target = tmp_path / "file.bin"
+    assert write_bytes_exclusive(target, b"first")
+    assert not write_bytes_exclusive(target, b"second")
+    assert target.read_bytes() == b"first"
+    write_bytes_atomic(target, b"third")
+    assert target.read_bytes() == b"third"
+    assert [p.name for p in tmp_path.iterdir()] == ["file.bin"]

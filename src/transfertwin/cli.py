@@ -163,7 +163,13 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def _plan_from_args(args: argparse.Namespace):  # -> StudyPlan
-    from transfertwin.study import PRESETS, ResampledDockingErrors, StudyPlan, parse_objects
+    from transfertwin.study import (
+        PRESETS,
+        FixedDockingError,
+        ResampledDockingErrors,
+        StudyPlan,
+        parse_objects,
+    )
     from transfertwin.study._profile import load_profile
 
     preset = PRESETS[args.preset]
@@ -177,7 +183,11 @@ def _plan_from_args(args: argparse.Namespace):  # -> StudyPlan
         theta_step=args.theta_step if args.theta_step is not None else preset.theta_step,
         runs=args.runs if args.runs is not None else preset.runs,
         seed=args.seed,
-        docking=ResampledDockingErrors.from_csv(args.docking_csv),
+        docking=(
+            FixedDockingError(_parse_dock_error(args.dock_error))
+            if args.dock_error
+            else ResampledDockingErrors.from_csv(args.docking_csv)
+        ),
         profile_name=profile_name,
         units=args.units,
         **kwargs,
@@ -309,6 +319,8 @@ def _add_study(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--units", default="m", help="length unit of mesh files")
     p.add_argument("--docking-csv", help="measured docking errors to resample (default: "
                    "the shipped calibration experiments)")  # fmt: skip
+    p.add_argument("--dock-error", help="X_MM,Y_MM,THETA_DEG: one fixed docking error for all "
+                   "experiments instead of resampled measurements")  # fmt: skip
     p.add_argument("--max-experiments", type=int, help="stop after this many new results")
     p.set_defaults(func=cmd_study_run)
     p = ssub.add_parser("status", help="done/planned and rows by status")

@@ -31,7 +31,7 @@ from transfertwin.store import ResultStore
 from transfertwin.study._experiment import ExperimentSpec, run_experiment
 from transfertwin.study._plan import StudyPlan
 
-__all__ = ["ObjectSummary", "StudyOutcome", "run_study", "summarize"]
+__all__ = ["ObjectSummary", "StudyOutcome", "run_rows", "run_study", "summarize"]
 
 log = logging.getLogger(__name__)
 
@@ -117,7 +117,9 @@ def _progress(console: Console) -> Progress:
     )
 
 
-def _results(specs: Iterator[ExperimentSpec], workers: int) -> Iterator[dict[str, object]]:
+def run_rows(specs: Iterable[ExperimentSpec], workers: int) -> Iterator[dict[str, object]]:
+    """Run experiments on `workers` processes; yields result rows as they complete
+    (unordered when workers > 1)."""
     if workers <= 1:
         for spec in specs:
             yield _run_row(spec)
@@ -164,7 +166,7 @@ def run_study(
     with _progress(console) as progress:
         task = progress.add_task("study", total=todo, rate="")
         try:
-            for row in _results(specs, workers):
+            for row in run_rows(specs, workers):
                 ran += store.put([row])
                 if on_result is not None:
                     on_result(row)

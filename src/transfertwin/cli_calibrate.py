@@ -1,0 +1,206 @@
+"""`transfertwin calibrate run|sweep|tune`: virtual calibration against real experiments."""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+import os
+from pathlib import Path
+
+from transfertwin._errors import InputError
+
+__all__ = ["register"]
+
+_DEFAULT_REAL = "builtin:calibration_experiments.csv"
+
+
+def _real_rows(path: str) -> list[dict[str, object]]:
+    from importlib import resources
+
+    from transfertwin.store import read_results
+
+    if path == _DEFAULT_REAL:
+        src = resources.files("transfertwin.data").joinpath("calibration_experiments.csv")
+        with resources.as_file(src) as real:
+            return read_results(real)
+    return read_results(path)
+
+
+def _common(args: argparse.Namespace):
+    """(rows, base scene, profile name, calibrate kwargs) from shared options."""
+    from transfertwin.sim import SceneConfig
+    from transfertwin.study._calibration import parse_object_map
+    from transfertwin.study._profile import load_profile
+
+    rows = _real_rows(args.real)
+    if args.limit:
+        rows = rows[: args.limit]
+    name, scene = load_profile(args.profile) if args.profile else ("default", SceneConfig())
+    ids = sorted({str(r["object_id"]) for r in rows})
+    mapping = parse_object_map(args.object_map, ids)
+    workers = args.workers or (os.cpu_count() or 1)
+    calib = {"runs": args.runs, "object_map": mapping, "seed": args.seed, "workers": workers,
+             "units": args.units}  # fmt: skip
+    return rows, scene, name, calib
+
+
+def _out_dir(path: str) -> Path:
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"{path}: exists and is not a directory")
+    if not out.parent.exists():
+        raise InputError(f"{path}: directory {out.parent} does not exist")
+    out.mkdir(exist_ok=True)
+    return out
+
+
+def _mapping_note(mapping: dict[str, str]) -> str:
+    return ", ".join(f"{k}->{v}" for k, v in sorted(mapping.items()))
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    """Replay the real experiments R times; write metrics.json."""
+    from transfertwin.report._figure import write_atomic
+    from transfertwin.study._calibration import calibrate
+
+    rows, scene, name, calib = _common(args)
+    out = _out_dir(args.out)
+    result = calibrate(rows, scene=scene, **calib)
+    metrics = result.summary()["metrics"]
+    per_run = [
+        {"run": r.run, **r.confusion.to_dict(), "not_ok": r.not_ok,
+         **{k: r.confusion.metric(k) for k in metrics}}
+        for r in result.runs
+    ]  # fmt: skip
+    payload = {
+        "profile": name, "real": args.real, "n_real": len(rows), "runs": per_run,
+        "mean": {k: v["mean"] for k, v in metrics.items()},
+        "std": {k: v["std"] for k, v in metrics.items()}, "std_ddof": 1,
+        "object_map": result.object_map,
+        "note": "real objects are replayed with the mapped meshes; the real scans are not public",
+    }  # fmt: skip
+    write_atomic(out / "metrics.json", json.dumps(payload, indent=2) + "\n")
+    print(f"real objects mapped to meshes: {_mapping_note(result.object_map)} "
+          "(the real cores' scans are not public)")  # fmt: skip
+    for key in ("f05", "precision", "recall", "accuracy"):
+        print(f"{key:9s} {metrics[key]['mean']:.3f} ± {metrics[key]['std']:.3f}")
+    print(out / "metrics.json")
+    return 0
+
+
+def _parse_values(text: str) -> list[object]:
+    values: list[object] = []
+    for part in text.split(","):
+        part = part.strip()
+        if not part:
+            continue
+        try:
+            values.append(int(part) if part.lstrip("-").isdigit() else float(part))
+        except ValueError:
+            values.append(True if part == "true" else False if part == "false" else part)
+    if not values:
+        raise InputError("--values is empty")
+    return values
+
+
+def _write_trials(out: Path, trials, metric: str, title: str) -> None:
+    from transfertwin.report._calibration_plots import (
+        plot_score_distribution,
+        score_distribution_data,
+    )
+    from transfertwin.report._figure import figure_png, write_atomic
+
+    buf = io.StringIO()
+    keys = sorted({k for t in trials for k in t.params})
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(["label", *keys, f"{metric}_mean", f"{metric}_std", "runs"])
+    for t in trials:
+        s = t.result.summary()["metrics"][metric]
+        writer.writerow([t.label, *(t.params.get(k, "") for k in keys), f"{s['mean']:.6f}",
+                         f"{s['std']:.6f}", len(t.result.runs)])  # fmt: skip
+    write_atomic(out / "trials.csv", buf.getvalue())
+    labels = [f"{t.label} " + ",".join(f"{k}={v}" for k, v in t.params.items()) for t in trials]
+    data = score_distribution_data(labels, [t.scores() for t in trials], metric)
+    fig = plot_score_distribution(data)
+    fig.suptitle(title)
+    write_atomic(out / "scores.png", figure_png(fig))
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    """One-at-a-time sweep of one setting."""
+    from transfertwin.study._tuning import best_trial, sweep
+
+    rows, scene, _, calib = _common(args)
+    out = _out_dir(args.out)
+    trials = sweep(rows, args.param, _parse_values(args.values), base=scene, metric=args.metric,
+                   on_trial=lambda t: print(f"{t.label} {t.params}: {t.score:.3f}"),
+                   **calib)  # fmt: skip
+    _write_trials(out, trials, args.metric, f"sweep of {args.param}")
+    best = best_trial(trials)
+    print(f"best: {best.params} {args.metric} = {best.score:.3f}; {out / 'trials.csv'}")
+    return 0
+
+
+def cmd_tune(args: argparse.Namespace) -> int:
+    """Tune μ_k and d_gap by Latin hypercube rounds or TPE; save the winner as a profile."""
+    from transfertwin.study._profile import save_profile
+    from transfertwin.study._tuning import best_trial, scene_with, tune_lhs, tune_tpe
+
+    rows, scene, _, calib = _common(args)
+    out = _out_dir(args.out)
+    bounds = {"mu": (args.mu_min, args.mu_max), "gap_mm": (args.gap_min_mm, args.gap_max_mm)}
+    show = lambda t: print(f"{t.label} {t.params}: {t.score:.3f}")  # noqa: E731
+    if args.method == "lhs":
+        trials = tune_lhs(rows, bounds, base=scene, n_per_round=args.trials, rounds=2,
+                          seed=args.seed, metric=args.metric, on_trial=show, **calib)  # fmt: skip
+    else:
+        trials = tune_tpe(rows, bounds, base=scene, n_trials=args.trials, seed=args.seed,
+                          metric=args.metric, on_trial=show, **calib)  # fmt: skip
+    _write_trials(out, trials, args.metric, f"instance-parameter tuning ({args.method})")
+    best = best_trial(trials)
+    profile = Path(args.save_profile) if args.save_profile else out / "profile.toml"
+    save_profile(profile, args.name, scene_with(scene, best.params))
+    print(f"best: {best.params} {args.metric} = {best.score:.3f}; profile {profile}")
+    return 0
+
+
+def _shared(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--real", default=_DEFAULT_REAL,
+                   help="real result table (CSV/Parquet/db); default: the shipped 191")  # fmt: skip
+    p.add_argument("--runs", type=int, default=3, help="repetitions R per real experiment")
+    p.add_argument("--profile", help="physics profile TOML to start from")
+    p.add_argument("--object-map", help="real id to mesh: o1=PATH,o18=o5 (default: same id)")
+    p.add_argument("--units", default="m", help="length unit of mapped mesh files")
+    p.add_argument("--workers", type=int, default=0, help="worker processes (default: cores)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--limit", type=int, default=0, help="use only the first N real rows")
+    p.add_argument("--out", required=True, help="output directory")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add `calibrate run|sweep|tune` to the CLI."""
+    cal = sub.add_parser("calibrate", help="virtual calibration against real experiments")
+    csub = cal.add_subparsers(dest="calibrate_command", required=True, parser_class=type(cal))
+    p = csub.add_parser("run", help="replay real experiments; metrics.json (F0.5 etc.)")
+    _shared(p)
+    p.set_defaults(func=cmd_run)
+    p = csub.add_parser("sweep", help="one-at-a-time sweep of a setting (Fig. 6.12/6.14)")
+    _shared(p)
+    p.add_argument("--param", required=True, help="mu, gap_mm, physics.solver, ...")
+    p.add_argument("--values", required=True, help="comma-separated values")
+    p.add_argument("--metric", default="f05")
+    p.set_defaults(func=cmd_sweep)
+    p = csub.add_parser("tune", help="tune mu and gap (LHS rounds or TPE); save a profile")
+    _shared(p)
+    p.add_argument("--method", choices=("lhs", "tpe"), default="tpe")
+    p.add_argument("--trials", type=int, default=12, help="trials (per round for lhs)")
+    p.add_argument("--mu-min", type=float, default=0.2)
+    p.add_argument("--mu-max", type=float, default=0.8)
+    p.add_argument("--gap-min-mm", type=float, default=5.0)
+    p.add_argument("--gap-max-mm", type=float, default=40.0)
+    p.add_argument("--metric", default="f05")
+    p.add_argument("--name", default="calibrated", help="name of the saved profile")
+    p.add_argument("--save-profile", help="profile path (default OUT/profile.toml)")
+    p.set_defaults(func=cmd_tune)

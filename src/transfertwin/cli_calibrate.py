@@ -154,9 +154,9 @@ def cmd_tune(args: argparse.Namespace) -> int:
     show = lambda t: print(f"{t.label} {t.params}: {t.score:.3f}")  # noqa: E731
     if args.method == "lhs":
         trials = tune_lhs(rows, bounds, base=scene, n_per_round=args.trials, rounds=2,
-                          seed=args.seed, metric=args.metric, on_trial=show, **calib)  # fmt: skip
+                          metric=args.metric, on_trial=show, **calib)  # fmt: skip
     else:
-        trials = tune_tpe(rows, bounds, base=scene, n_trials=args.trials, seed=args.seed,
+        trials = tune_tpe(rows, bounds, base=scene, n_trials=args.trials,
                           metric=args.metric, on_trial=show, **calib)  # fmt: skip
     _write_trials(out, trials, args.metric, f"instance-parameter tuning ({args.method})")
     best = best_trial(trials)

@@ -122,14 +122,15 @@ def tune_lhs(
     n_per_round: int = 10,
     rounds: int = 2,
     shrink: float = 0.4,
-    seed: int = 0,
     metric: str = "f05",
     on_trial: Callable[[Trial], None] | None = None,
     **calib: object,
 ) -> list[Trial]:
     """Latin-hypercube rounds; each later round samples a box `shrink` times as wide,
-    centred on the best trial so far and clipped to the original bounds."""
+    centred on the best trial so far and clipped to the original bounds. The design is
+    seeded by the calibration's `seed`."""
     _check_metric(metric)
+    seed = int(calib.get("seed", 0))
     _check_bounds(bounds)
     keys = list(bounds)
     lo = np.array([bounds[k][0] for k in keys], dtype=float)
@@ -158,15 +159,16 @@ def tune_tpe(
     *,
     base: SceneConfig,
     n_trials: int = 20,
-    seed: int = 0,
     metric: str = "f05",
     on_trial: Callable[[Trial], None] | None = None,
     **calib: object,
 ) -> list[Trial]:
-    """optuna TPE search (seeded sampler) maximising the mean metric."""
+    """optuna TPE search maximising the mean metric; the sampler is seeded by the
+    calibration's `seed`."""
     import optuna
 
     _check_metric(metric)
+    seed = int(calib.get("seed", 0))
     _check_bounds(bounds)
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     trials: list[Trial] = []

@@ -12,6 +12,7 @@ from transfertwin.cli import main
 from transfertwin.sim import SceneConfig
 from transfertwin.study._calibration import calibrate, parse_object_map
 
+
 def _real_rows(n: int) -> list[dict]:
     from importlib import resources
 

@@ -126,6 +126,9 @@ class OTSController:
         """Form the OTS, check the pre-transfer state, run the belts named by c until a
         terminal state (Eq. 4.9) or t_max, stop the belts.
 
+        Like a real unit, the belts stop at once when the receiving unit's far light barrier
+        is interrupted, so an object is never driven off the far end.
+
         Args:
             direction: TM → TU (Eq. 6.16) or TU → TM (Eq. 6.17).
             face: Face f the object lies on.
@@ -146,8 +149,15 @@ class OTSController:
             for belt in belts_for(conveyor):
                 hal.set_belt_speed(belt, sign * self.speed)
 
+        receiver = self.tu if direction is TransferDirection.TM_TO_TU else self.tm
+        stopped = [False]
+
         def u(_: np.ndarray) -> np.ndarray:
             self.clock.wait(self.dt)
+            if not stopped[0] and receiver.barriers()["far"]:
+                # Safety stop: the object reached the receiver's far edge.
+                self.stop_all()
+                stopped[0] = True
             return self.state(face, conveyor)
 
         try:

@@ -108,3 +108,22 @@ def test_docking_error_moves_the_transfer_unit_without_recompiling():
     tu_body = system.model.body("tu").id
     assert system.data.xpos[tu_body][:2] == pytest.approx([x, y])
     assert x > SceneConfig().gap_m + 0.019
+
+
+def test_controller_stops_belts_at_the_receivers_far_barrier():
+    from transfertwin.control import OTSController
+    from transfertwin.ots import BeltThresholds, TransferDirection
+
+    system = _system()
+    system.place("front", 0.0, -0.325, 0.0)
+    system.clock.wait(0.3)
+    # A success threshold the object can never meet: it runs on to the TU's far end.
+    th = BeltThresholds(x_success=0.49, t_max=8.0)
+    ctl = OTSController(system.tm, system.tu, system, system.clock, thresholds=th,
+                        belt_speed_m_s=0.15, sample_period_s=0.034)  # fmt: skip
+    record = ctl.transfer(TransferDirection.TM_TO_TU, "front", "both")
+    assert record.y == 0
+    assert system.tu.belt_speed("left") == 0.0
+    _, x, _, z, sx, _, sz, _ = system.observe()
+    assert x + sx <= SceneConfig().gap_m + 0.5 + 0.01  # stopped at the end, not run off
+    assert z - sz > -0.005

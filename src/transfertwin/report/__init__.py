@@ -12,6 +12,11 @@ from transfertwin.report._binary_polar import (
     binary_polar_data,
     plot_binary_polar,
 )
+from transfertwin.report._calibration_plots import (
+    ScoreDistribution,
+    plot_score_distribution,
+    score_distribution_data,
+)
 from transfertwin.report._figure import figure_png
 from transfertwin.report._html import REPORT_NAME, write_report
 from transfertwin.report._interval_plot import IntervalPlot, interval_plot_data, plot_intervals
@@ -24,6 +29,12 @@ from transfertwin.report._polar_full_state import (
     plot_polar_full_state,
     polar_full_state_data,
 )
+from transfertwin.report._validation_plots import (
+    ValidationPlot,
+    plot_validation,
+    validate_and_report,
+    validation_plot_data,
+)
 
 __all__ = [
     "REPORT_NAME",
@@ -35,6 +46,8 @@ __all__ = [
     "PolarFace",
     "PolarFullState",
     "PolarMarker",
+    "ScoreDistribution",
+    "ValidationPlot",
     "analyze_and_report",
     "binary_polar_data",
     "figure_png",
@@ -42,6 +55,11 @@ __all__ = [
     "plot_binary_polar",
     "plot_intervals",
     "plot_polar_full_state",
+    "plot_score_distribution",
+    "plot_validation",
     "polar_full_state_data",
+    "score_distribution_data",
+    "validate_and_report",
+    "validation_plot_data",
     "write_report",
 ]

@@ -27,6 +27,7 @@ from transfertwin.study._experiment import (
     system_for,
 )
 from transfertwin.study._intervals import Interval, clopper_pearson, clopper_pearson_array
+from transfertwin.study._metrics import RUN_METRICS, ConfusionMatrix, summarize_runs
 from transfertwin.study._plan import PRESETS, Preset, StudyPlan, experiment_seeds, parse_objects
 from transfertwin.study._profile import load_profile, save_profile, scene_from_dict, scene_to_dict
 from transfertwin.study._runner import ObjectSummary, StudyOutcome, run_study, summarize
@@ -39,12 +40,25 @@ from transfertwin.study._selection import (
     worst_global,
     worst_local,
 )
+from transfertwin.study._validation import (
+    NEWCOMBE_HYBRID_SCORE,
+    VALIDATION_COLUMNS,
+    StateComparison,
+    ValidationResult,
+    compare,
+    newcombe_difference,
+    validate,
+)
 
 __all__ = [
+    "NEWCOMBE_HYBRID_SCORE",
     "PRESETS",
     "RESULT_COLUMNS",
+    "RUN_METRICS",
+    "VALIDATION_COLUMNS",
     "AnalysisResult",
     "CircularSeries",
+    "ConfusionMatrix",
     "DockingErrorModel",
     "ExperimentResult",
     "ExperimentSpec",
@@ -57,20 +71,24 @@ __all__ = [
     "SelectedState",
     "Selection",
     "SeriesStats",
+    "StateComparison",
     "StateStat",
     "StudyOutcome",
     "StudyPlan",
+    "ValidationResult",
     "analyze",
     "best_global",
     "best_local",
     "circular_moving_average",
     "clopper_pearson",
     "clopper_pearson_array",
+    "compare",
     "docking_model_from_dict",
     "experiment_seeds",
     "load_profile",
     "measured_docking_errors",
     "moving_average",
+    "newcombe_difference",
     "parse_objects",
     "run_experiment",
     "run_study",
@@ -81,7 +99,9 @@ __all__ = [
     "series_table",
     "state_table",
     "summarize",
+    "summarize_runs",
     "system_for",
+    "validate",
     "worst_global",
     "worst_local",
 ]

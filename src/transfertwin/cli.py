@@ -393,6 +393,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except InputError as exc:
         print(f"transfertwin: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # e.g. `transfertwin states | head`
+        sys.stderr.close()
+        return 0
     except KeyboardInterrupt:
         print("transfertwin: interrupted", file=sys.stderr)
         return 130

@@ -7,13 +7,12 @@ state or GUI backend is touched; saving to PNG uses the Agg canvas.
 from __future__ import annotations
 
 import io
-import os
-import uuid
-from pathlib import Path
 
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+
+from transfertwin._atomic import write_atomic
 
 __all__ = [
     "FAILURE_COLOR",
@@ -47,15 +46,3 @@ def figure_png(fig: Figure, dpi: int = 100) -> bytes:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)
     return buf.getvalue()
-
-
-def write_atomic(path: Path, data: bytes | str) -> None:
-    """Write ``data`` to ``path`` via a temporary file in the same folder and `os.replace`."""
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
-    try:
-        with tmp.open("xb") as fh:  # honours the umask, unlike mkstemp's 0600
-            fh.write(data.encode("utf-8") if isinstance(data, str) else data)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise

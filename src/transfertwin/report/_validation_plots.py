@@ -22,7 +22,7 @@ from matplotlib.figure import Figure
 
 from transfertwin._errors import InputError
 from transfertwin.report._figure import FAILURE_COLOR, figure_png, new_figure, write_atomic
-from transfertwin.study._analysis import ResultRecord, _state_order
+from transfertwin.study._states import ResultRecord, state_order
 from transfertwin.study._validation import (
     StateComparison,
     ValidationResult,
@@ -98,7 +98,7 @@ def validation_plot_data(
     Raises:
         InputError: If there is no comparison or the alphas differ.
     """
-    items = sorted(comparisons, key=lambda c: _state_order(c.key))
+    items = sorted(comparisons, key=lambda c: state_order(c.key))
     if not items:
         raise InputError("Fig. 6.24/6.25: no compared state to plot")
     alphas = {c.alpha for c in items}

@@ -20,6 +20,7 @@ import tomllib
 from dataclasses import asdict, fields
 from pathlib import Path
 
+from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
 from transfertwin.sim import SceneConfig
 
@@ -102,8 +103,4 @@ def profile_toml(name: str, cfg: SceneConfig) -> str:
 
 def save_profile(path: str | Path, name: str, cfg: SceneConfig) -> Path:
     """Write a profile atomically."""
-    path = Path(path)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(profile_toml(name, cfg))
-    tmp.replace(path)
-    return path
+    return write_atomic(path, profile_toml(name, cfg))

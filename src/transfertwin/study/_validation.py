@@ -30,17 +30,17 @@ from typing import Any
 
 from statsmodels.stats.proportion import confint_proportions_2indep
 
+from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
 from transfertwin.store import read_results
-from transfertwin.study._analysis import (
+from transfertwin.study._intervals import clopper_pearson
+from transfertwin.study._states import (
     ResultRecord,
     StateStat,
-    _state_order,
-    _write_atomic,
     object_sort_key,
+    state_order,
     state_table,
 )
-from transfertwin.study._intervals import clopper_pearson
 
 __all__ = [
     "NEWCOMBE_HYBRID_SCORE",
@@ -359,8 +359,8 @@ def validate(
         )
     result = ValidationResult(
         tuple(comparisons),
-        tuple(sorted(v_run - p_run, key=_state_order)),
-        tuple(sorted(p_run - v_run, key=_state_order)),
+        tuple(sorted(v_run - p_run, key=state_order)),
+        tuple(sorted(p_run - v_run, key=state_order)),
         float(alpha),
     )
     _log.info("%d virtual-only states not compared", len(result.virtual_only))
@@ -379,6 +379,6 @@ def write_validation(result: ValidationResult, out_dir: str | os.PathLike[str]) 
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    _write_atomic(out / "validation.csv", validation_csv_text(result.comparisons))
-    _write_atomic(out / "summary.json", summary_json_text(result))
+    write_atomic(out / "validation.csv", validation_csv_text(result.comparisons))
+    write_atomic(out / "summary.json", summary_json_text(result))
     return out

@@ -18,6 +18,7 @@ import numpy as np
 
 from transfertwin._errors import InputError
 from transfertwin.sim import DockingError
+from transfertwin.study._copula import COPULA_KINDS, copula_from_dict
 
 __all__ = [
     "DockingErrorModel",
@@ -127,6 +128,8 @@ def docking_model_from_dict(desc: dict[str, object]) -> DockingErrorModel:
                 float(desc["x_mm"]), float(desc["y_mm"]), float(desc["theta_deg"])
             )
         )
+    if kind in COPULA_KINDS:
+        return copula_from_dict(desc)
     if kind == "resample":
         source = str(desc.get("source", ""))
         path = None if source.startswith("builtin:") else source

@@ -163,13 +163,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def _plan_from_args(args: argparse.Namespace):  # -> StudyPlan
-    from transfertwin.study import (
-        PRESETS,
-        FixedDockingError,
-        ResampledDockingErrors,
-        StudyPlan,
-        parse_objects,
-    )
+    from transfertwin.study import PRESETS, StudyPlan, parse_objects
     from transfertwin.study._profile import load_profile
 
     preset = PRESETS[args.preset]
@@ -183,15 +177,45 @@ def _plan_from_args(args: argparse.Namespace):  # -> StudyPlan
         theta_step=args.theta_step if args.theta_step is not None else preset.theta_step,
         runs=args.runs if args.runs is not None else preset.runs,
         seed=args.seed,
-        docking=(
-            FixedDockingError(_parse_dock_error(args.dock_error))
-            if args.dock_error
-            else ResampledDockingErrors.from_csv(args.docking_csv)
-        ),
+        docking=_docking_model(args),
         profile_name=profile_name,
         units=args.units,
         **kwargs,
     )
+
+
+def _docking_model(args: argparse.Namespace):  # -> DockingErrorModel
+    """The study's docking-error model from --dock-error / --docking / --docking-csv."""
+    from transfertwin.study import (
+        FixedDockingError,
+        GaussianCopula,
+        PerStationCopula,
+        ResampledDockingErrors,
+        docking_model_from_dict,
+        measured_docking_errors,
+    )
+
+    if args.dock_error:
+        return FixedDockingError(_parse_dock_error(args.dock_error))
+    kind = args.docking
+    if kind == "resample":
+        return ResampledDockingErrors.from_csv(args.docking_csv)
+    if kind == "copula":
+        return GaussianCopula.fit(measured_docking_errors(args.docking_csv))
+    if kind == "copula-per-station":
+        from transfertwin.cli_docking import read_errors
+
+        errors, units = read_errors(args.docking_csv, need_units=True)
+        return PerStationCopula.fit(errors, units)
+    path = Path(kind)
+    if path.suffix.lower() != ".json" or not path.is_file():
+        raise InputError(f"--docking {kind!r}: expected copula, copula-per-station, resample "
+                         "or a model JSON written by 'transfertwin docking fit'")  # fmt: skip
+    try:
+        desc = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise InputError(f"{kind}: cannot read docking model: {exc}") from None
+    return docking_model_from_dict(desc)
 
 
 def cmd_study_run(args: argparse.Namespace) -> int:
@@ -317,8 +341,11 @@ def _add_study(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--profile", help="physics profile TOML (default: built-in defaults)")
     p.add_argument("--units", default="m", help="length unit of mesh files")
-    p.add_argument("--docking-csv", help="measured docking errors to resample (default: "
-                   "the shipped calibration experiments)")  # fmt: skip
+    p.add_argument("--docking", default="copula", help="docking-error model: copula "
+                   "(default, fitted to the measured errors), copula-per-station, resample, "
+                   "or MODEL.json from 'docking fit'")  # fmt: skip
+    p.add_argument("--docking-csv", help="measured docking errors to fit or resample "
+                   "(default: the shipped calibration experiments)")  # fmt: skip
     p.add_argument("--dock-error", help="X_MM,Y_MM,THETA_DEG: one fixed docking error for all "
                    "experiments instead of resampled measurements")  # fmt: skip
     p.add_argument("--max-experiments", type=int, help="stop after this many new results")

@@ -39,11 +39,20 @@ def _out_file(path: str, suffix: str) -> Path:
     return out
 
 
-def _read_table(path: str, need_units: bool) -> tuple[np.ndarray, tuple[str, ...] | None]:
-    """Errors (n, 3) in mm, mm, deg and, if asked, the transfer unit of each row."""
+def read_errors(path: str | None, need_units: bool) -> tuple[np.ndarray, tuple[str, ...] | None]:
+    """Errors (n, 3) in mm, mm, deg and, if asked, the transfer unit of each row.
+
+    `path` None reads the shipped calibration experiments.
+    """
+    from importlib import resources
+
     from transfertwin.study import measured_docking_errors
     from transfertwin.study._copula import MIN_ROWS
 
+    if path is None:
+        src = resources.files("transfertwin.data").joinpath("calibration_experiments.csv")
+        with resources.as_file(src) as shipped:
+            return read_errors(str(shipped), need_units)
     try:
         errors = measured_docking_errors(path)
         units = None
@@ -62,7 +71,7 @@ def _read_table(path: str, need_units: bool) -> tuple[np.ndarray, tuple[str, ...
     return errors, units
 
 
-def _load_model(path: str):  # -> GaussianCopula | PerStationCopula
+def load_docking_model(path: str):  # -> GaussianCopula | PerStationCopula
     from transfertwin.study._copula import copula_from_dict
 
     try:
@@ -87,7 +96,7 @@ def cmd_docking_fit(args: argparse.Namespace) -> int:
     from transfertwin.study._copula import GaussianCopula, PerStationCopula
 
     out = _out_file(args.out, ".json")
-    errors, units = _read_table(args.csv, args.per_station)
+    errors, units = read_errors(args.csv, args.per_station)
     if units is not None:
         model = PerStationCopula.fit(errors, units)
         models = dict(zip(model.units, model.copulas, strict=True))
@@ -109,7 +118,7 @@ def cmd_docking_sample(args: argparse.Namespace) -> int:
 
     out = _out_file(args.out, ".csv")
     n = _check_n(args.n)
-    model = _load_model(args.model)
+    model = load_docking_model(args.model)
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
     if isinstance(model, PerStationCopula):
@@ -142,8 +151,8 @@ def cmd_docking_plot(args: argparse.Namespace) -> int:
     if not out.parent.is_dir():
         raise InputError(f"{args.out}: directory {out.parent} does not exist")
     n = _check_n(args.n)
-    real, _ = _read_table(args.csv, need_units=False)
-    synthetic = _load_model(args.model).sample_n(n, args.seed)
+    real, _ = read_errors(args.csv, need_units=False)
+    synthetic = load_docking_model(args.model).sample_n(n, args.seed)
     pngs = {
         HISTOGRAMS_PNG: figure_png(plot_docking_histograms(docking_hist_data(real, synthetic))),
         CORRELATIONS_PNG: figure_png(

@@ -11,6 +11,12 @@ from transfertwin.study._analysis import (
     series_table,
     state_table,
 )
+from transfertwin.study._copula import (
+    COPULA_KINDS,
+    GaussianCopula,
+    PerStationCopula,
+    copula_from_dict,
+)
 from transfertwin.study._docking_models import (
     DockingErrorModel,
     FixedDockingError,
@@ -51,6 +57,7 @@ from transfertwin.study._validation import (
 )
 
 __all__ = [
+    "COPULA_KINDS",
     "NEWCOMBE_HYBRID_SCORE",
     "PRESETS",
     "RESULT_COLUMNS",
@@ -64,8 +71,10 @@ __all__ = [
     "ExperimentSpec",
     "FixedDockingError",
     "Frame",
+    "GaussianCopula",
     "Interval",
     "ObjectSummary",
+    "PerStationCopula",
     "Preset",
     "ResampledDockingErrors",
     "SelectedState",
@@ -83,6 +92,7 @@ __all__ = [
     "clopper_pearson",
     "clopper_pearson_array",
     "compare",
+    "copula_from_dict",
     "docking_model_from_dict",
     "experiment_seeds",
     "load_profile",

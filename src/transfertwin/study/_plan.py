@@ -142,17 +142,29 @@ class StudyPlan:
             units=str(d.get("units", "m")),
         )
 
-    def specs(self, object_ids: dict[str, str]) -> Iterator[tuple[tuple, ExperimentSpec]]:
-        """(store key, spec) of every experiment, in plan order.
+    def keys(self, object_ids: dict[str, str]) -> Iterator[tuple[str, str, str, int, int]]:
+        """Store keys (object_id, face, conveyor, theta_deg, run) in plan order; cheap."""
+        for ref in self.objects:
+            for s in self.states():
+                for run in range(self.runs):
+                    yield object_ids[ref], s.face, s.conveyor, s.theta_deg, run
+
+    def specs(
+        self, object_ids: dict[str, str], skip: frozenset | set = frozenset()
+    ) -> Iterator[tuple[tuple, ExperimentSpec]]:
+        """(store key, spec) of every experiment not in `skip`, in plan order.
 
         Args:
             object_ids: Object reference → object id (the id used in result rows).
+            skip: Keys to leave out (done already); their docking errors are not drawn.
         """
         for ref in self.objects:
             oid = object_ids[ref]
             for s in self.states():
                 idx = state_index(s.face, s.conveyor, s.theta_deg)
                 for run in range(self.runs):
+                    if (oid, s.face, s.conveyor, s.theta_deg, run) in skip:
+                        continue
                     exp_seed, dock_seed = experiment_seeds(self.seed, oid, idx, run)
                     spec = ExperimentSpec(
                         ref, s.face, s.conveyor, s.theta_deg,

@@ -93,14 +93,8 @@ def _pending(plan: StudyPlan, done: set[tuple]) -> tuple[int, Iterator[Experimen
     if len(set(object_ids.values())) != len(object_ids):
         ids = ", ".join(sorted(object_ids.values()))
         raise InputError(f"two objects share an id ({ids}); rename the mesh files")
-    todo = sum(1 for key, _ in plan.specs(object_ids) if key not in done)
-
-    def gen() -> Iterator[ExperimentSpec]:
-        for key, spec in plan.specs(object_ids):
-            if key not in done:
-                yield spec
-
-    return todo, gen()
+    todo = sum(1 for key in plan.keys(object_ids) if key not in done)
+    return todo, (spec for _, spec in plan.specs(object_ids, done))
 
 
 def _progress(console: Console) -> Progress:

@@ -96,3 +96,27 @@ def test_parse_objects_all_is_the_37_cores():
 def test_invalid_plans_are_input_errors(kw):
     with pytest.raises(InputError):
         _plan(**kw)
+
+
+def test_plan_with_the_default_copula_round_trips_and_resumes_identically():
+    from transfertwin.study import GaussianCopula, measured_docking_errors
+
+    plan = _plan(docking=GaussianCopula.fit(measured_docking_errors()))
+    again = StudyPlan.from_json(plan.to_json())
+    assert again.plan_hash == plan.plan_hash
+    refitted = _plan(docking=GaussianCopula.fit(measured_docking_errors()))
+    assert refitted.plan_hash == plan.plan_hash  # the fit is deterministic: resume works
+    ids = {"o1": "o1", "o2": "o2"}
+    first = [s.docking_error for _, s in plan.specs(ids)][:5]
+    assert first == [s.docking_error for _, s in again.specs(ids)][:5]
+
+
+def test_specs_skip_done_keys_without_changing_the_others():
+    plan = _plan()
+    ids = {"o1": "o1", "o2": "o2"}
+    keys = list(plan.keys(ids))
+    done = set(keys[::3])
+    rest = dict(plan.specs(ids, done))
+    assert set(rest) == set(keys) - done
+    full = dict(plan.specs(ids))
+    assert all(rest[k] == full[k] for k in rest)

@@ -11,34 +11,18 @@ from __future__ import annotations
 
 import argparse
 import tempfile
-import time
 from pathlib import Path
 
-import mujoco
 from rich.console import Console
 
-from transfertwin.sim import DockingError
+from _engine import raw_replay_seconds
 from transfertwin.store import SQLiteResultStore
 from transfertwin.study import (
-    ExperimentSpec,
     ResampledDockingErrors,
     StudyPlan,
     run_experiment,
     run_study,
-    system_for,
 )
-
-
-def _raw_step_rate(object_ref: str, plan: StudyPlan, n: int = 20000) -> float:
-    system = system_for(object_ref, "m", plan.scene)
-    system.reset(DockingError())
-    system.place("front", 0.0, -0.325, 0.0)
-    for belt in ("left", "right"):
-        system.tm.set_belt_speed(belt, 0.15)
-        system.tu.set_belt_speed(belt, 0.15)
-    t0 = time.perf_counter()
-    mujoco.mj_step(system.model, system.data, nstep=n)
-    return n / (time.perf_counter() - t0)
 
 
 def _timed(plan: StudyPlan, workers: int, tmp: Path) -> tuple[float, int]:
@@ -59,14 +43,11 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         rate1, n = _timed(plan, 1, Path(tmp))
         rate_n, _ = _timed(plan, args.workers, Path(tmp))
-        # physics steps per experiment, from the first state of each object
-        steps = []
-        for ref in plan.objects:
-            s = plan.states()[0]
-            run_experiment(ExperimentSpec(ref, s.face, s.conveyor, s.theta_deg))
-            steps.append(system_for(ref, "m", plan.scene).steps_taken)
-        raw = sum(_raw_step_rate(ref, plan) for ref in plan.objects) / len(plan.objects)
-    per_exp = sum(steps) / len(steps)
+        # engine alone on the same plan's first experiments, replayed without Python
+        ids = {ref: ref for ref in plan.objects}
+        sample = [spec for _, spec in plan.specs(ids)][:: max(1, n // 20)]
+        raw_s, raw_steps = raw_replay_seconds(sample, [run_experiment(s) for s in sample])
+    engine = len(sample) / raw_s
     print(
         f"plan: {len(plan.objects)} objects x {len(plan.states())} states x {plan.runs} runs"
         f" = {n} experiments"
@@ -74,12 +55,10 @@ def main() -> None:
     print(f"1 worker           : {rate1:8.2f} experiments/s")
     print(f"{args.workers} workers          : {rate_n:8.2f} experiments/s")
     print(f"scaling            : {rate_n / rate1:8.2f}x  (ideal {args.workers}.00x)")
-    print(f"raw mj_step rate   : {raw:8.0f} steps/s (1 thread, same scenes, same run)")
-    print(
-        f"engine-bound limit : {raw / per_exp:8.2f} experiments/s per worker "
-        f"(~{per_exp:.0f} steps/experiment)"
-    )
-    print(f"1-worker efficiency: {rate1 / (raw / per_exp):8.2f}  (1.0 = all time in mj_step)")
+    print(f"raw mj_step rate   : {raw_steps / raw_s:8.0f} steps/s (same experiments, 1 thread)")
+    print(f"engine-bound limit : {engine:8.2f} experiments/s per worker "
+          f"(~{raw_steps / len(sample):.0f} steps/experiment)")  # fmt: skip
+    print(f"1-worker efficiency: {rate1 / engine:8.2f}  (1.0 = all time in mj_step)")
 
 
 if __name__ == "__main__":

@@ -8,11 +8,13 @@ its compiled virtual systems between experiments; the parent is the store's only
 
 from __future__ import annotations
 
+import itertools
 import logging
 import multiprocessing as mp
 import time
 from collections import Counter, defaultdict
 from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass
 
 from rich.console import Console
@@ -113,17 +115,29 @@ def _progress(console: Console) -> Progress:
 
 def run_rows(specs: Iterable[ExperimentSpec], workers: int) -> Iterator[dict[str, object]]:
     """Run experiments on `workers` processes; yields result rows as they complete
-    (unordered when workers > 1)."""
+    (unordered when workers > 1).
+
+    At most a few experiments per worker are in flight, so an interrupted run loses little.
+    A worker that dies (e.g. a crash inside the engine) raises `BrokenProcessPool` here
+    instead of hanging the study.
+    """
     if workers <= 1:
         for spec in specs:
             yield _run_row(spec)
         return
-    ctx = mp.get_context("spawn")
-    with ctx.Pool(workers) as pool:
+    todo = iter(specs)
+    with ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn")) as pool:
+        pending = {pool.submit(_run_row, s) for s in itertools.islice(todo, 3 * workers)}
         try:
-            yield from pool.imap_unordered(_run_row, specs, chunksize=2)
+            while pending:
+                done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                for future in done:
+                    yield future.result()
+                    nxt = next(todo, None)
+                    if nxt is not None:
+                        pending.add(pool.submit(_run_row, nxt))
         except BaseException:
-            pool.terminate()
+            pool.shutdown(wait=False, cancel_futures=True)
             raise
 
 

@@ -166,6 +166,41 @@ def cmd_tune(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_simstudy(args: argparse.Namespace) -> int:
+    """Simulation-parameter study: each set of SIM_PARAMETER_SETS, R runs; the best set is
+    recorded and saved as a profile."""
+    from transfertwin.report._figure import write_atomic
+    from transfertwin.study._profile import save_profile
+    from transfertwin.study._tuning import (
+        SIM_PARAMETER_SETS,
+        best_trial,
+        scene_with,
+        simulation_parameter_study,
+    )
+
+    rows, scene, _, calib = _common(args)
+    sets = SIM_PARAMETER_SETS
+    if args.sets:
+        wanted = {s.strip() for s in args.sets.split(",")}
+        unknown = wanted - {label for label, _ in sets}
+        if unknown:
+            raise InputError(f"unknown parameter set(s): {', '.join(sorted(unknown))}")
+        sets = tuple(s for s in sets if s[0] in wanted)
+    out = _out_dir(args.out)
+    trials = simulation_parameter_study(
+        rows, base=scene, sets=sets, metric=args.metric,
+        on_trial=lambda t: print(f"{t.label} {t.params}: {t.score:.3f}"), **calib,
+    )  # fmt: skip
+    _write_trials(out, trials, args.metric, "simulation-parameter study")
+    best = best_trial(trials)
+    chosen = {"label": best.label, "params": best.params, args.metric: best.score}
+    write_atomic(out / "chosen.json", json.dumps(chosen, indent=2) + "\n")
+    save_profile(out / "profile.toml", f"simstudy-{best.label}", scene_with(scene, best.params))
+    print(f"chosen: {best.label} {best.params} {args.metric} = {best.score:.3f}; "
+          f"{out / 'profile.toml'}")  # fmt: skip
+    return 0
+
+
 def _shared(p: argparse.ArgumentParser) -> None:
     p.add_argument("--real", default=_DEFAULT_REAL,
                    help="real result table (CSV/Parquet/db); default: the shipped 191")  # fmt: skip
@@ -192,6 +227,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--values", required=True, help="comma-separated values")
     p.add_argument("--metric", default="f05")
     p.set_defaults(func=cmd_sweep)
+    p = csub.add_parser("simstudy", help="simulation-parameter study (Sec. 6.5.1, Fig. 6.12)")
+    _shared(p)
+    p.add_argument("--sets", help="labels to run, e.g. S0,S3,S5 (default: all)")
+    p.add_argument("--metric", default="f05")
+    p.set_defaults(func=cmd_simstudy)
     p = csub.add_parser("tune", help="tune mu and gap (LHS rounds or TPE); save a profile")
     _shared(p)
     p.add_argument("--method", choices=("lhs", "tpe"), default="tpe")

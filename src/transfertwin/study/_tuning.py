@@ -23,7 +23,17 @@ from transfertwin._errors import InputError
 from transfertwin.sim import SceneConfig
 from transfertwin.study._calibration import CalibrationResult, calibrate
 
-__all__ = ["METRICS", "Trial", "best_trial", "scene_with", "sweep", "tune_lhs", "tune_tpe"]
+__all__ = [
+    "METRICS",
+    "SIM_PARAMETER_SETS",
+    "Trial",
+    "best_trial",
+    "scene_with",
+    "simulation_parameter_study",
+    "sweep",
+    "tune_lhs",
+    "tune_tpe",
+]
 
 log = logging.getLogger(__name__)
 
@@ -100,6 +110,45 @@ def sweep(
     trials = []
     for i, value in enumerate(values):
         trial = _evaluate(rows, base, {param: value}, f"S{i}", metric, **calib)
+        trials.append(trial)
+        if on_trial is not None:
+            on_trial(trial)
+    return trials
+
+
+# Our analogue of Table A.4: MuJoCo settings varied one at a time against the defaults (S0).
+SIM_PARAMETER_SETS: tuple[tuple[str, dict[str, object]], ...] = (
+    ("S0", {}),
+    ("S1", {"physics.timestep_s": 0.001}),
+    ("S2", {"physics.timestep_s": 0.004}),
+    ("S3", {"physics.solver": "CG"}),
+    ("S4", {"physics.solver": "PGS"}),
+    ("S5", {"physics.cone": "pyramidal"}),
+    ("S6", {"physics.iterations": 20}),
+    ("S7", {"physics.impratio": 10.0}),
+    ("S8", {"physics.noslip_iterations": 5}),
+    ("S9", {"physics.multiccd": True}),
+    ("S10", {"physics.condim": 3}),
+    ("S11", {"physics.condim": 6}),
+    ("S12", {"physics.integrator": "RK4"}),
+)
+
+
+def simulation_parameter_study(
+    rows: Sequence[Mapping[str, object]],
+    *,
+    base: SceneConfig,
+    sets: Sequence[tuple[str, Mapping[str, object]]] = SIM_PARAMETER_SETS,
+    metric: str = "f05",
+    on_trial: Callable[[Trial], None] | None = None,
+    **calib: object,
+) -> list[Trial]:
+    """Evaluate each labelled parameter set (one setting changed from `base`) with R
+    calibration runs (Sec. 6.5.1). Choose with `best_trial`."""
+    _check_metric(metric)
+    trials = []
+    for label, params in sets:
+        trial = _evaluate(rows, base, params, label, metric, **calib)
         trials.append(trial)
         if on_trial is not None:
             on_trial(trial)

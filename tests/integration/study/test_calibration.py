@@ -80,3 +80,19 @@ def test_calibrate_sweep_bad_metric_is_exit_2(tmp_path, capsys):
                "--limit", "1", "--out", str(tmp_path / "s")])  # fmt: skip
     assert rc == 2
     assert "auc" in capsys.readouterr().err
+
+
+def test_simulation_parameter_study_records_the_chosen_set(tmp_path):
+    out = tmp_path / "sim"
+    rc = main(["calibrate", "simstudy", "--sets", "S0,S5", "--runs", "1", "--limit", "2",
+               "--workers", "1", "--out", str(out)])  # fmt: skip
+    assert rc == 0
+    chosen = json.loads((out / "chosen.json").read_text())
+    assert chosen["label"] in {"S0", "S5"}
+    assert (out / "profile.toml").exists()
+    assert (out / "trials.csv").read_text().count("\n") == 3
+
+
+def test_simulation_parameter_study_rejects_unknown_sets(tmp_path, capsys):
+    assert main(["calibrate", "simstudy", "--sets", "S99", "--out", str(tmp_path / "x")]) == 2
+    assert "S99" in capsys.readouterr().err

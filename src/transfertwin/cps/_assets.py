@@ -15,12 +15,12 @@ from enum import Enum
 from transfertwin._errors import InputError
 
 __all__ = [
+    "TYPE_PROPERTIES",
     "AssetDescriptor",
     "AssetKind",
     "Capability",
     "Layer",
     "PhysicalType",
-    "TYPE_PROPERTIES",
 ]
 
 

@@ -10,6 +10,7 @@ from the hull vertices at camera rate).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
@@ -65,6 +66,8 @@ class SimClock:
         """Advance the simulation by `dt_s` (rounded to whole physics steps, at least 1)."""
         steps = max(1, round(dt_s / self._system.model.opt.timestep))
         self._system.step(steps)
+        for listener in self._system.step_listeners:
+            listener()
 
 
 class MujocoUnitHAL:
@@ -157,6 +160,8 @@ class VirtualTransferSystem:
         self.clock = SimClock(self)
         self.tu_pose = (cfg.gap_m, 0.0, 0.0)
         self.steps_taken = 0
+        # Called after every clock wait: lets a live CPS publish sensor values (barriers).
+        self.step_listeners: list[Callable[[], None]] = []
 
     # -- set-up ---------------------------------------------------------------------------
     def reset(self, docking_error: DockingError) -> None:
@@ -165,13 +170,21 @@ class VirtualTransferSystem:
         for hal in (self.tm, self.tu):
             for belt in BELTS:
                 hal.set_belt_speed(belt, 0.0)
+        self.dock(docking_error)
+        self.steps_taken = 0
+
+    def dock(self, docking_error: DockingError) -> None:
+        """Move the TU to where it lies for `docking_error` (Eq. 6.11), keeping the object.
+
+        Used when a transport module docks at another unit with an object on board.
+        """
         x, y, yaw = tu_pose_in_tip_frame(
             docking_error, self.cfg.gap_m, self.cfg.layout.tip_to_centre_m
         )
         self.tu_pose = (x, y, yaw)
         self.data.mocap_pos[0] = (x, y, 0.0)
         self.data.mocap_quat[0] = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
-        self.steps_taken = 0
+        mujoco.mj_forward(self.model, self.data)
 
     def place(self, face: str, theta_rad: float, x_m: float, y_m: float) -> None:
         """Put the object with its AABB centre at (x, y), yaw θ on `face`, just above the belt."""

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from transfertwin.control import OTSController, TransferRecord
+from transfertwin.control import OTSController, TransferRecord, UnitHAL
 from transfertwin.objects import ObjectModel, load_object
 from transfertwin.ots import (
     POSITIONS,
@@ -159,11 +159,17 @@ def _place_and_settle(system: VirtualTransferSystem, spec: ExperimentSpec) -> No
     system.clock.wait(placement.settle_time_s)
 
 
-def run_experiment(spec: ExperimentSpec) -> ExperimentResult:
+def run_experiment(spec: ExperimentSpec, *, tu_hal: UnitHAL | None = None) -> ExperimentResult:
     """Run E^V (Eq. 6.18): settle, check P_pre, transfer TM → TU, and back if y1 = 1.
 
     Never raises for a simulation problem: the result's status says what happened
     ('ok', 'invalid', 'unstable', 'error').
+
+    Args:
+        spec: The experiment.
+        tu_hal: The transfer unit's HAL; None uses the simulated unit directly. The CPS
+            passes an OPC UA HAL here that reaches the same simulated unit through its
+            server, which must give the same record.
     """
     base = {
         "face": spec.face,
@@ -184,7 +190,7 @@ def run_experiment(spec: ExperimentSpec) -> ExperimentResult:
             frames.append(Frame(phase[0], float(system.data.time), _tuple(system.object_qpos())))
 
     controller = OTSController(
-        system.tm, system.tu, system, system.clock,
+        system.tm, tu_hal if tu_hal is not None else system.tu, system, system.clock,
         thresholds=_thresholds(spec.scene),
         belt_speed_m_s=spec.scene.layout.belt_speed_m_s,
         sample_period_s=spec.scene.steps_per_sample() * spec.scene.physics.timestep_s,

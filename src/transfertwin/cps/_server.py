@@ -185,17 +185,18 @@ class AssetServer:
         outs = [(v.id_short, _python_type(v.value_type)) for v in op.output_variable]
         handler = self.handlers.get(op.id_short)
 
-        async def call(_parent: ua.NodeId, *args: ua.Variant) -> list[ua.Variant]:
+        async def call(_parent: ua.NodeId, *args: ua.Variant) -> list[ua.Variant] | ua.StatusCode:
+            # A bad request becomes a status code for the caller, never a server failure.
             if handler is None:
-                raise ua.UaStatusCodeError(ua.StatusCodes.BadNotImplemented)
+                return ua.StatusCode(ua.StatusCodes.BadNotImplemented)
+            if len(args) != len(ins):
+                return ua.StatusCode(ua.StatusCodes.BadArgumentsMissing)
             values = [a.Value for a in args]
             try:
                 result = await handler(*values)
-            except ua.UaStatusCodeError:
-                raise
             except (ValueError, KeyError, TypeError) as exc:
                 log.info("%s.%s refused: %s", self.asset_id, op.id_short, exc)
-                raise ua.UaStatusCodeError(ua.StatusCodes.BadInvalidArgument) from None
+                return ua.StatusCode(ua.StatusCodes.BadInvalidArgument)
             result = result if isinstance(result, tuple) else (result,)
             return [ua.Variant(t(v), _VARIANT[t]) for (_, t), v in zip(outs, result, strict=True)]
 

@@ -1,0 +1,244 @@
+"""What each asset class exposes in its AAS, as plain data (Sec. 3.1, 5.1–5.3, Table 3.1).
+
+The tables here are the functional core of the virtual representations: `_aas` turns them
+into basyx objects. A virtual model uses the very same rows as its physical twin (Sec. 3.2:
+"structured as identically as possible"), so the two can differ only in values and in the
+provenance of the Identification submodel.
+
+Value types are XSD names (``xs:double``, …) resolved by basyx at build time; units are
+UCUM-like codes attached as a ``Unit`` qualifier.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+
+__all__ = [
+    "CONTROL_INTERFACE",
+    "LOGICAL_CLASSES",
+    "OPERATIONAL_DATA",
+    "PHYSICAL_CLASSES",
+    "Arg",
+    "OperationSpec",
+    "PropertySpec",
+]
+
+
+@dataclass(frozen=True)
+class PropertySpec:
+    """One Property of the OperationalData submodel.
+
+    Attributes:
+        id_short: AAS idShort.
+        xsd: XSD value type name, e.g. ``'xs:double'``.
+        initial: Initial value (matching `xsd`).
+        unit: Unit code (``'m/s'``, ``'m'``, ``'rad'``) or None for dimensionless/text.
+        mixed_external: For a mixed-sync asset (type D/E, Sec. 5.1.1): whether other assets,
+            not the asset itself, keep this value current.
+        description: One English sentence.
+    """
+
+    id_short: str
+    xsd: str
+    initial: str | float | int | bool
+    unit: str | None = None
+    mixed_external: bool = False
+    description: str = ""
+
+
+@dataclass(frozen=True)
+class Arg:
+    """One operation argument (an OperationVariable wrapping a Property)."""
+
+    id_short: str
+    xsd: str
+    unit: str | None = None
+
+
+@dataclass(frozen=True)
+class OperationSpec:
+    """One Operation of the ControlInterface submodel.
+
+    Attributes:
+        id_short: AAS idShort (also the OPC UA method name).
+        inputs: Input variables in call order.
+        outputs: Output variables in return order.
+        description: One English sentence.
+        external_sync: Present only for assets whose state others synchronise (Table 3.1
+            sync 'external' or 'mixed').
+    """
+
+    id_short: str
+    inputs: tuple[Arg, ...]
+    outputs: tuple[Arg, ...]
+    description: str = ""
+    external_sync: bool = False
+
+
+PHYSICAL_CLASSES = frozenset({"transfer_unit", "transport_module", "object"})
+LOGICAL_CLASSES = frozenset(
+    {"transport_module_system", "experiment_manager", "props", "knowledge_graph"}
+)
+
+_S, _D, _B, _I = "xs:string", "xs:double", "xs:boolean", "xs:int"
+
+_BELTS = (
+    PropertySpec("BeltSpeedLeft", _D, 0.0, "m/s", description="Speed of the left belt."),
+    PropertySpec("BeltSpeedRight", _D, 0.0, "m/s", description="Speed of the right belt."),
+    PropertySpec("BarrierNearInterrupted", _B, False, description="Near light barrier blocked."),
+    PropertySpec("BarrierFarInterrupted", _B, False, description="Far light barrier blocked."),
+    PropertySpec(
+        "PossessedObjects",
+        _S,
+        "",
+        mixed_external=True,
+        description="Comma-separated ids of the objects on the belts.",
+    ),
+)
+
+
+def _state() -> PropertySpec:
+    return PropertySpec("State", _S, "idle", description="Current state.")
+
+
+def _count(id_short: str, what: str) -> PropertySpec:
+    return PropertySpec(id_short, _I, 0, description=f"Number of {what}.")
+
+
+OPERATIONAL_DATA: Mapping[str, tuple[PropertySpec, ...]] = MappingProxyType(
+    {
+        "transfer_unit": (
+            *_BELTS,
+            PropertySpec(
+                "DockedTransportModule",
+                _S,
+                "",
+                mixed_external=True,
+                description="Id of the docked transport module, '' if none.",
+            ),
+        ),
+        "transport_module": (
+            *_BELTS,
+            PropertySpec("PoseX", _D, 0.0, "m", description="Map x of the robot."),
+            PropertySpec("PoseY", _D, 0.0, "m", description="Map y of the robot."),
+            PropertySpec("PoseTheta", _D, 0.0, "rad", description="Heading of the robot."),
+            PropertySpec("DockedAt", _S, "", description="Station/unit docked at, '' if none."),
+            PropertySpec("State", _S, "idle", description="idle|busy|docking|transferring."),
+            PropertySpec("CurrentTask", _S, "", description="Id of the running task, '' if none."),
+        ),
+        "object": (
+            PropertySpec("PossessedBy", _S, "", description="Id of the possessing asset."),
+            PropertySpec("Face", _S, "", description="Face resting on the belts."),
+            PropertySpec("Conveyor", _S, "", description="Conveyor (belt) it lies on."),
+            PropertySpec("Theta", _D, 0.0, "rad", description="Yaw on the belts."),
+        ),
+        "transport_module_system": (
+            _state(),
+            _count("QueuedOperations", "queued transport operations"),
+            _count("CompletedOperations", "completed transport operations"),
+        ),
+        "experiment_manager": (_state(), _count("ExperimentsDone", "finished experiments")),
+        "props": (_state(), _count("FusedPoses", "fused poses")),
+        "knowledge_graph": (
+            _state(),
+            _count("Triples", "triples in the graph"),
+            _count("Assets", "assets described"),
+        ),
+    }
+)
+
+_OK = (Arg("ok", _B),)
+_SET_BELT = OperationSpec(
+    "SetBeltSpeed",
+    (Arg("belt", _S), Arg("speed", _D, "m/s")),
+    _OK,
+    "Set one belt ('left'|'right') to a speed.",
+)
+_SET_POSSESSED = OperationSpec(
+    "SetPossessedObjects",
+    (Arg("objects", _S),),
+    _OK,
+    "External state sync: the comma-separated ids of the objects on the belts.",
+    external_sync=True,
+)
+_TRANSFER_ARGS = (Arg("source", _S), Arg("target", _S), Arg("object", _S))
+
+CONTROL_INTERFACE: Mapping[str, tuple[OperationSpec, ...]] = MappingProxyType(
+    {
+        "transfer_unit": (_SET_BELT, _SET_POSSESSED),
+        "transport_module": (
+            _SET_BELT,
+            _SET_POSSESSED,
+            OperationSpec("Dock", (Arg("unit", _S),), _OK, "Dock to a transfer unit."),
+            OperationSpec("Undock", (), _OK, "Undock from the current unit."),
+            OperationSpec(
+                "QueueTransportTask",
+                _TRANSFER_ARGS,
+                (Arg("task_id", _S),),
+                "Queue moving an object from a source to a target unit.",
+            ),
+            OperationSpec(
+                "StartTransfer",
+                (Arg("direction", _S), Arg("face", _S), Arg("conveyor", _S)),
+                (Arg("y", _I),),
+                "Run one object transfer; y is the outcome (1 success).",
+            ),
+        ),
+        "object": (),
+        "transport_module_system": (
+            OperationSpec(
+                "SubmitTransportOperation",
+                _TRANSFER_ARGS,
+                (Arg("operation_id", _S),),
+                "Place a transport operation for allocation.",
+            ),
+        ),
+        "experiment_manager": (
+            OperationSpec(
+                "RunExperiment",
+                (
+                    Arg("unit", _S),
+                    Arg("object", _S),
+                    Arg("face", _S),
+                    Arg("conveyor", _S),
+                    Arg("theta_deg", _I, "deg"),
+                    Arg("seed", _I),
+                ),
+                (Arg("result_json", _S),),
+                "Plan and run one transfer experiment.",
+            ),
+        ),
+        "props": (
+            OperationSpec(
+                "ReportPose",
+                (
+                    Arg("source", _S),
+                    Arg("subject", _S),
+                    Arg("x", _D, "m"),
+                    Arg("y", _D, "m"),
+                    Arg("theta", _D, "rad"),
+                    Arg("sigma_xy", _D, "m"),
+                    Arg("sigma_theta", _D, "rad"),
+                ),
+                _OK,
+                "Report an observed pose of a subject (pose-graph edge).",
+            ),
+            OperationSpec(
+                "FusedPose",
+                (Arg("subject", _S),),
+                (Arg("pose_json", _S),),
+                "The fused pose estimate of a subject.",
+            ),
+        ),
+        "knowledge_graph": (
+            OperationSpec(
+                "Query",
+                (Arg("sparql", _S),),
+                (Arg("result_json", _S),),
+                "Answer a SPARQL query.",
+            ),
+        ),
+    }
+)

@@ -386,9 +386,10 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     _add_transfer(sub)
     _add_study(sub)
-    from transfertwin import cli_calibrate, cli_docking, cli_validate
+    from transfertwin import cli_calibrate, cli_cps, cli_docking, cli_validate
 
     cli_calibrate.register(sub)
+    cli_cps.register(sub)
     cli_docking.register(sub)
     cli_validate.register(sub)
     p = sub.add_parser("states", help="print the 924 pre-transfer states as CSV")

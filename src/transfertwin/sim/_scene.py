@@ -62,8 +62,9 @@ def configure_physics(spec: mujoco.MjSpec, physics: PhysicsConfig) -> None:
     opt.tolerance = physics.tolerance
     opt.impratio = physics.impratio
     opt.noslip_iterations = physics.noslip_iterations
-    if physics.multiccd:
-        opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_MULTICCD)
+    # MuJoCo >= 4 generates multiple contacts per convex pair by default; opt out here.
+    if not physics.multiccd:
+        opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_MULTICCD)
 
 
 def add_belt(

@@ -35,3 +35,23 @@ def test_invalid_values_are_input_errors():
 def test_camera_sampling_is_whole_physics_steps():
     cfg = SceneConfig(camera_rate_hz=30.0)
     assert cfg.steps_per_sample() == 17  # 1/30 s at 2 ms steps, rounded
+
+
+def test_physics_config_reaches_the_compiled_model():
+    import mujoco
+    import numpy as np
+
+    from tests.conftest import box_hulls, box_inertia
+    from transfertwin.sim import build_spec
+
+    cfg = SceneConfig().with_overrides(
+        **{"physics.solver": "CG", "physics.cone": "pyramidal", "physics.multiccd": False,
+           "physics.timestep_s": 0.001, "physics.impratio": 3.0}
+    )  # fmt: skip
+    m = build_spec(box_hulls(), 1.0, np.zeros(3), box_inertia(1.0), cfg).compile()
+    assert m.opt.solver == mujoco.mjtSolver.mjSOL_CG
+    assert m.opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL
+    assert m.opt.timestep == 0.001 and m.opt.impratio == 3.0
+    assert m.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_MULTICCD)
+    default = build_spec(box_hulls(), 1.0, np.zeros(3), box_inertia(1.0), SceneConfig()).compile()
+    assert not default.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_MULTICCD)

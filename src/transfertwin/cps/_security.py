@@ -83,6 +83,9 @@ class RoleRuleset(PermissionRuleset):
                 ua.NodeId(ua.ObjectIds.ActivateSessionRequest_Encoding_DefaultBinary),
                 ua.NodeId(ua.ObjectIds.GetEndpointsRequest_Encoding_DefaultBinary),
                 ua.NodeId(ua.ObjectIds.FindServersRequest_Encoding_DefaultBinary),
+                # RegisterServer2 is a session-less discovery service: it arrives without a
+                # user, protected only by the SignAndEncrypt secure channel.
+                ua.NodeId(ua.ObjectIds.RegisterServer2Request_Encoding_DefaultBinary),
                 ua.NodeId(ua.ObjectIds.CloseSessionRequest_Encoding_DefaultBinary),
                 ua.NodeId(ua.ObjectIds.CloseSecureChannelRequest_Encoding_DefaultBinary),
             }

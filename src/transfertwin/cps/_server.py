@@ -204,6 +204,31 @@ class AssetServer:
         out_args = [_argument(n, t) for n, t in outs]
         await parent.add_method(nid, name, call, in_args, out_args)
 
+    # -- discovery ------------------------------------------------------------------------
+    def register_peer(self, uri: str, url: str, name: str) -> None:
+        """Answer FindServers with this peer too (decentralised discovery)."""
+        registered = ua.RegisteredServer()
+        registered.ServerUri = uri
+        registered.ProductUri = "urn:transfertwin"
+        registered.ServerNames = [ua.LocalizedText(name)]
+        registered.ServerType = ua.ApplicationType.Server
+        registered.DiscoveryUrls = [url]
+        registered.IsOnline = True
+        self._server.iserver.register_server(registered)
+
+    def registered_peers(self) -> list[tuple[str, str]]:
+        """(application URI, discovery URL) of every server registered here."""
+        out = []
+        for uri, desc in list(self._server.iserver._known_servers.items()):
+            urls = desc.Server.DiscoveryUrls
+            if uri != f"urn:transfertwin:{self.asset_id}" and urls:
+                out.append((uri, urls[0]))
+        return out
+
+    def unregister_peer(self, uri: str) -> None:
+        """Stop answering FindServers with a peer that left."""
+        self._server.iserver._known_servers.pop(uri, None)
+
     # -- values ---------------------------------------------------------------------------
     async def set(self, submodel: str, prop: str, value: Any) -> None:
         """Update a variable (the asset synchronising its own state)."""

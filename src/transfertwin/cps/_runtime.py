@@ -27,6 +27,7 @@ from transfertwin.cps._aas import build_representation, externally_synced
 from transfertwin.cps._aas_demo import demo_descriptors
 from transfertwin.cps._assets import AssetDescriptor
 from transfertwin.cps._client import connect
+from transfertwin.cps._discovery import Discovery, Peer
 from transfertwin.cps._environment import Environment
 from transfertwin.cps._kg import KnowledgeGraph
 from transfertwin.cps._props import PoseGraph, PoseObservation
@@ -63,6 +64,7 @@ class CpsConfig:
         insecure: Serve NoSecurity (explicit opt-in only).
         time_scale: Simulated seconds per wall second (0: as fast as possible).
         seed: Seed of the docking errors drawn for transport operations.
+        gossip_period_s: Discovery gossip period of every asset.
         scene: Virtual system configuration.
     """
 
@@ -71,6 +73,7 @@ class CpsConfig:
     insecure: bool = False
     time_scale: float = 0.0
     seed: int = 0
+    gossip_period_s: float = 5.0
     scene: SceneConfig = field(default_factory=SceneConfig)
 
 
@@ -78,6 +81,7 @@ class CpsConfig:
 class _Asset:
     desc: AssetDescriptor
     server: AssetServer
+    discovery: Discovery | None = None
 
 
 class Cps:
@@ -113,6 +117,8 @@ class Cps:
         for task in list(self._tasks):
             task.cancel()
         for aid, asset in reversed(list(self.assets.items())):
+            if asset.discovery is not None:
+                await asset.discovery.stop()
             self.kg.leave(aid)
             await asset.server.__aexit__(None, None, None)
         self.assets.clear()
@@ -152,18 +158,41 @@ class Cps:
         )  # fmt: skip
         server = AssetServer(desc.asset_id, rep.submodels, cfg, self._handlers(desc), writable)
         await server.__aenter__()
-        self.assets[desc.asset_id] = _Asset(desc, server)
+        asset = _Asset(desc, server)
+        self.assets[desc.asset_id] = asset
+        asset.discovery = Discovery(
+            server, period_s=self.config.gossip_period_s, on_change=self._peer_change(desc)
+        )
+        seeds = [a.server.endpoint for a in self.assets.values() if a is not asset][:1]
+        await asset.discovery.join(seeds, self._connector)
         self.kg.join(desc, endpoint=server.endpoint, security_policy=server.security_policy)
         if desc.asset_class == "transport_module":
             self.kg.set_state(desc.asset_id, await server.get("OperationalData", "State"))
         log.info("%s joined at %s", desc.asset_id, server.endpoint)
 
     async def leave(self, asset_id: str) -> None:
-        """Take one asset off the network; the knowledge graph notices."""
+        """Take one asset off the network; its peers notice through discovery."""
         asset = self.assets.pop(asset_id)
-        self.kg.leave(asset_id)
+        if asset.discovery is not None:
+            await asset.discovery.stop()
         await asset.server.__aexit__(None, None, None)
         log.info("%s left", asset_id)
+
+    def _peer_change(self, desc: AssetDescriptor) -> Callable[[str, Peer], None]:
+        """The knowledge graph asset keeps the graph current from what its discovery sees."""
+
+        def changed(kind: str, peer: Peer) -> None:
+            if desc.asset_class == "knowledge_graph" and kind == "leave":
+                self.kg.leave(peer.asset_id)
+
+        return changed
+
+    def _connector(self, url: str):
+        return connect(
+            url, url.rsplit("/", 1)[-1],
+            credentials=None if self.config.insecure else self.credentials,
+            cert_dir=self.config.workdir / "certs", insecure=self.config.insecure,
+        )  # fmt: skip
 
     # -- clients --------------------------------------------------------------------------
     def client(self, asset_id: str, role: str = "operator"):

@@ -12,7 +12,7 @@ from transfertwin.study import ExperimentSpec, run_experiment
 
 def test_demo_cps_end_to_end(tmp_path):
     async def scenario():
-        async with Cps(CpsConfig(tmp_path, time_scale=0.0)) as cps:
+        async with Cps(CpsConfig(tmp_path, time_scale=0.0, gossip_period_s=0.3)) as cps:
             info = json.loads((tmp_path / "cps.json").read_text())
             assert {a["id"] for a in info["assets"]} >= {"TU_A", "TU_C", "TM_1", "TMS", "KG"}
             assert all(a["security_policy"] == "Basic256Sha256_SignAndEncrypt"
@@ -57,8 +57,17 @@ def test_demo_cps_end_to_end(tmp_path):
                         "state_end_1", "state_end_2"):  # fmt: skip
                 assert remote[key] == local[key], key
 
-            # An asset that leaves is noticed by the graph.
+            # An asset that leaves is noticed by the graph (through the KG's discovery).
+            left = asyncio.Event()
+            loop = asyncio.get_running_loop()
+            cps.kg.subscribe(
+                lambda kind, aid: (
+                    aid == "TU_D" and kind == "leave" and loop.call_soon_threadsafe(left.set)
+                )
+            )
+            assert "TU_D" in cps.kg.receivers_at("D")
             await cps.leave("TU_D")
+            await asyncio.wait_for(left.wait(), timeout=60)
             assert "TU_D" not in cps.kg.receivers_at("D")
             status = {a["id"]: a["status"] for a in cps.kg.assets()}
             assert status.get("TU_D") in (None, "offline")

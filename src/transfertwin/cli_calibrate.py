@@ -17,15 +17,10 @@ _DEFAULT_REAL = "builtin:calibration_experiments.csv"
 
 
 def _real_rows(path: str) -> list[dict[str, object]]:
-    from importlib import resources
-
+    from transfertwin.data import calibration_csv_path
     from transfertwin.store import read_results
 
-    if path == _DEFAULT_REAL:
-        src = resources.files("transfertwin.data").joinpath("calibration_experiments.csv")
-        with resources.as_file(src) as real:
-            return read_results(real)
-    return read_results(path)
+    return read_results(calibration_csv_path() if path == _DEFAULT_REAL else path)
 
 
 def _common(args: argparse.Namespace):

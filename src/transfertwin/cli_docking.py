@@ -44,15 +44,12 @@ def read_errors(path: str | None, need_units: bool) -> tuple[np.ndarray, tuple[s
 
     `path` None reads the shipped calibration experiments.
     """
-    from importlib import resources
-
+    from transfertwin.data import calibration_csv_path
     from transfertwin.study import measured_docking_errors
     from transfertwin.study._copula import MIN_ROWS
 
     if path is None:
-        src = resources.files("transfertwin.data").joinpath("calibration_experiments.csv")
-        with resources.as_file(src) as shipped:
-            return read_errors(str(shipped), need_units)
+        return read_errors(str(calibration_csv_path()), need_units)
     try:
         errors = measured_docking_errors(path)
         units = None

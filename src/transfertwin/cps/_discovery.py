@@ -61,6 +61,7 @@ class Discovery:
     peers: dict[str, Peer] = field(default_factory=dict)
     _misses: dict[str, int] = field(default_factory=dict)
     _gone: dict[str, float] = field(default_factory=dict)  # uri -> when it was dropped
+    _turn: int = 0
     _task: asyncio.Task | None = None
 
     @property
@@ -127,22 +128,30 @@ class Discovery:
         self._task = asyncio.ensure_future(self._gossip())
 
     async def round(self) -> None:
-        """One gossip round: take the registrations our own server received, ask every
-        known peer for its list, drop the silent ones."""
+        """One gossip round: take the registrations our own server received, then ask the
+        next known peer (round robin) for its list; drop a peer silent `max_misses` times.
+
+        One peer per round keeps the traffic linear in the number of assets; every peer is
+        visited once per len(peers) rounds.
+        """
         for uri, url in self.server.registered_peers():
             if uri not in self.peers and uri not in self._gone:
                 self._add(Peer(uri, url), direct=True)
-        for uri, peer in list(self.peers.items()):
-            try:
-                found = await self._ask(peer.url)
-            except (TimeoutError, OSError, ua.UaError, ConnectionError):
-                self._misses[uri] = self._misses.get(uri, 0) + 1
-                if self._misses[uri] >= self.max_misses:
-                    self._drop(uri)
-                continue
-            self._misses[uri] = 0
-            for other in found:
-                self._add(other)
+        if not self.peers:
+            return
+        uris = sorted(self.peers)
+        self._turn = (self._turn + 1) % len(uris)
+        uri = uris[self._turn]
+        try:
+            found = await self._ask(self.peers[uri].url)
+        except (TimeoutError, OSError, ua.UaError, ConnectionError):
+            self._misses[uri] = self._misses.get(uri, 0) + 1
+            if self._misses[uri] >= self.max_misses:
+                self._drop(uri)
+            return
+        self._misses[uri] = 0
+        for other in found:
+            self._add(other)
 
     async def _gossip(self) -> None:
         while True:

@@ -73,7 +73,7 @@ class CpsConfig:
     insecure: bool = False
     time_scale: float = 0.0
     seed: int = 0
-    gossip_period_s: float = 5.0
+    gossip_period_s: float = 1.0
     scene: SceneConfig = field(default_factory=SceneConfig)
 
 

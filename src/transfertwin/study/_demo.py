@@ -8,24 +8,24 @@ experiment, prints a table, writes the results as CSV and one image strip.
 from __future__ import annotations
 
 import csv
-from importlib import resources
 from pathlib import Path
 
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
+from transfertwin.data import calibration_csv_path
 from transfertwin.ots import experiment_states, filter_theta_step
 from transfertwin.sim import DockingError
-from transfertwin.study._experiment import RESULT_COLUMNS, ExperimentSpec, run_experiment
+from transfertwin.store import export_results
+from transfertwin.study._experiment import ExperimentSpec, run_experiment
 
 __all__ = ["real_docking_error", "run_demo"]
 
 
 def real_docking_error(experiment_id: int = 0) -> DockingError:
     """The measured docking error of one shipped real calibration experiment."""
-    text = resources.files("transfertwin.data").joinpath("calibration_experiments.csv")
-    with text.open() as fh:
+    with calibration_csv_path().open() as fh:
         for row in csv.DictReader(fh):
             if int(row["experiment_id"]) == experiment_id:
                 return DockingError.from_mm_deg(
@@ -65,13 +65,6 @@ def run_demo(out_dir: Path, *, object_ref: str = "o1", step_deg: int = 45) -> Pa
     share = sum(r.success for r in ok) / len(ok) if ok else float("nan")
     console.print(f"success share over {len(ok)} valid states: {share:.2f}")
     out_dir.mkdir(parents=True, exist_ok=True)
-    path = out_dir / "results.csv"
-    tmp = path.with_suffix(".csv.tmp")
-    with tmp.open("w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(RESULT_COLUMNS))
-        writer.writeheader()
-        for r in results:
-            writer.writerow(r.row())
-    tmp.replace(path)
+    path = export_results([r.row() for r in results], out_dir / "results.csv")
     console.print(f"results: {path}")
     return path

@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import csv
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 
 from transfertwin._errors import InputError
+from transfertwin.data import CALIBRATION_CSV, calibration_csv_path
 from transfertwin.sim import DockingError
 from transfertwin.study._copula import COPULA_KINDS, copula_from_dict
 
@@ -68,9 +68,8 @@ def measured_docking_errors(path: str | Path | None = None) -> np.ndarray:
             None reads the study's calibration experiments shipped with the package.
     """
     if path is None:
-        src = resources.files("transfertwin.data").joinpath("calibration_experiments.csv")
-        text = src.read_text()
-        name = "calibration_experiments.csv"
+        text = calibration_csv_path().read_text()
+        name = CALIBRATION_CSV
     else:
         try:
             text = Path(path).read_text()

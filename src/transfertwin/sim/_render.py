@@ -31,8 +31,8 @@ def pick_frames(n_available: int, n_wanted: int) -> list[int]:
 def _camera() -> mujoco.MjvCamera:
     cam = mujoco.MjvCamera()
     cam.type = mujoco.mjtCamera.mjCAMERA_FREE
-    cam.lookat[:] = (0.0, 0.0, 0.0)
-    cam.distance = 1.25
+    cam.lookat[:] = (0.0, 0.0, 0.02)
+    cam.distance = 0.95
     cam.azimuth = 200.0
     cam.elevation = -55.0
     return cam

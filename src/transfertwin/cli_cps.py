@@ -151,6 +151,25 @@ def cmd_order(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_export(args: argparse.Namespace) -> int:
+    """Write the demo assets' AAS (and their physical twins') as JSON, XML or AASX."""
+    from transfertwin.cps import (
+        build_representation,
+        demo_descriptors,
+        export_aas,
+        physical_twin,
+        validate_export,
+    )
+    from transfertwin.cps._assets import AssetKind
+
+    descs = list(demo_descriptors())
+    if args.with_physical:
+        descs += [physical_twin(d) for d in descs if d.kind is AssetKind.VIRTUAL_MODEL]
+    path = export_aas([build_representation(d) for d in descs], Path(args.out))
+    print(f"{path}: {validate_export(path)} identifiables, valid")
+    return 0
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     """Add `cps up|status|order` to the CLI."""
     cps = sub.add_parser("cps", help="demo cyber-physical system on loopback (Ch. 3, Sec. 5.3)")
@@ -174,3 +193,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--object", required=True)
     p.add_argument("--timeout", type=float, default=600.0)
     p.set_defaults(func=cmd_order)
+    p = csub.add_parser("export", help="write the demo assets' AAS as JSON, XML or AASX")
+    p.add_argument("--out", required=True, help="FILE.json, FILE.xml or FILE.aasx")
+    p.add_argument("--with-physical", action="store_true",
+                   help="also the physical twins (TU_A_P, ...) of the virtual models")  # fmt: skip
+    p.set_defaults(func=cmd_export)

@@ -52,3 +52,18 @@ def test_cps_commands_need_a_running_cps(tmp_path):
     res = _tt("cps", "status", "--workdir", str(tmp_path))
     assert res.returncode == 2
     assert "cps up" in res.stderr and len(res.stderr.strip().splitlines()) == 1
+
+
+def test_cps_export_writes_valid_aas_in_every_format(tmp_path):
+    from transfertwin.cps import read_export
+
+    for suffix in (".json", ".xml", ".aasx"):
+        out = tmp_path / f"demo{suffix}"
+        res = _tt("cps", "export", "--out", str(out), "--with-physical", timeout=120)
+        assert res.returncode == 0, res.stderr
+        assert "valid" in res.stdout
+        ids = {obj.id for obj in read_export(out)}
+        assert "https://transfertwin.dev/ids/aas/TU_A" in ids
+        assert "https://transfertwin.dev/ids/aas/TU_A_P" in ids
+    bad = _tt("cps", "export", "--out", str(tmp_path / "demo.txt"), timeout=120)
+    assert bad.returncode == 2 and not (tmp_path / "demo.txt").exists()

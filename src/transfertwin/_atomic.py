@@ -1,24 +1,88 @@
-"""Atomic file writes shared by every layer (stdlib only, like `_errors`)."""
+"""Atomic file writes shared by every layer (stdlib only, like `_errors`).
+
+A temporary file is written next to the target, flushed and fsync'ed, then renamed over it
+(`write_atomic`) or hard-linked to it (`write_bytes_exclusive`, first writer wins), so
+readers see the old file or the whole new one, never a part.
+"""
 
 from __future__ import annotations
 
 import os
-import uuid
+import tempfile
 from pathlib import Path
 
-__all__ = ["write_atomic"]
+__all__ = ["write_atomic", "write_bytes_atomic", "write_bytes_exclusive"]
 
 
-def write_atomic(path: str | Path, data: bytes | str) -> Path:
-    """Write `data` (text as UTF-8) to `path` via a temporary file in the same folder and
-    `os.replace`, so readers see the old file or the whole new one, never a part."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
+def _temporary_copy(path: Path, data: bytes) -> Path:
+    """Write ``data`` to a flushed, fsync'ed temporary file in ``path``'s directory."""
+    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
-        with tmp.open("xb") as fh:  # honours the umask, unlike mkstemp's 0600
-            fh.write(data.encode("utf-8") if isinstance(data, str) else data)
+        with os.fdopen(fd, "wb") as handle:
+            os.fchmod(handle.fileno(), 0o644)  # mkstemp creates 0o600
+            handle.write(data)
+            handle.flush()
+            os.fsync(handle.fileno())
+    except BaseException:
+        Path(name).unlink(missing_ok=True)
+        raise
+    return Path(name)
+
+
+def write_bytes_atomic(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` so that readers see either the old or the new file.
+
+    The temporary file lives in the target's directory (same file system) and
+    is renamed over the target with `os.replace`; on any error it is removed
+    and no partial file is left behind.
+
+    Args:
+        path: Destination file; its directory must exist.
+        data: The bytes to write.
+
+    Raises:
+        OSError: If the directory is not writable or the disk is full.
+    """
+    tmp = _temporary_copy(path, data)
+    try:
         os.replace(tmp, path)
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
+
+
+def write_bytes_exclusive(path: Path, data: bytes) -> bool:
+    """Create ``path`` with ``data`` atomically unless it exists (first writer wins).
+
+    The complete temporary file is hard-linked to ``path``, which fails if
+    ``path`` exists, so concurrent writers never replace each other's file.
+    Where hard links are unsupported it falls back to `write_bytes_atomic`.
+
+    Args:
+        path: Destination file; its directory must exist.
+        data: The bytes to write.
+
+    Returns:
+        True if this call created ``path``, False if it already existed.
+
+    Raises:
+        OSError: If the directory is not writable or the disk is full.
+    """
+    tmp = _temporary_copy(path, data)
+    try:
+        os.link(tmp, path)
+    except FileExistsError:
+        return False
+    except OSError:
+        os.replace(tmp, path)
+        return True
+    finally:
+        tmp.unlink(missing_ok=True)
+    return True
+
+
+def write_atomic(path: str | Path, data: bytes | str) -> Path:
+    """`write_bytes_atomic` for text (UTF-8) or bytes; returns the path."""
+    path = Path(path)
+    write_bytes_atomic(path, data.encode("utf-8") if isinstance(data, str) else data)
     return path

@@ -24,8 +24,8 @@ import numpy as np
 import trimesh
 from scipy.spatial import ConvexHull, QhullError
 
+from transfertwin._atomic import write_bytes_exclusive
 from transfertwin._errors import InputError
-from transfertwin.objects._atomic import write_bytes_exclusive
 
 __all__ = [
     "CACHE_ENV_VAR",

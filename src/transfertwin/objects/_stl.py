@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from transfertwin.objects._atomic import write_bytes_atomic
+from transfertwin._atomic import write_bytes_atomic
 
 __all__ = ["mesh_content_hash", "stl_bytes", "write_stl"]
 

@@ -12,8 +12,8 @@ from manifold3d import Manifold
 from scipy.spatial import ConvexHull
 
 from transfertwin import InputError
+from transfertwin._atomic import write_bytes_atomic, write_bytes_exclusive
 from transfertwin.objects import _hulls, decompose_hulls, default_cache_dir
-from transfertwin.objects._atomic import write_bytes_atomic, write_bytes_exclusive
 
 
 def _l_shape() -> trimesh.Trimesh:

@@ -14,12 +14,12 @@ from pathlib import Path
 __all__ = ["write_atomic", "write_bytes_atomic", "write_bytes_exclusive"]
 
 
-def _temporary_copy(path: Path, data: bytes) -> Path:
+def _temporary_copy(path: Path, data: bytes, mode: int = 0o644) -> Path:
     """Write ``data`` to a flushed, fsync'ed temporary file in ``path``'s directory."""
     fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
         with os.fdopen(fd, "wb") as handle:
-            os.fchmod(handle.fileno(), 0o644)  # mkstemp creates 0o600
+            os.fchmod(handle.fileno(), mode)  # mkstemp creates 0o600
             handle.write(data)
             handle.flush()
             os.fsync(handle.fileno())
@@ -29,7 +29,7 @@ def _temporary_copy(path: Path, data: bytes) -> Path:
     return Path(name)
 
 
-def write_bytes_atomic(path: Path, data: bytes) -> None:
+def write_bytes_atomic(path: Path, data: bytes, mode: int = 0o644) -> None:
     """Write ``data`` to ``path`` so that readers see either the old or the new file.
 
     The temporary file lives in the target's directory (same file system) and
@@ -39,11 +39,12 @@ def write_bytes_atomic(path: Path, data: bytes) -> None:
     Args:
         path: Destination file; its directory must exist.
         data: The bytes to write.
+        mode: Permission bits of the new file.
 
     Raises:
         OSError: If the directory is not writable or the disk is full.
     """
-    tmp = _temporary_copy(path, data)
+    tmp = _temporary_copy(path, data, mode)
     try:
         os.replace(tmp, path)
     except BaseException:
@@ -81,8 +82,12 @@ def write_bytes_exclusive(path: Path, data: bytes) -> bool:
     return True
 
 
-def write_atomic(path: str | Path, data: bytes | str) -> Path:
-    """`write_bytes_atomic` for text (UTF-8) or bytes; returns the path."""
+def write_atomic(path: str | Path, data: bytes | str, mode: int = 0o644) -> Path:
+    """`write_bytes_atomic` for text (UTF-8) or bytes with file `mode`; returns the path.
+
+    The mode is set on the temporary file before any data is written, so a secret written
+    with mode 0o600 is never readable by others, not even for a moment.
+    """
     path = Path(path)
-    write_bytes_atomic(path, data.encode("utf-8") if isinstance(data, str) else data)
+    write_bytes_atomic(path, data.encode("utf-8") if isinstance(data, str) else data, mode)
     return path

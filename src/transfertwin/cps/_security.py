@@ -115,8 +115,7 @@ def new_credentials() -> Credentials:
 def write_credentials(path: Path, creds: Credentials) -> Path:
     """Write credentials as JSON readable by the owner only (mode 0600)."""
     data = {role: {"username": u, "password": p} for role, (u, p) in creds.users.items()}
-    write_atomic(path, json.dumps(data, indent=2) + "\n")
-    os.chmod(path, 0o600)
+    write_atomic(path, json.dumps(data, indent=2) + "\n", mode=0o600)
     return path
 
 

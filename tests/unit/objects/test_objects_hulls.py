@@ -142,3 +142,15 @@ def test_write_bytes_exclusive_creates_once(tmp_path: Path) -> None:
     write_bytes_atomic(target, b"third")
     assert target.read_bytes() == b"third"
     assert [p.name for p in tmp_path.iterdir()] == ["file.bin"]
+
+
+def test_write_atomic_sets_the_mode_before_any_byte_is_written(tmp_path):
+    import stat
+
+    from transfertwin._atomic import write_atomic
+
+    secret = write_atomic(tmp_path / "secret.json", "{}", mode=0o600)
+    public = write_atomic(tmp_path / "public.txt", b"x")
+    assert stat.S_IMODE(secret.stat().st_mode) == 0o600
+    assert stat.S_IMODE(public.stat().st_mode) == 0o644
+    assert list(tmp_path.glob(".*.tmp")) == []

@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from transfertwin.objects._atomic import write_bytes_atomic
+from transfertwin._atomic import write_bytes_atomic
 from transfertwin.objects._builtin import MANIFEST_NAME
 from transfertwin.objects._core_draw import core_spec
 from transfertwin.objects._core_spec import BUILTIN_COUNT

@@ -17,13 +17,13 @@ import logging
 from collections.abc import Awaitable, Callable
 
 from transfertwin._errors import InputError
-from transfertwin.control import OTSController
 from transfertwin.cps._assets import AssetDescriptor
 from transfertwin.cps._props import PoseObservation
 from transfertwin.cps._remote_hal import OpcUaUnitHAL
 from transfertwin.cps._server import AssetServer
-from transfertwin.ots import BeltThresholds, TransferDirection
+from transfertwin.ots import TransferDirection
 from transfertwin.study import ExperimentSpec, experiment_seeds, run_experiment
+from transfertwin.study._experiment import scene_controller
 
 __all__ = ["AssetApplications"]
 
@@ -199,12 +199,8 @@ class AssetApplications:
         scene = self.config.scene
         async with self.client(unit) as session:
             remote = OpcUaUnitHAL(session, asyncio.get_running_loop(), timeout_s=30)
-            ctl = OTSController(
-                self.env.system.tm, remote, self.env.system, self.env.clock,
-                thresholds=BeltThresholds(t_max=scene.t_max_s),
-                belt_speed_m_s=scene.layout.belt_speed_m_s,
-                sample_period_s=scene.steps_per_sample() * scene.physics.timestep_s,
-            )  # fmt: skip
+            system = self.env.system
+            ctl = scene_controller(scene, system.tm, remote, system, self.env.clock)
             record = await asyncio.to_thread(ctl.transfer, direction, "front", None)
         return record.y
 

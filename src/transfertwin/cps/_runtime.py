@@ -182,21 +182,20 @@ class Cps(AssetApplications):
         return changed
 
     def _connector(self, url: str):
+        """An operator session to a peer known only by its URL (discovery)."""
+        return self._session(url, url.rsplit("/", 1)[-1])
+
+    def _session(self, url: str, asset_id: str, role: str = "operator", timeout_s: float = 10.0):
         return connect(
-            url, url.rsplit("/", 1)[-1],
-            credentials=None if self.config.insecure else self.credentials,
-            cert_dir=self.config.workdir / "certs", insecure=self.config.insecure,
+            url, asset_id, credentials=None if self.config.insecure else self.credentials,
+            role=role, cert_dir=self.config.workdir / "certs", insecure=self.config.insecure,
+            timeout_s=timeout_s,
         )  # fmt: skip
 
     # -- clients --------------------------------------------------------------------------
     def client(self, asset_id: str, role: str = "operator"):
         """An OPC UA session with one asset of this CPS."""
-        return connect(
-            self.assets[asset_id].server.endpoint, asset_id,
-            credentials=None if self.config.insecure else self.credentials, role=role,
-            cert_dir=self.config.workdir / "certs", insecure=self.config.insecure,
-            timeout_s=120.0,
-        )  # fmt: skip
+        return self._session(self.assets[asset_id].server.endpoint, asset_id, role, 120.0)
 
     def _spawn(self, coro: Awaitable[object]) -> None:
         task = asyncio.ensure_future(coro)

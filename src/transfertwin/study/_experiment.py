@@ -11,11 +11,12 @@ import functools
 import json
 import logging
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from transfertwin.control import OTSController, TransferRecord, UnitHAL
+from transfertwin.control import Clock, ObjectSensor, OTSController, TransferRecord, UnitHAL
 from transfertwin.objects import ObjectModel, load_object
 from transfertwin.ots import (
     POSITIONS,
@@ -35,6 +36,7 @@ __all__ = [
     "ExperimentSpec",
     "Frame",
     "run_experiment",
+    "scene_controller",
     "system_for",
 ]
 
@@ -139,8 +141,22 @@ def system_for(ref: str, units: str, scene: SceneConfig) -> VirtualTransferSyste
     )
 
 
-def _thresholds(scene: SceneConfig) -> BeltThresholds:
-    return BeltThresholds(t_max=scene.t_max_s)
+def scene_controller(
+    scene: SceneConfig,
+    tm: UnitHAL,
+    tu: UnitHAL,
+    sensor: ObjectSensor,
+    clock: Clock,
+    on_sample: Callable[[], None] | None = None,
+) -> OTSController:
+    """The OTS controller configured by a scene: its t_max, belt speed and camera rate."""
+    return OTSController(
+        tm, tu, sensor, clock,
+        thresholds=BeltThresholds(t_max=scene.t_max_s),
+        belt_speed_m_s=scene.layout.belt_speed_m_s,
+        sample_period_s=scene.steps_per_sample() * scene.physics.timestep_s,
+        on_sample=on_sample,
+    )  # fmt: skip
 
 
 def _tuple(state: np.ndarray) -> tuple[float, ...]:
@@ -189,19 +205,14 @@ def run_experiment(spec: ExperimentSpec, *, tu_hal: UnitHAL | None = None) -> Ex
         if spec.record:
             frames.append(Frame(phase[0], float(system.data.time), _tuple(system.object_qpos())))
 
-    controller = OTSController(
-        system.tm, tu_hal if tu_hal is not None else system.tu, system, system.clock,
-        thresholds=_thresholds(spec.scene),
-        belt_speed_m_s=spec.scene.layout.belt_speed_m_s,
-        sample_period_s=spec.scene.steps_per_sample() * spec.scene.physics.timestep_s,
-        on_sample=record,
-    )  # fmt: skip
+    tu = tu_hal if tu_hal is not None else system.tu
+    controller = scene_controller(spec.scene, system.tm, tu, system, system.clock, record)
     try:
         _place_and_settle(system, spec)
         phase[0] = "there"
         system.clock.start()
         s_pre = controller.state(spec.face, spec.conveyor)
-        if not bool(experiment_pre_transfer_set(_thresholds(spec.scene)).contains(s_pre)):
+        if not bool(experiment_pre_transfer_set(controller.thresholds).contains(s_pre)):
             return ExperimentResult(
                 object_id, **base, y1=None, y2=None, success=None, t_end_s=math.nan,
                 status="invalid", message="settled state is not a pre-transfer state (Eq. 6.1)",

@@ -13,8 +13,6 @@ import argparse
 import tempfile
 from pathlib import Path
 
-from rich.console import Console
-
 from _engine import raw_replay_seconds
 from transfertwin.store import SQLiteResultStore
 from transfertwin.study import (
@@ -27,7 +25,7 @@ from transfertwin.study import (
 
 def _timed(plan: StudyPlan, workers: int, tmp: Path) -> tuple[float, int]:
     with SQLiteResultStore(tmp / f"w{workers}.sqlite") as store:
-        outcome = run_study(plan, store, workers=workers, console=Console(quiet=True))
+        outcome = run_study(plan, store, workers=workers)
     return outcome.rate, outcome.ran
 
 

@@ -86,8 +86,10 @@ def write_atomic(path: str | Path, data: bytes | str, mode: int = 0o644) -> Path
     """`write_bytes_atomic` for text (UTF-8) or bytes with file `mode`; returns the path.
 
     The mode is set on the temporary file before any data is written, so a secret written
-    with mode 0o600 is never readable by others, not even for a moment.
+    with mode 0o600 is never readable by others, not even for a moment. Missing parent
+    directories are created (outputs are written last, once their content is known).
     """
     path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
     write_bytes_atomic(path, data.encode("utf-8") if isinstance(data, str) else data, mode)
     return path

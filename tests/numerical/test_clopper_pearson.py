@@ -17,7 +17,7 @@ import pytest
 from scipy.stats import binom
 
 from transfertwin._errors import InputError
-from transfertwin.study._intervals import Interval, clopper_pearson, clopper_pearson_array
+from transfertwin.study.fullstate._intervals import Interval, clopper_pearson, clopper_pearson_array
 
 
 @pytest.mark.parametrize(

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from transfertwin.study._copula import GaussianCopula, PerStationCopula
+from transfertwin.study.docking._copula import GaussianCopula, PerStationCopula
 
 RHO = np.array([[1.0, 0.5, -0.3], [0.5, 1.0, 0.2], [-0.3, 0.2, 1.0]])
 TRUE = (stats.norm(2.0, 3.0), stats.gamma(4.0, loc=-1.0, scale=0.5), stats.uniform(-2.0, 5.0))

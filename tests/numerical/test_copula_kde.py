@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from transfertwin.study._marginals import Marginal
+from transfertwin.study.docking._marginals import Marginal
 
 
 @pytest.fixture(scope="module")

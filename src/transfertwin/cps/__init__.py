@@ -1,29 +1,35 @@
 """The cyber-physical runtime (Ch. 3, Sec. 5.2–5.3): assets, AAS virtual representations
 served over OPC UA, the knowledge graph and the logical assets."""
 
-from transfertwin.cps._aas import (
-    AssetRepresentation,
-    build_representation,
-    externally_synced,
-    wire_signature,
-)
-from transfertwin.cps._aas_demo import demo_descriptors, physical_twin
-from transfertwin.cps._aas_export import export_aas, read_export, validate_export
-from transfertwin.cps._assets import (
+from transfertwin.cps._runtime import Cps, CpsConfig
+from transfertwin.cps.aas import (
     TYPE_PROPERTIES,
     AssetDescriptor,
     AssetKind,
+    AssetRepresentation,
     Capability,
     Layer,
     PhysicalType,
+    build_representation,
+    demo_descriptors,
+    export_aas,
+    externally_synced,
+    physical_twin,
+    read_export,
+    validate_export,
+    wire_signature,
 )
-from transfertwin.cps._client import AssetClient, connect
-from transfertwin.cps._kg import KnowledgeGraph
-from transfertwin.cps._props import PoseGraph, PoseObservation
-from transfertwin.cps._remote_hal import OpcUaUnitHAL
-from transfertwin.cps._runtime import Cps, CpsConfig
-from transfertwin.cps._security import Credentials, new_credentials
-from transfertwin.cps._server import AssetServer, ServerConfig
+from transfertwin.cps.apps import PoseGraph, PoseObservation
+from transfertwin.cps.kg import KnowledgeGraph
+from transfertwin.cps.opcua import (
+    AssetClient,
+    AssetServer,
+    Credentials,
+    OpcUaUnitHAL,
+    ServerConfig,
+    connect,
+    new_credentials,
+)
 
 __all__ = [
     "TYPE_PROPERTIES",

@@ -21,27 +21,27 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from transfertwin._atomic import write_atomic
-from transfertwin.cps._aas import build_representation, externally_synced
-from transfertwin.cps._aas_demo import demo_descriptors
-from transfertwin.cps._applications import AssetApplications
-from transfertwin.cps._assets import AssetDescriptor
-from transfertwin.cps._client import connect
-from transfertwin.cps._discovery import Discovery, Peer
-from transfertwin.cps._environment import Environment
-from transfertwin.cps._kg import KnowledgeGraph
-from transfertwin.cps._props import PoseGraph
-from transfertwin.cps._security import (
+from transfertwin.cps.aas import (
+    AssetDescriptor,
+    build_representation,
+    demo_descriptors,
+    externally_synced,
+)
+from transfertwin.cps.apps import AssetApplications, Environment, PoseGraph
+from transfertwin.cps.kg import KnowledgeGraph
+from transfertwin.cps.opcua import (
+    AssetServer,
     Credentials,
+    Discovery,
+    Peer,
+    ServerConfig,
+    connect,
     free_port,
     new_credentials,
     write_credentials,
 )
-from transfertwin.cps._server import AssetServer, ServerConfig
 from transfertwin.sim import SceneConfig
-from transfertwin.study import (
-    GaussianCopula,
-    measured_docking_errors,
-)
+from transfertwin.study.docking import GaussianCopula, measured_docking_errors
 
 __all__ = ["Cps", "CpsConfig"]
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -152,51 +152,49 @@ class PossessionSet:
 
 
 @dataclass(frozen=True, init=False)
-class UnionSet:
+class _CombinedSet:
+    """Members combined element-wise by `_combine` (a numpy ufunc) from `_identity`."""
+
+    members: tuple[StateSet, ...]
+    _identity: ClassVar[bool]
+    _combine: ClassVar[np.ufunc]
+
+    def __init__(self, *members: StateSet) -> None:
+        if not members:
+            raise InputError(f"{type(self).__name__} needs at least one member set")
+        object.__setattr__(self, "members", tuple(members))
+
+    def contains(self, states: ArrayLike) -> np.ndarray:
+        """Membership per state; see the module docstring for shapes."""
+        batch, single = as_state_batch(states)
+        result = np.full(batch.shape[0], self._identity, dtype=bool)
+        for member in self.members:
+            type(self)._combine(result, member.contains(batch), out=result)
+        return result.reshape(()) if single else result
+
+
+@dataclass(frozen=True, init=False)
+class UnionSet(_CombinedSet):
     """Union of state sets, e.g. the terminal states S+ ∪ S- of Eq. 4.9.
 
     Attributes:
         members: The united sets (at least one).
     """
 
-    members: tuple[StateSet, ...]
-
-    def __init__(self, *members: StateSet) -> None:
-        if not members:
-            raise InputError("UnionSet needs at least one member set")
-        object.__setattr__(self, "members", tuple(members))
-
-    def contains(self, states: ArrayLike) -> np.ndarray:
-        """Membership per state; see the module docstring for shapes."""
-        batch, single = as_state_batch(states)
-        result = np.zeros(batch.shape[0], dtype=bool)
-        for member in self.members:
-            result |= member.contains(batch)
-        return result.reshape(()) if single else result
+    _identity: ClassVar[bool] = False
+    _combine: ClassVar[np.ufunc] = np.logical_or
 
 
 @dataclass(frozen=True, init=False)
-class IntersectionSet:
+class IntersectionSet(_CombinedSet):
     """Intersection of state sets, e.g. possession ∩ predicate in Eq. 4.4 / 4.5.
 
     Attributes:
         members: The intersected sets (at least one).
     """
 
-    members: tuple[StateSet, ...]
-
-    def __init__(self, *members: StateSet) -> None:
-        if not members:
-            raise InputError("IntersectionSet needs at least one member set")
-        object.__setattr__(self, "members", tuple(members))
-
-    def contains(self, states: ArrayLike) -> np.ndarray:
-        """Membership per state; see the module docstring for shapes."""
-        batch, single = as_state_batch(states)
-        result = np.ones(batch.shape[0], dtype=bool)
-        for member in self.members:
-            result &= member.contains(batch)
-        return result.reshape(()) if single else result
+    _identity: ClassVar[bool] = True
+    _combine: ClassVar[np.ufunc] = np.logical_and
 
 
 @dataclass(frozen=True)

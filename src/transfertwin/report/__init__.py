@@ -17,6 +17,21 @@ from transfertwin.report._calibration_plots import (
     plot_score_distribution,
     score_distribution_data,
 )
+from transfertwin.report._docking_plots import (
+    DockingCorrelations,
+    DockingHistograms,
+    docking_correlation_data,
+    docking_hist_data,
+    plot_correlation_matrices,
+    plot_docking_histograms,
+)
+from transfertwin.report._fidelity_plots import (
+    Curve,
+    FidelityPlot,
+    ShareBar,
+    fidelity_plot_data,
+    plot_fidelity,
+)
 from transfertwin.report._figure import figure_png
 from transfertwin.report._html import REPORT_NAME, write_report
 from transfertwin.report._interval_plot import IntervalPlot, interval_plot_data, plot_intervals
@@ -41,18 +56,29 @@ __all__ = [
     "RING_RADIUS",
     "BinaryPoint",
     "BinaryPolar",
+    "Curve",
+    "DockingCorrelations",
+    "DockingHistograms",
+    "FidelityPlot",
     "IntervalPlot",
     "PolarCurve",
     "PolarFace",
     "PolarFullState",
     "PolarMarker",
     "ScoreDistribution",
+    "ShareBar",
     "ValidationPlot",
     "analyze_and_report",
     "binary_polar_data",
+    "docking_correlation_data",
+    "docking_hist_data",
+    "fidelity_plot_data",
     "figure_png",
     "interval_plot_data",
     "plot_binary_polar",
+    "plot_correlation_matrices",
+    "plot_docking_histograms",
+    "plot_fidelity",
     "plot_intervals",
     "plot_polar_full_state",
     "plot_score_distribution",

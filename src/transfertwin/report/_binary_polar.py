@@ -21,7 +21,7 @@ from matplotlib.lines import Line2D
 from transfertwin._errors import InputError
 from transfertwin.ots import FACES
 from transfertwin.report._figure import FAILURE_COLOR, SUCCESS_COLOR, new_figure, setup_yaw_axes
-from transfertwin.study._analysis import ResultRecord, parse_row
+from transfertwin.study.fullstate import ResultRecord, parse_row
 
 __all__ = ["RING_RADIUS", "BinaryPoint", "BinaryPolar", "binary_polar_data", "plot_binary_polar"]
 

@@ -23,7 +23,7 @@ from transfertwin.report._binary_polar import binary_polar_data, plot_binary_pol
 from transfertwin.report._figure import figure_png, write_atomic
 from transfertwin.report._interval_plot import interval_plot_data, plot_intervals
 from transfertwin.report._polar_full_state import plot_polar_full_state, polar_full_state_data
-from transfertwin.study._analysis import (
+from transfertwin.study.fullstate import (
     AnalysisResult,
     ResultRecord,
     SelectedState,

@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 
 from transfertwin._errors import InputError
 from transfertwin.report._figure import FAILURE_COLOR, SUCCESS_COLOR, new_figure
-from transfertwin.study._analysis import Selection, object_sort_key
+from transfertwin.study.fullstate import Selection, object_sort_key
 
 __all__ = ["IntervalPlot", "interval_plot_data", "plot_intervals"]
 

@@ -7,7 +7,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 from transfertwin.report._html import write_report
-from transfertwin.study._analysis import AnalysisResult, ResultRecord, analyze
+from transfertwin.study.fullstate import AnalysisResult, ResultRecord, analyze
 
 __all__ = ["analyze_and_report"]
 

@@ -19,7 +19,7 @@ from matplotlib.figure import Figure
 from transfertwin._errors import InputError
 from transfertwin.ots import FACES
 from transfertwin.report._figure import FAILURE_COLOR, SUCCESS_COLOR, new_figure, setup_yaw_axes
-from transfertwin.study._analysis import SelectedState, Selection, SeriesStats
+from transfertwin.study.fullstate import SelectedState, Selection, SeriesStats
 
 __all__ = [
     "PolarCurve",

@@ -5,7 +5,7 @@ their Clopper–Pearson intervals and the Newcombe hybrid score interval of
 p_V − p_P. `plot_validation` draws the two estimates side by side per state
 (objects along x, states whose difference is significant on a red background,
 as in Fig. 6.24/6.25) and, below, the difference intervals with a zero line.
-`validate_and_report` runs `transfertwin.study._validation.validate` and writes
+`validate_and_report` runs `transfertwin.study.validation._validation.validate` and writes
 its tables and ``validation.png``.
 """
 
@@ -22,8 +22,8 @@ from matplotlib.figure import Figure
 
 from transfertwin._errors import InputError
 from transfertwin.report._figure import FAILURE_COLOR, figure_png, new_figure, write_atomic
-from transfertwin.study._states import ResultRecord, state_order
-from transfertwin.study._validation import (
+from transfertwin.study.fullstate import ResultRecord, state_order
+from transfertwin.study.validation import (
     StateComparison,
     ValidationResult,
     validate,

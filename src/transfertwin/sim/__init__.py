@@ -8,6 +8,15 @@ from transfertwin.sim._config import (
     SceneConfig,
 )
 from transfertwin.sim._docking import tu_pose_in_tip_frame
+from transfertwin.sim._names import (
+    OBJECT_BODY,
+    OBJECT_JOINT,
+    TU_BODY,
+    barrier_sensor,
+    belt_geom,
+    object_hull,
+)
+from transfertwin.sim._render import render_strip
 from transfertwin.sim._scene import build_spec
 from transfertwin.sim._system import (
     MujocoUnitHAL,
@@ -18,6 +27,9 @@ from transfertwin.sim._system import (
 )
 
 __all__ = [
+    "OBJECT_BODY",
+    "OBJECT_JOINT",
+    "TU_BODY",
     "DockingError",
     "LayoutConfig",
     "MujocoUnitHAL",
@@ -27,7 +39,11 @@ __all__ = [
     "SimClock",
     "SimulationUnstable",
     "VirtualTransferSystem",
+    "barrier_sensor",
+    "belt_geom",
     "build_spec",
+    "object_hull",
     "object_quat",
+    "render_strip",
     "tu_pose_in_tip_frame",
 ]

@@ -3,7 +3,7 @@
 `PhysicsConfig` is the analogue of the study's simulation-parameter tables (Tables A.3/A.4):
 every MuJoCo option that can change a transfer's outcome lives here, and nowhere else.
 `LayoutConfig` fixes the geometry of the transport module TM^V and the transfer unit TU^V
-in the tip frame F_T (DESIGN.md, "Frames, geometry and defaults"). `SceneConfig` bundles them
+in the tip frame F_T (docs/design-choices.md, "Frames and geometry"). `SceneConfig` bundles them
 with the instance parameters of Sec. 6.5.2 (friction μ_k and initial gap d_gap).
 """
 
@@ -145,7 +145,8 @@ class LayoutConfig:
 
 @dataclass(frozen=True)
 class PlacementConfig:
-    """How a pre-transfer state is realised in simulation (DESIGN.md).
+    """How a pre-transfer state is realised in simulation (docs/design-choices.md,
+    "Object frame, faces and placement").
 
     The object is dropped from `drop_height_m` above the belt and settles with all belts
     stopped for `settle_time_s`. Real placement is never exact: each run draws a small

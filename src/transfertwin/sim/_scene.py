@@ -15,6 +15,14 @@ import mujoco
 import numpy as np
 
 from transfertwin.sim._config import LayoutConfig, PhysicsConfig, SceneConfig
+from transfertwin.sim._names import (
+    OBJECT_BODY,
+    OBJECT_JOINT,
+    TU_BODY,
+    barrier_sensor,
+    belt_geom,
+    object_hull,
+)
 
 __all__ = [
     "BARRIERS",
@@ -87,7 +95,7 @@ def add_belt(
     friction = [mu, 0.005, 0.0001]
     x0, x1 = span.x_start + r, span.x_end - r
     deck = parent.add_geom(
-        name=f"{unit}_{belt}_deck",
+        name=belt_geom(unit, belt, "deck"),
         type=mujoco.mjtGeom.mjGEOM_BOX,
         size=[0.5 * (x1 - x0), half_w, r],
         pos=[0.5 * (x0 + x1), y, -r],
@@ -99,7 +107,7 @@ def add_belt(
     deck.friction = friction
     for end, x in (("start", x0), ("end", x1)):
         pulley = parent.add_geom(
-            name=f"{unit}_{belt}_pulley_{end}",
+            name=belt_geom(unit, belt, f"pulley_{end}"),
             type=mujoco.mjtGeom.mjGEOM_CYLINDER,
             size=[r, half_w, 0],
             pos=[x, y, -r],
@@ -126,13 +134,13 @@ def add_light_barrier(
     """
     y_edge = layout.belt_separation_m / 2 + layout.belt_width_m + 0.01
     site = parent.add_site(
-        name=f"{unit}_barrier_{which}",
+        name=barrier_sensor(unit, which),
         pos=[x, y_edge, layout.barrier_height_m],
         quat=_Z_TO_MINUS_Y,
         size=[0.003, 0, 0],
     )
     sensor = spec.add_sensor(
-        name=f"{unit}_barrier_{which}",
+        name=barrier_sensor(unit, which),
         type=mujoco.mjtSensor.mjSENS_RANGEFINDER,
         objtype=mujoco.mjtObj.mjOBJ_SITE,
         objname=site.name,
@@ -152,7 +160,7 @@ def add_unit(spec: mujoco.MjSpec, unit: str, layout: LayoutConfig, mu: float) ->
         span = UnitGeometry(-layout.tm_length_m, 0.0)
         near, far = span.x_end - layout.barrier_inset_m, span.x_start + layout.barrier_inset_m
     else:
-        parent = spec.worldbody.add_body(name="tu", mocap=True)
+        parent = spec.worldbody.add_body(name=TU_BODY, mocap=True)
         span = UnitGeometry(0.0, layout.tu_length_m)
         near, far = span.x_start + layout.barrier_inset_m, span.x_end - layout.barrier_inset_m
     for belt in BELTS:
@@ -179,15 +187,15 @@ def add_object(
         inertia_kg_m2: Inertia tensor (3, 3) about the centre of mass, in F_O axes.
         physics: For the contact settings (condim, solref, solimp).
     """
-    body = spec.worldbody.add_body(name="object", pos=[0, 0, 0.5])
-    body.add_freejoint(name="object_free")
+    body = spec.worldbody.add_body(name=OBJECT_BODY, pos=[0, 0, 0.5])
+    body.add_freejoint(name=OBJECT_JOINT)
     body.explicitinertial = True
     body.mass = float(mass_kg)
     body.ipos = np.asarray(com_m, dtype=float)
     i = np.asarray(inertia_kg_m2, dtype=float)
     body.fullinertia = np.array([i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2]])
     for k, verts in enumerate(hulls):
-        name = f"object_hull_{k}"
+        name = object_hull(k)
         spec.add_mesh(name=name, uservert=np.asarray(verts, dtype=np.float32).ravel())
         geom = body.add_geom(
             name=name,

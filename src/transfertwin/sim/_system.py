@@ -17,6 +17,7 @@ import numpy as np
 
 from transfertwin.sim._config import DockingError, SceneConfig
 from transfertwin.sim._docking import tu_pose_in_tip_frame
+from transfertwin.sim._names import OBJECT_BODY, OBJECT_JOINT, TU_BODY, barrier_sensor, belt_geom
 from transfertwin.sim._scene import BARRIERS, BELTS, UNITS, build_spec
 
 __all__ = [
@@ -86,16 +87,13 @@ class MujocoUnitHAL:
         self._r = system.cfg.layout.pulley_radius_m
         self._geoms = {
             belt: {
-                part: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, f"{unit}_{belt}_{part}")
+                part: model.geom(belt_geom(unit, belt, part)).id
                 for part in ("deck", "pulley_start", "pulley_end")
             }
             for belt in BELTS
         }
         self._sensors = {
-            which: model.sensor_adr[
-                mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SENSOR, f"{unit}_barrier_{which}")
-            ]
-            for which in BARRIERS
+            which: int(model.sensor(barrier_sensor(unit, which)).adr[0]) for which in BARRIERS
         }
         self._beam_m = 2 * system.cfg.layout.belt_width_m + system.cfg.layout.belt_separation_m
         self._speeds = dict.fromkeys(BELTS, 0.0)
@@ -146,13 +144,11 @@ class VirtualTransferSystem:
         self.cfg = cfg
         self.model = build_spec(hulls, mass_kg, com_m, inertia_kg_m2, cfg).compile()
         self.data = mujoco.MjData(self.model)
-        self._body = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "object")
-        self._qadr = self.model.jnt_qposadr[
-            mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_JOINT, "object_free")
-        ]
-        self._vadr = self.model.jnt_dofadr[
-            mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_JOINT, "object_free")
-        ]
+        self._body = self.model.body(OBJECT_BODY).id
+        joint = self.model.joint(OBJECT_JOINT)
+        self._qadr = int(joint.qposadr[0])
+        self._vadr = int(joint.dofadr[0])
+        self._tu_mocap = int(self.model.body(TU_BODY).mocapid[0])
         self._verts = np.concatenate([np.asarray(h, dtype=float) for h in hulls], axis=0)
         self._com = np.asarray(com_m, dtype=float)
         self.tm = MujocoUnitHAL(self, "tm")
@@ -182,8 +178,8 @@ class VirtualTransferSystem:
             docking_error, self.cfg.gap_m, self.cfg.layout.tip_to_centre_m
         )
         self.tu_pose = (x, y, yaw)
-        self.data.mocap_pos[0] = (x, y, 0.0)
-        self.data.mocap_quat[0] = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+        self.data.mocap_pos[self._tu_mocap] = (x, y, 0.0)
+        self.data.mocap_quat[self._tu_mocap] = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
         mujoco.mj_forward(self.model, self.data)
 
     def place(self, face: str, theta_rad: float, x_m: float, y_m: float) -> None:

@@ -18,6 +18,7 @@ from transfertwin.store._memory import MemoryResultStore
 from transfertwin.store._read import REQUIRED_COLUMNS, SQLITE_SUFFIXES, read_results
 from transfertwin.store._schema import (
     COLUMN_TYPES,
+    DOCKING_ERROR_COLUMNS,
     FINISHED_COLUMN,
     KEY_COLUMNS,
     NULLABLE_INT_COLUMNS,
@@ -30,6 +31,7 @@ from transfertwin.store._sqlite import SQLiteResultStore
 
 __all__ = [
     "COLUMN_TYPES",
+    "DOCKING_ERROR_COLUMNS",
     "EXPORT_SUFFIXES",
     "FINISHED_COLUMN",
     "KEY_COLUMNS",

@@ -1,6 +1,6 @@
 """The results table: columns, types, key, statuses and the row check every store applies.
 
-One row per experiment (DESIGN.md, "Contracts"). A row is keyed by
+One row per experiment (docs/architecture.md, "Contracts"). A row is keyed by
 (object_id, face, conveyor, theta_deg, run); a store holds each key at most once.
 
 Column types, as stored and as read back:
@@ -26,6 +26,7 @@ from types import MappingProxyType
 
 __all__ = [
     "COLUMN_TYPES",
+    "DOCKING_ERROR_COLUMNS",
     "FINISHED_COLUMN",
     "KEY_COLUMNS",
     "NULLABLE_INT_COLUMNS",
@@ -41,9 +42,16 @@ __all__ = [
 #: Version of the stored layout; a store refuses a database written with another one.
 SCHEMA_VERSION: int = 1
 
+#: The docking error ξ's columns (mm, mm, deg), in results and in real-experiment tables.
+DOCKING_ERROR_COLUMNS: tuple[str, str, str] = (
+    "dock_err_x_mm",
+    "dock_err_y_mm",
+    "dock_err_theta_deg",
+)
+
 RESULT_COLUMNS: tuple[str, ...] = (
     "object_id", "face", "conveyor", "theta_deg", "run", "seed",
-    "dock_err_x_mm", "dock_err_y_mm", "dock_err_theta_deg",
+    *DOCKING_ERROR_COLUMNS,
     "y1", "y2", "success", "t_end_s", "status",
     "t_end_1_s", "t_end_2_s", "message", "state_pre", "state_end_1", "state_end_2",
 )  # fmt: skip

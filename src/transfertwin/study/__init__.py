@@ -1,52 +1,60 @@
 """Experiments and studies over the virtual transfer system (Ch. 6)."""
 
-from transfertwin.study._analysis import (
+from transfertwin.study.calibration import RUN_METRICS, ConfusionMatrix, summarize_runs
+from transfertwin.study.docking import (
+    COPULA_KINDS,
+    DockingErrorModel,
+    FixedDockingError,
+    GaussianCopula,
+    PerStationCopula,
+    ResampledDockingErrors,
+    copula_from_dict,
+    docking_model_from_dict,
+    measured_docking_errors,
+)
+from transfertwin.study.experiment import (
+    PRESETS,
+    RESULT_COLUMNS,
+    ExperimentResult,
+    ExperimentSpec,
+    Frame,
+    ObjectSummary,
+    Preset,
+    StudyOutcome,
+    StudyPlan,
+    experiment_seeds,
+    load_profile,
+    parse_objects,
+    run_experiment,
+    run_study,
+    save_profile,
+    scene_from_dict,
+    scene_to_dict,
+    summarize,
+    system_for,
+)
+from transfertwin.study.fullstate import (
     AnalysisResult,
+    CircularSeries,
+    Interval,
     SelectedState,
     Selection,
     SeriesStats,
     StateStat,
     analyze,
-    select,
-    series_table,
-    state_table,
-)
-from transfertwin.study._copula import (
-    COPULA_KINDS,
-    GaussianCopula,
-    PerStationCopula,
-    copula_from_dict,
-)
-from transfertwin.study._docking_models import (
-    DockingErrorModel,
-    FixedDockingError,
-    ResampledDockingErrors,
-    docking_model_from_dict,
-    measured_docking_errors,
-)
-from transfertwin.study._experiment import (
-    RESULT_COLUMNS,
-    ExperimentResult,
-    ExperimentSpec,
-    Frame,
-    run_experiment,
-    system_for,
-)
-from transfertwin.study._intervals import Interval, clopper_pearson, clopper_pearson_array
-from transfertwin.study._metrics import RUN_METRICS, ConfusionMatrix, summarize_runs
-from transfertwin.study._plan import PRESETS, Preset, StudyPlan, experiment_seeds, parse_objects
-from transfertwin.study._profile import load_profile, save_profile, scene_from_dict, scene_to_dict
-from transfertwin.study._runner import ObjectSummary, StudyOutcome, run_study, summarize
-from transfertwin.study._selection import (
-    CircularSeries,
     best_global,
     best_local,
     circular_moving_average,
+    clopper_pearson,
+    clopper_pearson_array,
     moving_average,
+    select,
+    series_table,
+    state_table,
     worst_global,
     worst_local,
 )
-from transfertwin.study._validation import (
+from transfertwin.study.validation import (
     NEWCOMBE_HYBRID_SCORE,
     VALIDATION_COLUMNS,
     StateComparison,

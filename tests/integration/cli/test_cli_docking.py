@@ -14,8 +14,8 @@ from pathlib import Path
 import pytest
 
 from transfertwin._errors import InputError
-from transfertwin.cli import _Parser
-from transfertwin.cli_docking import register
+from transfertwin.cli._common import Parser as _Parser
+from transfertwin.cli._docking import register
 from transfertwin.study import measured_docking_errors
 
 HEADER = ["dock_err_x_mm", "dock_err_y_mm", "dock_err_theta_deg"]

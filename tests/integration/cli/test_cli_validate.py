@@ -18,8 +18,8 @@ from pathlib import Path
 import pytest
 
 from transfertwin._errors import InputError
-from transfertwin.cli import _Parser
-from transfertwin.cli_validate import register
+from transfertwin.cli._common import Parser as _Parser
+from transfertwin.cli._validate import register
 from transfertwin.store import export_results, read_results
 
 REAL = Path(__file__).resolve().parents[3] / "src" / "transfertwin" / "data"

@@ -6,9 +6,9 @@ from __future__ import annotations
 import asyncio
 
 from transfertwin.cps import AssetServer, ServerConfig, build_representation, connect
-from transfertwin.cps._aas_demo import demo_descriptors
-from transfertwin.cps._discovery import Discovery
-from transfertwin.cps._security import new_credentials
+from transfertwin.cps.aas._demo import demo_descriptors
+from transfertwin.cps.opcua._discovery import Discovery
+from transfertwin.cps.opcua._security import new_credentials
 
 IDS = ("TU_A", "TU_B", "TM_1", "TU_C")
 

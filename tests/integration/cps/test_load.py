@@ -5,9 +5,9 @@ from __future__ import annotations
 import asyncio
 
 from transfertwin.cps import AssetServer, ServerConfig, build_representation, connect
-from transfertwin.cps._aas import externally_synced
-from transfertwin.cps._aas_demo import demo_descriptors
-from transfertwin.cps._security import new_credentials
+from transfertwin.cps.aas._demo import demo_descriptors
+from transfertwin.cps.aas._representation import externally_synced
+from transfertwin.cps.opcua._security import new_credentials
 
 N_WRITES, N_SUBS = 1000, 100
 

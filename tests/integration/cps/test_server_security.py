@@ -7,11 +7,11 @@ import asyncio
 import pytest
 from asyncua import ua
 
-from transfertwin.cps._aas import build_representation, externally_synced
-from transfertwin.cps._aas_demo import demo_descriptors
-from transfertwin.cps._client import connect
-from transfertwin.cps._security import new_credentials
-from transfertwin.cps._server import AssetServer, ServerConfig
+from transfertwin.cps.aas._demo import demo_descriptors
+from transfertwin.cps.aas._representation import build_representation, externally_synced
+from transfertwin.cps.opcua._client import connect
+from transfertwin.cps.opcua._security import new_credentials
+from transfertwin.cps.opcua._server import AssetServer, ServerConfig
 
 
 def _tu():

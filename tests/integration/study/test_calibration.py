@@ -10,7 +10,7 @@ import pytest
 from transfertwin import InputError
 from transfertwin.cli import main
 from transfertwin.sim import SceneConfig
-from transfertwin.study._calibration import calibrate, parse_object_map
+from transfertwin.study.calibration._replay import calibrate, parse_object_map
 
 
 def _real_rows(n: int) -> list[dict]:

@@ -10,19 +10,19 @@ import pytest
 from basyx.aas import model
 
 from transfertwin._errors import InputError
-from transfertwin.cps._aas import (
+from transfertwin.cps.aas._assets import AssetDescriptor, AssetKind, Capability, PhysicalType
+from transfertwin.cps.aas._demo import demo_descriptors, physical_twin
+from transfertwin.cps.aas._representation import (
     AssetRepresentation,
     build_representation,
     externally_synced,
 )
-from transfertwin.cps._aas_demo import demo_descriptors, physical_twin
-from transfertwin.cps._aas_spec import (
+from transfertwin.cps.aas._spec import (
     CONTROL_INTERFACE,
     LOGICAL_CLASSES,
     OPERATIONAL_DATA,
     PHYSICAL_CLASSES,
 )
-from transfertwin.cps._assets import AssetDescriptor, AssetKind, Capability, PhysicalType
 
 DEMO = {d.asset_id: d for d in demo_descriptors()}
 

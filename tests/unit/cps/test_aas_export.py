@@ -10,9 +10,13 @@ from basyx.aas import model
 from basyx.aas.adapter import aasx
 
 from transfertwin._errors import InputError
-from transfertwin.cps._aas import AssetRepresentation, build_representation, wire_signature
-from transfertwin.cps._aas_demo import demo_descriptors
-from transfertwin.cps._aas_export import export_aas, read_export, validate_export
+from transfertwin.cps.aas._demo import demo_descriptors
+from transfertwin.cps.aas._export import export_aas, read_export, validate_export
+from transfertwin.cps.aas._representation import (
+    AssetRepresentation,
+    build_representation,
+    wire_signature,
+)
 
 # 14 shells; 3 submodels each; a ControlInterface for 4 TUs, 1 TM and 4 logical assets.
 DEMO_IDENTIFIABLES = 14 + 14 * 3 + 4 + 1 + 4

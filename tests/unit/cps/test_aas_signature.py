@@ -5,9 +5,9 @@ from __future__ import annotations
 import pytest
 from basyx.aas import model
 
-from transfertwin.cps._aas import build_representation, wire_signature
-from transfertwin.cps._aas_demo import demo_descriptors, physical_twin
-from transfertwin.cps._assets import AssetKind
+from transfertwin.cps.aas._assets import AssetKind
+from transfertwin.cps.aas._demo import demo_descriptors, physical_twin
+from transfertwin.cps.aas._representation import build_representation, wire_signature
 
 DEMO = {d.asset_id: d for d in demo_descriptors()}
 VIRTUAL = [a for a, d in DEMO.items() if d.kind is AssetKind.VIRTUAL_MODEL]

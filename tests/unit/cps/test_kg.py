@@ -6,8 +6,8 @@ import pytest
 from rdflib import Graph
 
 from transfertwin import InputError
-from transfertwin.cps._assets import AssetDescriptor, AssetKind, Capability, PhysicalType
-from transfertwin.cps._kg import KnowledgeGraph
+from transfertwin.cps.aas._assets import AssetDescriptor, AssetKind, Capability, PhysicalType
+from transfertwin.cps.kg._graph import KnowledgeGraph
 
 P, L, V = AssetKind.PHYSICAL, AssetKind.LOGICAL, AssetKind.VIRTUAL_MODEL
 TU_CAPS = (Capability.TRANSFER, Capability.SENSE)

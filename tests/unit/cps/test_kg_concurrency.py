@@ -7,9 +7,9 @@ from collections import Counter
 
 from rdflib import Graph, Literal, URIRef
 
-from transfertwin.cps._assets import AssetDescriptor, AssetKind, Capability, PhysicalType
-from transfertwin.cps._kg import KnowledgeGraph
-from transfertwin.cps._kg_validate import first_violation
+from transfertwin.cps.aas._assets import AssetDescriptor, AssetKind, Capability, PhysicalType
+from transfertwin.cps.kg._graph import KnowledgeGraph
+from transfertwin.cps.kg._validate import first_violation
 
 TT = "https://transfertwin.dev/ontology#"
 WRITERS, MODULES, READERS, REJOINS = 4, 6, 2, 3

@@ -6,9 +6,9 @@ import pytest
 from rdflib import RDF, Graph, Literal, URIRef
 
 from transfertwin import InputError
-from transfertwin.cps._assets import AssetDescriptor, AssetKind, Capability, PhysicalType
-from transfertwin.cps._kg import KnowledgeGraph
-from transfertwin.cps._kg_describe import describe
+from transfertwin.cps.aas._assets import AssetDescriptor, AssetKind, Capability, PhysicalType
+from transfertwin.cps.kg._describe import describe
+from transfertwin.cps.kg._graph import KnowledgeGraph
 
 TT = "https://transfertwin.dev/ontology#"
 IDS = "https://transfertwin.dev/ids/asset/"

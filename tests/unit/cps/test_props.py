@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from transfertwin import InputError
-from transfertwin.cps._props import (
+from transfertwin.cps.apps._props import (
     Pose2D,
     PoseGraph,
     PoseObservation,

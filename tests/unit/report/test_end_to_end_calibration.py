@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from transfertwin.report import analyze_and_report
-from transfertwin.study._analysis import STATES_COLUMNS
+from transfertwin.study.fullstate import STATES_COLUMNS
 
 CALIBRATION_CSV = Path("/work/shared/data/calibration_experiments.csv")
 OBJECTS = ("o1", "o18", "o23", "o32")

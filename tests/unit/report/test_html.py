@@ -6,7 +6,7 @@ import re
 from pathlib import Path
 
 from transfertwin.report import REPORT_NAME, write_report
-from transfertwin.study._analysis import analyze
+from transfertwin.study.fullstate import analyze
 
 
 def rows() -> list[dict]:

@@ -14,7 +14,13 @@ from transfertwin.report import (
     interval_plot_data,
     polar_full_state_data,
 )
-from transfertwin.study._analysis import SelectedState, Selection, select, series_table, state_table
+from transfertwin.study.fullstate import (
+    SelectedState,
+    Selection,
+    select,
+    series_table,
+    state_table,
+)
 
 
 def row(obj="o1", face="front", conveyor="both", theta=100, success=1, status="ok") -> dict:

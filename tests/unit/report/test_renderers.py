@@ -15,7 +15,7 @@ from transfertwin.report import (
     plot_polar_full_state,
     polar_full_state_data,
 )
-from transfertwin.study._analysis import select, series_table, state_table
+from transfertwin.study.fullstate import select, series_table, state_table
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 

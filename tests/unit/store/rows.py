@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 
-#: The DESIGN.md ("Contracts") minimum result columns, written out independently.
+#: The minimum result columns (docs/architecture.md, "Contracts"), written out independently.
 DESIGN_COLUMNS = (
     "object_id", "face", "conveyor", "theta_deg", "run", "seed", "dock_err_x_mm",
     "dock_err_y_mm", "dock_err_theta_deg", "y1", "y2", "success", "t_end_s", "status",

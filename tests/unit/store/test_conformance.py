@@ -1,4 +1,5 @@
-"""The result-store contract (STYLE.md item 7): every backend passes this one suite."""
+"""The result-store contract (docs/architecture.md, "Contracts"): every backend passes this
+one suite."""
 
 from __future__ import annotations
 

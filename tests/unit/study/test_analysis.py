@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from transfertwin._errors import InputError
-from transfertwin.study._analysis import (
+from transfertwin.study.fullstate import (
     STATES_COLUMNS,
     analyze,
     object_sort_key,

@@ -11,14 +11,14 @@ import pytest
 from transfertwin._errors import InputError
 from transfertwin.sim import DockingError
 from transfertwin.study import DockingErrorModel
-from transfertwin.study._copula import (
+from transfertwin.study.docking._copula import (
     MIN_ROWS,
     GaussianCopula,
     PerStationCopula,
     copula_from_dict,
     normal_scores,
 )
-from transfertwin.study._marginals import FAMILIES
+from transfertwin.study.docking._marginals import FAMILIES
 
 FAST = tuple(f for f in FAMILIES if f.name in ("normal", "uniform", "kde"))
 

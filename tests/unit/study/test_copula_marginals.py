@@ -9,7 +9,7 @@ import pytest
 from scipy import stats
 
 from transfertwin._errors import InputError
-from transfertwin.study._marginals import (
+from transfertwin.study.docking._marginals import (
     FAMILIES,
     Marginal,
     MarginalFamily,

@@ -13,7 +13,7 @@ import pytest
 from sklearn.metrics import accuracy_score, fbeta_score, precision_score, recall_score
 
 from transfertwin._errors import InputError
-from transfertwin.study._metrics import RUN_METRICS, ConfusionMatrix, summarize_runs
+from transfertwin.study.calibration._metrics import RUN_METRICS, ConfusionMatrix, summarize_runs
 
 
 def test_table_a2_counts_from_predictions_by_hand() -> None:

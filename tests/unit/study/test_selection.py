@@ -10,7 +10,7 @@ import pytest
 
 from transfertwin._errors import InputError
 from transfertwin.ots import THETA_ALL
-from transfertwin.study._selection import (
+from transfertwin.study.fullstate._selection import (
     CircularSeries,
     best_global,
     best_local,

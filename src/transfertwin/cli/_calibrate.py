@@ -1,0 +1,291 @@
+"""`transfertwin calibrate run|sweep|tune`: virtual calibration against real experiments."""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+import math
+import os
+from pathlib import Path
+
+from transfertwin._atomic import write_atomic
+from transfertwin._errors import InputError
+from transfertwin.cli._common import positive_int
+from transfertwin.cli._paths import out_dir
+
+__all__ = ["register"]
+
+_DEFAULT_REAL = "builtin:calibration_experiments.csv"
+
+
+def _real_rows(path: str) -> list[dict[str, object]]:
+    from transfertwin.data import calibration_csv_path
+    from transfertwin.store import read_results
+
+    return read_results(calibration_csv_path() if path == _DEFAULT_REAL else path)
+
+
+def _common(args: argparse.Namespace):
+    """(rows, base scene, profile name, calibrate kwargs) from shared options."""
+    from transfertwin.sim import SceneConfig
+    from transfertwin.study.calibration import parse_object_map
+    from transfertwin.study.experiment import load_profile
+
+    rows = _real_rows(args.real)
+    if args.limit:
+        rows = rows[: args.limit]
+    name, scene = load_profile(args.profile) if args.profile else ("default", SceneConfig())
+    ids = sorted({str(r["object_id"]) for r in rows})
+    mapping = parse_object_map(args.object_map, ids)
+    workers = args.workers or (os.cpu_count() or 1)
+    calib = {"runs": args.runs, "object_map": mapping, "seed": args.seed, "workers": workers,
+             "units": args.units}  # fmt: skip
+    return rows, scene, name, calib
+
+
+def _mapping_note(mapping: dict[str, str]) -> str:
+    return ", ".join(f"{k}->{v}" for k, v in sorted(mapping.items()))
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    """Replay the real experiments R times; write metrics.json."""
+    from transfertwin.study.calibration import calibrate
+
+    rows, scene, name, calib = _common(args)
+    out = out_dir(args.out)
+    result = calibrate(rows, scene=scene, **calib)
+    metrics = result.summary()["metrics"]
+    per_run = [
+        {"run": r.run, **r.confusion.to_dict(), "not_ok": r.not_ok,
+         **{k: r.confusion.metric(k) for k in metrics}}
+        for r in result.runs
+    ]  # fmt: skip
+    payload = {
+        "profile": name, "real": args.real, "n_real": len(rows), "runs": per_run,
+        "mean": {k: v["mean"] for k, v in metrics.items()},
+        "std": {k: v["std"] for k, v in metrics.items()}, "std_ddof": 1,
+        "object_map": result.object_map,
+        "note": "real objects are replayed with the mapped meshes; the real scans are not public",
+    }  # fmt: skip
+    write_atomic(out / "metrics.json", json.dumps(_json_safe(payload), indent=2) + "\n")
+    print(f"real objects mapped to meshes: {_mapping_note(result.object_map)} "
+          "(the real cores' scans are not public)")  # fmt: skip
+    for key in ("f05", "precision", "recall", "accuracy"):
+        print(f"{key:9s} {metrics[key]['mean']:.3f} ± {metrics[key]['std']:.3f}")
+    print(out / "metrics.json")
+    return 0
+
+
+def _parse_values(text: str) -> list[object]:
+    values: list[object] = []
+    for part in text.split(","):
+        part = part.strip()
+        if not part:
+            continue
+        try:
+            values.append(int(part) if part.lstrip("-").isdigit() else float(part))
+        except ValueError:
+            values.append(True if part == "true" else False if part == "false" else part)
+    if not values:
+        raise InputError("--values is empty")
+    return values
+
+
+def _write_trials(out: Path, trials, metric: str, title: str) -> None:
+    from transfertwin.report import (
+        figure_png,
+        plot_score_distribution,
+        score_distribution_data,
+    )
+
+    buf = io.StringIO()
+    keys = sorted({k for t in trials for k in t.params})
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(["label", *keys, f"{metric}_mean", f"{metric}_std", "runs"])
+    for t in trials:
+        s = t.result.summary()["metrics"][metric]
+        writer.writerow([t.label, *(t.params.get(k, "") for k in keys), f"{s['mean']:.6f}",
+                         f"{s['std']:.6f}", len(t.result.runs)])  # fmt: skip
+    write_atomic(out / "trials.csv", buf.getvalue())
+    labels = [f"{t.label} " + ",".join(f"{k}={v}" for k, v in t.params.items()) for t in trials]
+    data = score_distribution_data(labels, [t.scores() for t in trials], metric)
+    fig = plot_score_distribution(data)
+    fig.suptitle(title)
+    write_atomic(out / "scores.png", figure_png(fig))
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    """One-at-a-time sweep of one setting."""
+    from transfertwin.study.calibration import best_trial, sweep
+
+    rows, scene, _, calib = _common(args)
+    out = out_dir(args.out)
+    trials = sweep(rows, args.param, _parse_values(args.values), base=scene, metric=args.metric,
+                   on_trial=lambda t: print(f"{t.label} {t.params}: {t.score:.3f}"),
+                   **calib)  # fmt: skip
+    _write_trials(out, trials, args.metric, f"sweep of {args.param}")
+    best = best_trial(trials)
+    print(f"best: {best.params} {args.metric} = {best.score:.3f}; {out / 'trials.csv'}")
+    return 0
+
+
+def cmd_tune(args: argparse.Namespace) -> int:
+    """Tune μ_k and d_gap by Latin hypercube rounds or TPE; save the winner as a profile."""
+    from transfertwin.study.calibration import best_trial, scene_with, tune_lhs, tune_tpe
+    from transfertwin.study.experiment import save_profile
+
+    rows, scene, _, calib = _common(args)
+    out = out_dir(args.out)
+    bounds = {"mu": (args.mu_min, args.mu_max), "gap_mm": (args.gap_min_mm, args.gap_max_mm)}
+    show = lambda t: print(f"{t.label} {t.params}: {t.score:.3f}")  # noqa: E731
+    if args.method == "lhs":
+        trials = tune_lhs(rows, bounds, base=scene, n_per_round=args.trials, rounds=2,
+                          metric=args.metric, on_trial=show, **calib)  # fmt: skip
+    else:
+        trials = tune_tpe(rows, bounds, base=scene, n_trials=args.trials,
+                          metric=args.metric, on_trial=show, **calib)  # fmt: skip
+    _write_trials(out, trials, args.metric, f"instance-parameter tuning ({args.method})")
+    best = best_trial(trials)
+    profile = Path(args.save_profile) if args.save_profile else out / "profile.toml"
+    save_profile(profile, args.name, scene_with(scene, best.params))
+    print(f"best: {best.params} {args.metric} = {best.score:.3f}; profile {profile}")
+    return 0
+
+
+def cmd_simstudy(args: argparse.Namespace) -> int:
+    """Simulation-parameter study: each set of SIM_PARAMETER_SETS, R runs; the best set is
+    recorded and saved as a profile."""
+    from transfertwin.study.calibration import (
+        SIM_PARAMETER_SETS,
+        best_trial,
+        scene_with,
+        simulation_parameter_study,
+    )
+    from transfertwin.study.experiment import save_profile
+
+    rows, scene, _, calib = _common(args)
+    sets = SIM_PARAMETER_SETS
+    if args.sets:
+        wanted = {s.strip() for s in args.sets.split(",")}
+        unknown = wanted - {label for label, _ in sets}
+        if unknown:
+            raise InputError(f"unknown parameter set(s): {', '.join(sorted(unknown))}")
+        sets = tuple(s for s in sets if s[0] in wanted)
+    out = out_dir(args.out)
+    trials = simulation_parameter_study(
+        rows, base=scene, sets=sets, metric=args.metric,
+        on_trial=lambda t: print(f"{t.label} {t.params}: {t.score:.3f}"), **calib,
+    )  # fmt: skip
+    _write_trials(out, trials, args.metric, "simulation-parameter study")
+    best = best_trial(trials)
+    chosen = {"label": best.label, "params": best.params, args.metric: best.score}
+    write_atomic(out / "chosen.json", json.dumps(chosen, indent=2) + "\n")
+    save_profile(out / "profile.toml", f"simstudy-{best.label}", scene_with(scene, best.params))
+    print(f"chosen: {best.label} {best.params} {args.metric} = {best.score:.3f}; "
+          f"{out / 'profile.toml'}")  # fmt: skip
+    return 0
+
+
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    """Twin vs base rate vs logistic regression, in-sample and in repeated stratified K-fold
+    cross-validation; writes evaluation.json and fidelity.png."""
+    import numpy as np
+
+    from transfertwin.report import fidelity_plot_data, figure_png, plot_fidelity
+    from transfertwin.study.calibration import calibrate, evaluate_predictions
+
+    rows, scene, name, calib = _common(args)
+    out = out_dir(args.out)
+    positive_int("--folds", args.folds)
+    positive_int("--repeats", args.repeats)
+    result = calibrate(rows, scene=scene, **calib)
+    p = result.probabilities()
+    objects = np.array([str(r["object_id"]) for r in rows])
+    candidates = {o: p[None, :] for o in sorted(set(objects))}
+    ev = evaluate_predictions(rows, candidates, folds=args.folds, repeats=args.repeats,
+                              seed=args.seed)  # fmt: skip
+    y = np.array([int(r["success"]) for r in rows])
+    runs = len(result.runs)
+    sim = {o: (round(float(p[objects == o].sum()) * runs), int((objects == o).sum()) * runs)
+           for o in candidates}  # fmt: skip
+    held_out = {"twin (held out)": ev.twin_oof, "logistic (held out)": ev.logistic_oof}
+    plot = fidelity_plot_data(y, held_out, objects, sim)
+    payload = {
+        "profile": name, "real": args.real, "n_real": ev.n, "real_successes": ev.successes,
+        "runs": runs, "folds": ev.folds, "repeats": ev.repeats, "seed": args.seed,
+        **ev.figures, "per_object": ev.per_object,
+        "note": "CV: candidates and thresholds are chosen on training folds only; "
+                "logistic: one-hot state, sin/cos of theta and 2 theta per object and face, "
+                "docking error",
+    }  # fmt: skip
+    write_atomic(out / "fidelity.png", figure_png(plot_fidelity(plot)))
+    write_atomic(out / "evaluation.json", json.dumps(_json_safe(payload), indent=2) + "\n")
+    for key in ("base_rate", "logistic_cv", "twin_in_sample", "twin_cv"):
+        f = ev.figures[key]
+        print(f"{key:15s} f05 {f['f05']:.3f}  precision {f['precision']:.3f}  "
+              f"recall {f['recall']:.3f}  brier {f['brier']:.3f}")  # fmt: skip
+    print(out / "evaluation.json")
+    return 0
+
+
+def _json_safe(value: object) -> object:
+    """NaN and infinities become null (strict JSON)."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(v) for v in value]
+    return value
+
+
+def _shared(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--real", default=_DEFAULT_REAL,
+                   help="real result table (CSV/Parquet/db); default: the shipped 191")  # fmt: skip
+    p.add_argument("--runs", type=int, default=3, help="repetitions R per real experiment")
+    p.add_argument("--profile", help="physics profile TOML to start from")
+    p.add_argument("--object-map", help="real id to mesh: o1=PATH,o18=o5 (default: same id)")
+    p.add_argument("--units", default="m", help="length unit of mapped mesh files")
+    p.add_argument("--workers", type=int, default=0, help="worker processes (default: cores)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--limit", type=int, default=0, help="use only the first N real rows")
+    p.add_argument("--out", required=True, help="output directory")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add `calibrate run|sweep|tune` to the CLI."""
+    cal = sub.add_parser("calibrate", help="virtual calibration against real experiments")
+    csub = cal.add_subparsers(dest="calibrate_command", required=True, parser_class=type(cal))
+    p = csub.add_parser("run", help="replay real experiments; metrics.json (F0.5 etc.)")
+    _shared(p)
+    p.set_defaults(func=cmd_run)
+    p = csub.add_parser("sweep", help="one-at-a-time sweep of a setting (Fig. 6.12/6.14)")
+    _shared(p)
+    p.add_argument("--param", required=True, help="mu, gap_mm, physics.solver, ...")
+    p.add_argument("--values", required=True, help="comma-separated values")
+    p.add_argument("--metric", default="f05")
+    p.set_defaults(func=cmd_sweep)
+    p = csub.add_parser("simstudy", help="simulation-parameter study (Sec. 6.5.1, Fig. 6.12)")
+    _shared(p)
+    p.add_argument("--sets", help="labels to run, e.g. S0,S3,S5 (default: all)")
+    p.add_argument("--metric", default="f05")
+    p.set_defaults(func=cmd_simstudy)
+    p = csub.add_parser("evaluate", help="twin vs baselines, in-sample and cross-validated")
+    _shared(p)
+    p.add_argument("--folds", type=int, default=5, help="stratified folds K (default 5)")
+    p.add_argument("--repeats", type=int, default=5, help="repetitions of the K folds")
+    p.set_defaults(func=cmd_evaluate)
+    p = csub.add_parser("tune", help="tune mu and gap (LHS rounds or TPE); save a profile")
+    _shared(p)
+    p.add_argument("--method", choices=("lhs", "tpe"), default="tpe")
+    p.add_argument("--trials", type=int, default=12, help="trials (per round for lhs)")
+    p.add_argument("--mu-min", type=float, default=0.2)
+    p.add_argument("--mu-max", type=float, default=0.8)
+    p.add_argument("--gap-min-mm", type=float, default=5.0)
+    p.add_argument("--gap-max-mm", type=float, default=40.0)
+    p.add_argument("--metric", default="f05")
+    p.add_argument("--name", default="calibrated", help="name of the saved profile")
+    p.add_argument("--save-profile", help="profile path (default OUT/profile.toml)")
+    p.set_defaults(func=cmd_tune)

@@ -1,0 +1,170 @@
+"""`transfertwin study run|status|export` and `analyze`: full-state studies (Sec. 6.6)."""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+from rich.console import Console
+from rich.table import Table
+
+from transfertwin.cli._common import parse_dock_error, positive_int
+from transfertwin.cli._paths import out_dir, out_file
+from transfertwin.cli._progress import progress_bar
+
+__all__ = ["register"]
+
+
+def _plan_from_args(args: argparse.Namespace):  # -> StudyPlan
+    from transfertwin.study.docking import FixedDockingError, docking_model
+    from transfertwin.study.experiment import PRESETS, StudyPlan, load_profile, parse_objects
+
+    preset = PRESETS[args.preset]
+    objects = parse_objects(args.objects) if args.objects else preset.objects
+    profile_name, scene = ("default", None)
+    if args.profile:
+        profile_name, scene = load_profile(args.profile)
+    kwargs = {"scene": scene} if scene is not None else {}
+    if args.dock_error:
+        docking = FixedDockingError(parse_dock_error(args.dock_error))
+    else:
+        docking = docking_model(args.docking, args.docking_csv)
+    return StudyPlan(
+        objects=objects,
+        theta_step=args.theta_step if args.theta_step is not None else preset.theta_step,
+        runs=args.runs if args.runs is not None else preset.runs,
+        seed=args.seed,
+        docking=docking,
+        profile_name=profile_name,
+        units=args.units,
+        **kwargs,
+    )
+
+
+def cmd_study_run(args: argparse.Namespace) -> int:
+    """Run (or resume) a full-state study into a SQLite store."""
+    from transfertwin.store import SQLiteResultStore
+    from transfertwin.study.experiment import check_plan, run_study, summarize
+
+    db = out_file(args.db, (".sqlite", ".sqlite3", ".db"))
+    workers = positive_int("--workers", args.workers) if args.workers else (os.cpu_count() or 1)
+    if args.max_experiments is not None:
+        positive_int("--max-experiments", args.max_experiments)
+    plan = _plan_from_args(args)
+    check_plan(plan)  # every mesh loads before the db is created
+    console = Console(stderr=True)
+    with SQLiteResultStore(db) as store:
+        store.init_plan(plan.plan_hash, plan.to_json())  # refuses another plan up front
+        console.print(
+            f"plan {plan.plan_hash[:12]}: {len(plan.objects)} objects x "
+            f"{len(plan.states())} states x {plan.runs} runs = {plan.n_experiments} experiments, "
+            f"profile {plan.profile_name}, {workers} workers"
+        )
+        with progress_bar("study", console) as on_progress:
+            outcome = run_study(plan, store, workers=workers, on_progress=on_progress,
+                                max_experiments=args.max_experiments)  # fmt: skip
+        _print_summary(summarize(store.rows()), console)
+        console.print(
+            f"{outcome.ran} new results in {outcome.seconds:.1f} s ({outcome.rate:.2f} exp/s); "
+            f"{store.count()}/{plan.n_experiments} done"
+        )
+    if outcome.interrupted:
+        console.print("interrupted: results so far are stored; rerun the same command to resume")
+        return 130
+    return 0
+
+
+def _print_summary(summaries, console: Console) -> None:
+    table = Table(title="per-object summary")
+    for col in ("object", "done", "ok", "invalid", "unstable", "error", "success share"):
+        table.add_column(col)
+    for s in summaries:
+        table.add_row(
+            s.object_id, str(s.done), str(s.ok), str(s.by_status.get("invalid", 0)),
+            str(s.by_status.get("unstable", 0)), str(s.by_status.get("error", 0)),
+            f"{s.success_share:.3f}",
+        )  # fmt: skip
+    console.print(table)
+
+
+def cmd_study_status(args: argparse.Namespace) -> int:
+    """Show done/planned and rows by status of a study db."""
+    from transfertwin.store import SQLiteResultStore
+    from transfertwin.study.experiment import StudyPlan
+
+    with SQLiteResultStore(args.db, create=False) as store:
+        stored = store.plan()
+        planned = StudyPlan.from_json(stored.plan_json).n_experiments if stored else 0
+        print(f"db: {args.db}")
+        print(f"plan: {stored.plan_hash[:12] if stored else '-'}")
+        print(f"done: {store.count()}/{planned}")
+        for status, n in sorted(store.count_by_status().items()):
+            print(f"  {status}: {n}")
+    return 0
+
+
+def cmd_study_export(args: argparse.Namespace) -> int:
+    """Write the result table of a study db as CSV or Parquet."""
+    from transfertwin.store import SQLiteResultStore, export_results
+
+    out = out_file(args.out, (".csv", ".parquet"))
+    with SQLiteResultStore(args.db, create=False) as store:
+        path = export_results(store.rows(), out)
+    print(path)
+    return 0
+
+
+def cmd_analyze(args: argparse.Namespace) -> int:
+    """Per-state statistics, best/worst states, plots and report of a result table."""
+    from transfertwin.report import analyze_and_report
+    from transfertwin.store import SQLITE_SUFFIXES, SQLiteResultStore, read_results
+    from transfertwin.study.experiment import plan_parameters
+
+    out = out_dir(args.out)
+    rows = read_results(args.results)
+    params: dict[str, object] = {"results": str(args.results), "rows": len(rows)}
+    if Path(args.results).suffix.lower() in SQLITE_SUFFIXES:
+        with SQLiteResultStore(args.results, create=False) as store:
+            stored = store.plan()
+        if stored is not None:
+            params.update(plan_parameters(stored.plan_json))
+    _, report = analyze_and_report(rows, out, params)
+    print(report)
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add `study run|status|export` and `analyze`."""
+    study = sub.add_parser("study", help="full-state digital-twin study (Sec. 6.6)")
+    ssub = study.add_subparsers(dest="study_command", required=True, parser_class=type(study))
+    p = ssub.add_parser("run", help="run or resume a study into a SQLite db")
+    p.add_argument("--db", required=True, help="SQLite result store (created if missing)")
+    p.add_argument("--objects", help="o1,o18,... | all | mesh paths (default: preset)")
+    p.add_argument("--runs", type=int, help="repetitions per state (default: preset)")
+    p.add_argument("--theta-step", type=int, help="keep θ multiples of this (default: preset)")
+    p.add_argument("--preset", choices=("quick", "full"), default="quick")
+    p.add_argument("--workers", type=int, default=0, help="worker processes (default: cores)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--profile", help="physics profile TOML (default: built-in defaults)")
+    p.add_argument("--units", default="m", help="length unit of mesh files (default m)")
+    p.add_argument("--docking", default="copula", help="docking-error model: "
+                   "copula, copula-per-station, resample or MODEL.json from 'docking fit' "
+                   "(default: copula fitted to the measured errors)")  # fmt: skip
+    p.add_argument("--docking-csv", help="measured docking errors to fit or resample "
+                   "(default: the shipped calibration experiments)")  # fmt: skip
+    p.add_argument("--dock-error", help="X_MM,Y_MM,THETA_DEG: one fixed docking error for all "
+                   "experiments instead of resampled measurements")  # fmt: skip
+    p.add_argument("--max-experiments", type=int, help="stop after this many new results")
+    p.set_defaults(func=cmd_study_run)
+    p = ssub.add_parser("status", help="done/planned and rows by status")
+    p.add_argument("--db", required=True)
+    p.set_defaults(func=cmd_study_status)
+    p = ssub.add_parser("export", help="write the result table as CSV or Parquet")
+    p.add_argument("--db", required=True)
+    p.add_argument("--out", required=True, help="FILE.csv or FILE.parquet")
+    p.set_defaults(func=cmd_study_export)
+    p = sub.add_parser("analyze", help="statistics, best/worst states, plots, report")
+    p.add_argument("results", help="result table: SQLite db, CSV or Parquet")
+    p.add_argument("--out", required=True, help="output directory")
+    p.set_defaults(func=cmd_analyze)

@@ -1,0 +1,165 @@
+"""`transfertwin transfer|states|objects|demo`: single experiments, the state set, the cores."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+from rich.console import Console
+from rich.table import Table
+
+from transfertwin.cli._common import parse_dock_error
+from transfertwin.cli._paths import out_dir, out_file
+from transfertwin.cli._progress import progress_bar
+
+__all__ = ["register"]
+
+_RESULT_KEYS = (
+    "object_id", "face", "conveyor", "theta_deg", "seed", "dock_err_x_mm", "dock_err_y_mm",
+    "dock_err_theta_deg", "status", "y1", "y2", "success", "t_end_1_s", "t_end_2_s",
+    "t_end_s", "message",
+)  # fmt: skip
+
+
+def cmd_transfer(args: argparse.Namespace) -> int:
+    """One virtual experiment E^V: there and, if that worked, back."""
+    from transfertwin.sim import SceneConfig, render_strip
+    from transfertwin.study.experiment import ExperimentSpec, run_experiment, system_for
+
+    image = out_file(args.image, (".png",)) if args.image else None
+    spec = ExperimentSpec(
+        object_ref=args.object,
+        face=args.face,
+        conveyor=args.conveyor,
+        theta_deg=args.theta,
+        docking_error=parse_dock_error(args.dock_error),
+        scene=SceneConfig(mu=args.mu, gap_m=args.gap_mm / 1000.0),
+        seed=args.seed,
+        units=args.units,
+        record=image is not None,
+    )
+    result = run_experiment(spec)
+    if image is not None:
+        system = system_for(spec.object_ref, spec.units, spec.scene)
+        poses = [(f.phase, f.t_s, f.qpos) for f in result.frames]
+        title = (
+            f"{result.object_id} {spec.face} {spec.conveyor} theta={spec.theta_deg} "
+            f"y1={result.y1} y2={result.y2} success={result.success} ({result.status})"
+        )
+        render_strip(system, poses, image, title=title)
+    row = result.row()
+    if args.json:
+        clean = {k: (None if isinstance(v, float) and math.isnan(v) else v) for k, v in row.items()}
+        for key in ("state_pre", "state_end_1", "state_end_2"):
+            clean[key] = json.loads(clean[key]) if clean[key] else None
+        print(json.dumps(clean))
+    else:
+        _print_result(row)
+    return 0
+
+
+def _print_result(row: dict[str, object]) -> None:
+    table = Table(title="virtual transfer experiment E^V", show_header=False)
+    for key in _RESULT_KEYS:
+        value = row[key]
+        text = f"{value:.3f}" if isinstance(value, float) else str(value)
+        table.add_row(key, "-" if value is None or text == "nan" else text)
+    Console().print(table)
+
+
+def cmd_states(args: argparse.Namespace) -> int:
+    """Print the experiment state set (Eq. 6.7–6.10) as CSV."""
+    from transfertwin.ots import experiment_states, filter_theta_step, states_csv
+
+    states = experiment_states()
+    if args.theta_step:
+        states = filter_theta_step(states, args.theta_step)
+    sys.stdout.write(states_csv(states))
+    return 0
+
+
+def cmd_objects_list(args: argparse.Namespace) -> int:
+    """List the built-in cores."""
+    from transfertwin.objects import builtin_ids, core_spec, load_object
+
+    table = Table(title="built-in starter-motor cores")
+    for col in ("id", "length mm", "mass kg", "hulls", "wear"):
+        table.add_column(col)
+    for i, oid in enumerate(builtin_ids(), start=1):
+        obj = load_object(oid)
+        spec = core_spec(i)
+        ext = obj.mesh.extents * 1000
+        table.add_row(
+            oid, f"{ext[0]:.0f}", f"{obj.mass.mass_kg:.2f}", str(len(obj.hulls)),
+            ", ".join(getattr(spec, "wear", ()) or ()) or "-",
+        )  # fmt: skip
+    Console().print(table)
+    return 0
+
+
+def cmd_objects_export(args: argparse.Namespace) -> int:
+    """Write an object's mesh as STL."""
+    from transfertwin.objects import export_object
+
+    out = out_file(args.out, (".stl",))
+    export_object(args.id, out)
+    print(out)
+    return 0
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
+    """A short demo of single transfers with a real docking error."""
+    from transfertwin.study.experiment import run_demo
+
+    out = out_dir(args.out)
+    console = Console()
+    with progress_bar(f"E^V {args.object}", console) as on_progress:
+        results, path = run_demo(
+            out, object_ref=args.object, step_deg=args.theta_step, on_progress=on_progress
+        )
+    table = Table(title=f"{args.object}: E^V with the docking error of real experiment 0")
+    for col in ("face", "conveyor", "theta_deg", "status", "y1", "y2", "success", "t_end_s"):
+        table.add_column(col)
+    for r in results:
+        table.add_row(r.face, r.conveyor, str(r.theta_deg), r.status, str(r.y1), str(r.y2),
+                      str(r.success), f"{r.t_end_s:.2f}")  # fmt: skip
+    console.print(table)
+    ok = [r for r in results if r.status == "ok"]
+    share = sum(r.success for r in ok) / len(ok) if ok else float("nan")
+    console.print(f"success share over {len(ok)} valid states: {share:.2f}")
+    console.print(f"results: {path}")
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add `transfer`, `states`, `objects list|export` and `demo`."""
+    p = sub.add_parser("transfer", help="run one virtual transfer experiment (E^V)")
+    p.add_argument("--object", required=True, help="built-in core id (o1..o37) or a mesh path")
+    p.add_argument("--units", default="m", help="length unit of a mesh file: m, cm, mm, in")
+    p.add_argument("--face", required=True, help="front or back")
+    p.add_argument("--conveyor", required=True, help="left, right or both")
+    p.add_argument("--theta", required=True, type=int, help="yaw in integer degrees, -179..180")
+    p.add_argument("--dock-error", default="0,0,0", help="X_MM,Y_MM,THETA_DEG (default 0,0,0)")
+    p.add_argument("--mu", type=float, default=0.489, help="dynamic friction (default 0.489)")
+    p.add_argument("--gap-mm", type=float, default=11.88, help="nominal gap (default 11.88)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--image", help="write a strip of frames from t0 to t_end to this PNG")
+    p.set_defaults(func=cmd_transfer)
+    p = sub.add_parser("states", help="print the 924 pre-transfer states as CSV")
+    p.add_argument("--theta-step", type=int, default=0, help="keep θ multiples of this")
+    p.set_defaults(func=cmd_states)
+    objects = sub.add_parser("objects", help="built-in cores")
+    osub = objects.add_subparsers(dest="objects_command", required=True, parser_class=type(objects))
+    osub.add_parser("list", help="list built-in cores").set_defaults(func=cmd_objects_list)
+    p = osub.add_parser("export", help="write a core's mesh as STL")
+    p.add_argument("id")
+    p.add_argument("--out", required=True)
+    p.set_defaults(func=cmd_objects_export)
+    p = sub.add_parser("demo", help="a short demo of single transfers")
+    p.add_argument("--out", default="out/demo", help="output directory")
+    p.add_argument("--object", default="o1")
+    p.add_argument("--theta-step", type=int, default=45)
+    p.set_defaults(func=cmd_demo)

@@ -1,0 +1,41 @@
+"""`transfertwin validate`: virtual against physical results per state (Sec. 6.7).
+
+Writes ``validation.csv``, ``summary.json`` and ``validation.png`` into ``--out``
+and prints one summary line such as ``12/37 objects differ (…)``.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from transfertwin.cli._paths import out_dir
+
+__all__ = ["cmd_validate", "register"]
+
+
+def cmd_validate(args: argparse.Namespace) -> int:
+    """Compare E^V with E^P state by state; Newcombe hybrid score intervals."""
+    from transfertwin.report import validate_and_report
+
+    out = out_dir(args.out)
+    result = validate_and_report(args.virtual, args.physical, out, alpha=args.alpha)
+    n_sig = sum(c.significant for c in result.comparisons)
+    print(
+        f"{result.summary_line} ({len(result.comparisons)} states compared, {n_sig} significant "
+        f"at alpha={result.alpha:g}; not compared: {len(result.virtual_only)} virtual-only, "
+        f"{len(result.physical_only)} physical-only states)"
+    )
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add `validate` to the CLI (``sub`` from ``add_subparsers(parser_class=_Parser)``)."""
+    p = sub.add_parser("validate", help="virtual vs physical success per state (Sec. 6.7)")
+    p.add_argument("--virtual", required=True, metavar="RESULTS",
+                   help="virtual results: SQLite db, CSV or Parquet")  # fmt: skip
+    p.add_argument("--physical", required=True, metavar="RESULTS",
+                   help="physical (real) results: SQLite db, CSV or Parquet")  # fmt: skip
+    p.add_argument("--out", required=True, metavar="DIR", help="output directory")
+    p.add_argument("--alpha", type=float, default=0.05,
+                   help="1 - confidence level of all intervals (default 0.05)")  # fmt: skip
+    p.set_defaults(func=cmd_validate)

@@ -1,0 +1,39 @@
+"""OPC UA servers and clients built from the AAS, security and decentralised discovery."""
+
+from transfertwin.cps.opcua._client import AssetClient, connect
+from transfertwin.cps.opcua._discovery import Discovery, Peer
+from transfertwin.cps.opcua._remote_hal import OpcUaUnitHAL
+from transfertwin.cps.opcua._security import (
+    ROLES,
+    Credentials,
+    RoleRuleset,
+    RoleUserManager,
+    ensure_certificate,
+    free_port,
+    load_credentials,
+    new_credentials,
+    write_credentials,
+)
+from transfertwin.cps.opcua._server import NAMESPACE, AssetServer, Handler, ServerConfig, node_id
+
+__all__ = [
+    "NAMESPACE",
+    "ROLES",
+    "AssetClient",
+    "AssetServer",
+    "Credentials",
+    "Discovery",
+    "Handler",
+    "OpcUaUnitHAL",
+    "Peer",
+    "RoleRuleset",
+    "RoleUserManager",
+    "ServerConfig",
+    "connect",
+    "ensure_certificate",
+    "free_port",
+    "load_credentials",
+    "new_credentials",
+    "node_id",
+    "write_credentials",
+]

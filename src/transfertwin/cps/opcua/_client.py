@@ -1,0 +1,81 @@
+"""Clients of asset servers: secure sessions and AAS-addressed reads, writes and calls."""
+
+from __future__ import annotations
+
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from pathlib import Path
+from typing import Any
+
+from asyncua import Client, ua
+from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
+
+from transfertwin.cps.opcua._security import Credentials, ensure_certificate
+from transfertwin.cps.opcua._server import NAMESPACE, node_id
+
+__all__ = ["AssetClient", "connect"]
+
+
+class AssetClient:
+    """A session with one asset server, addressing nodes by AAS idShorts."""
+
+    def __init__(self, client: Client, asset_id: str) -> None:
+        self.client = client
+        self.asset_id = asset_id
+        self._ns: int | None = None
+
+    async def _node(self, *parts: str):
+        if self._ns is None:
+            self._ns = await self.client.get_namespace_index(NAMESPACE)
+        return self.client.get_node(ua.NodeId(node_id(self.asset_id, *parts), self._ns))
+
+    async def read(self, submodel: str, prop: str) -> Any:
+        """Value of a property."""
+        return await (await self._node(submodel, prop)).read_value()
+
+    async def write(self, submodel: str, prop: str, value: Any) -> None:
+        """Write a property (needs the operator role and a writable variable)."""
+        node = await self._node(submodel, prop)
+        vtype = await node.read_data_type_as_variant_type()
+        await node.write_value(ua.DataValue(ua.Variant(value, vtype)))
+
+    async def call(self, operation: str, *args: Any, submodel: str = "ControlInterface") -> Any:
+        """Call an operation; returns its single output or a list of outputs."""
+        parent = await self._node(submodel)
+        method = await self._node(submodel, operation)
+        return await parent.call_method(method, *args)
+
+    async def subscribe(self, handler: object, *props: tuple[str, str], period_ms: int = 50):
+        """Subscribe `handler.datachange_notification` to (submodel, property) pairs."""
+        sub = await self.client.create_subscription(period_ms, handler)
+        nodes = [await self._node(sm, p) for sm, p in props]
+        await sub.subscribe_data_change(nodes)
+        return sub
+
+
+@asynccontextmanager
+async def connect(
+    endpoint: str,
+    asset_id: str,
+    *,
+    credentials: Credentials | None,
+    role: str = "operator",
+    cert_dir: Path = Path("certs"),
+    insecure: bool = False,
+    timeout_s: float = 10.0,
+) -> AsyncIterator[AssetClient]:
+    """A session with an asset server (secure unless `insecure`)."""
+    client = Client(url=endpoint, timeout=timeout_s)
+    client.application_uri = f"urn:transfertwin:client-{role}"
+    if not insecure:
+        cert, key = await ensure_certificate(cert_dir, f"client-{role}")
+        await client.set_security(
+            SecurityPolicyBasic256Sha256, str(cert), str(key),
+            mode=ua.MessageSecurityMode.SignAndEncrypt,
+        )  # fmt: skip
+    if credentials is not None:
+        user, password = credentials.for_role(role)
+        client.set_user(user)
+        client.set_password(password)
+    async with client:
+        yield AssetClient(client, asset_id)

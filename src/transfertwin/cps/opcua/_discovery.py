@@ -1,0 +1,167 @@
+"""Decentralised discovery: every asset knows its peers; no central registry (Sec. 5.3).
+
+Each asset server answers the standard OPC UA FindServers service with the servers it
+knows. An asset that joins registers itself (RegisterServer2) at one or more seed peers
+and takes their lists; then every asset periodically asks each known peer for its list
+(pull gossip), so a newcomer spreads to all within a few rounds. A peer that cannot be
+reached for `max_misses` rounds in a row is dropped: that is how a leaving asset is
+noticed. Listeners hear about every join and leave.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+from collections.abc import Callable, Iterable
+from contextlib import AbstractAsyncContextManager, suppress
+from dataclasses import dataclass, field
+
+from asyncua import Client, ua
+
+from transfertwin.cps.opcua._client import AssetClient
+from transfertwin.cps.opcua._server import AssetServer
+
+__all__ = ["Discovery", "Peer"]
+
+log = logging.getLogger(__name__)
+
+Connector = Callable[[str], AbstractAsyncContextManager[AssetClient]]
+
+
+@dataclass(frozen=True)
+class Peer:
+    """A known asset server: its application URI and discovery URL."""
+
+    uri: str
+    url: str
+
+    @property
+    def asset_id(self) -> str:
+        """The asset id encoded in a transfertwin application URI."""
+        return self.uri.rsplit(":", 1)[-1]
+
+
+@dataclass
+class Discovery:
+    """The discovery agent of one asset.
+
+    Args:
+        server: The asset's running server (its FindServers answers with `peers`).
+        period_s: Gossip period.
+        max_misses: Rounds a peer may be unreachable before it counts as gone.
+        on_change: Called with ('join' | 'leave', peer) for every change seen here.
+    """
+
+    server: AssetServer
+    period_s: float = 0.5
+    max_misses: int = 2
+    tombstone_s: float = 10.0
+    on_change: Callable[[str, Peer], None] | None = None
+    peers: dict[str, Peer] = field(default_factory=dict)
+    _misses: dict[str, int] = field(default_factory=dict)
+    _gone: dict[str, float] = field(default_factory=dict)  # uri -> when it was dropped
+    _turn: int = 0
+    _task: asyncio.Task | None = None
+
+    @property
+    def me(self) -> Peer:
+        """This asset as a peer."""
+        return Peer(f"urn:transfertwin:{self.server.asset_id}", self.server.endpoint)
+
+    def _add(self, peer: Peer, *, direct: bool = False) -> None:
+        if peer.uri == self.me.uri or peer.uri in self.peers:
+            return
+        dropped = self._gone.get(peer.uri)
+        if dropped is not None and not direct and time.monotonic() - dropped < self.tombstone_s:
+            return  # hearsay about a peer we saw leave; only its own re-registration counts
+        self._gone.pop(peer.uri, None)
+        self.peers[peer.uri] = peer
+        self._misses[peer.uri] = 0
+        self.server.register_peer(peer.uri, peer.url, peer.asset_id)
+        log.info("%s discovered %s at %s", self.server.asset_id, peer.asset_id, peer.url)
+        if self.on_change is not None:
+            self.on_change("join", peer)
+
+    def _drop(self, uri: str) -> None:
+        peer = self.peers.pop(uri)
+        self._misses.pop(uri, None)
+        self._gone[uri] = time.monotonic()
+        self.server.unregister_peer(uri)
+        log.info("%s noticed %s left", self.server.asset_id, peer.asset_id)
+        if self.on_change is not None:
+            self.on_change("leave", peer)
+
+    async def _ask(self, url: str) -> list[Peer]:
+        client = Client(url=url, timeout=2)
+        servers = await asyncio.wait_for(client.connect_and_find_servers(), 3)
+        return [Peer(s.ApplicationUri, s.DiscoveryUrls[0]) for s in servers if s.DiscoveryUrls]
+
+    async def _announce(self, url: str, connector: Connector) -> None:
+        registered = ua.RegisteredServer()
+        registered.ServerUri = self.me.uri
+        registered.ProductUri = "urn:transfertwin"
+        registered.ServerNames = [ua.LocalizedText(self.server.asset_id)]
+        registered.ServerType = ua.ApplicationType.Server
+        registered.DiscoveryUrls = [self.me.url]
+        registered.IsOnline = True
+        params = ua.RegisterServer2Parameters()
+        params.Server = registered
+        params.DiscoveryConfiguration = []
+        async with connector(url) as session:
+            await session.client.uaclient.register_server2(params)
+
+    async def join(self, seeds: Iterable[str], connector: Connector) -> None:
+        """Register at the seed peers, learn their lists, start gossiping.
+
+        Args:
+            seeds: Discovery URLs of peers to start from.
+            connector: Opens an operator session to a peer URL (RegisterServer2 needs it).
+        """
+        for url in seeds:
+            try:
+                await self._announce(url, connector)
+                for peer in await self._ask(url):
+                    self._add(peer)
+            except (TimeoutError, OSError, ua.UaError) as exc:
+                log.warning("%s: seed %s unreachable: %s", self.server.asset_id, url, exc)
+        self._task = asyncio.ensure_future(self._gossip())
+
+    async def round(self) -> None:
+        """One gossip round: take the registrations our own server received, then ask the
+        next known peer (round robin) for its list; drop a peer silent `max_misses` times.
+
+        One peer per round keeps the traffic linear in the number of assets; every peer is
+        visited once per len(peers) rounds.
+        """
+        for uri, url in self.server.registered_peers():
+            if uri not in self.peers and uri not in self._gone:
+                self._add(Peer(uri, url), direct=True)
+        if not self.peers:
+            return
+        uris = sorted(self.peers)
+        self._turn = (self._turn + 1) % len(uris)
+        uri = uris[self._turn]
+        try:
+            found = await self._ask(self.peers[uri].url)
+        except (TimeoutError, OSError, ua.UaError, ConnectionError):
+            self._misses[uri] = self._misses.get(uri, 0) + 1
+            if self._misses[uri] >= self.max_misses:
+                self._drop(uri)
+            return
+        self._misses[uri] = 0
+        for other in found:
+            self._add(other)
+
+    async def _gossip(self) -> None:
+        while True:
+            await asyncio.sleep(self.period_s)
+            await self.round()
+
+    async def stop(self) -> None:
+        """Stop gossiping (the server's going away is what peers notice)."""
+        if self._task is not None:
+            self._task.cancel()
+            with suppress(asyncio.CancelledError):
+                await self._task
+            self._task = None

@@ -1,0 +1,249 @@
+"""An asset's OPC UA server, its address space generated from its AAS (Sec. 3.1, 5.3).
+
+Structure (after the OPC UA for AAS companion specification, simplified):
+``Objects/AAS_<id>/`` holds one object per submodel, named by its idShort; a Property becomes
+a variable of the matching OPC UA data type, an Operation a method with the operation's input
+and output variables as arguments, a Capability an object carrying its semantic id. All
+nodes live in the namespace ``urn:transfertwin:aas`` with string node ids
+``<asset>.<submodel>.<element>``, so a client addresses every asset the same way.
+Deviations from the companion specification: no AAS object/variable *types* are
+instantiated (plain folders, objects and variables), and references are not modelled.
+
+Async context manager; secure by default (see `_security`). Variables listed as writable
+accept client writes (external state synchronisation); all others are updated by the asset
+itself through `set`.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Awaitable, Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import basyx.aas.model as aas
+from asyncua import Server, ua
+from asyncua.common.node import Node
+
+from transfertwin.cps.opcua._security import (
+    Credentials,
+    RoleRuleset,
+    RoleUserManager,
+    ensure_certificate,
+    free_port,
+)
+
+__all__ = ["NAMESPACE", "AssetServer", "Handler", "ServerConfig", "node_id"]
+
+log = logging.getLogger(__name__)
+
+NAMESPACE = "urn:transfertwin:aas"
+SECURE_POLICY = "Basic256Sha256_SignAndEncrypt"
+
+Handler = Callable[..., Awaitable[Any]]
+
+_VARIANT = {
+    bool: ua.VariantType.Boolean,
+    float: ua.VariantType.Double,
+    int: ua.VariantType.Int64,
+    str: ua.VariantType.String,
+}
+_DEFAULTS = {bool: False, float: 0.0, int: 0, str: ""}
+
+
+def _python_type(value_type: type) -> type:
+    for base in (bool, float, int, str):
+        if issubclass(value_type, base):
+            return base
+    return str
+
+
+def node_id(asset_id: str, *parts: str) -> str:
+    """The string node id of an element: ``<asset>.<submodel>.<element>``."""
+    return ".".join((asset_id, *parts))
+
+
+@dataclass(frozen=True)
+class ServerConfig:
+    """How an asset server listens.
+
+    Attributes:
+        host: Interface to bind (loopback by default).
+        port: TCP port; 0 picks a free one.
+        insecure: Serve NoSecurity without users (explicit opt-in only).
+        cert_dir: Where application certificates are created on first start.
+        credentials: Users and passwords per role (required unless insecure).
+    """
+
+    host: str = "127.0.0.1"
+    port: int = 0
+    insecure: bool = False
+    cert_dir: Path = Path("certs")
+    credentials: Credentials | None = None
+
+
+@dataclass
+class AssetServer:
+    """The OPC UA server of one asset.
+
+    Args:
+        asset_id: The asset's id.
+        submodels: Its AAS submodels (basyx objects).
+        config: Listening and security settings.
+        handlers: Operation idShort → async callable(*inputs) returning the outputs (a
+            value or a tuple in the order of the operation's output variables).
+        writable: (submodel, property) pairs clients may write.
+    """
+
+    asset_id: str
+    submodels: tuple[aas.Submodel, ...]
+    config: ServerConfig = field(default_factory=ServerConfig)
+    handlers: Mapping[str, Handler] = field(default_factory=dict)
+    writable: frozenset[tuple[str, str]] = frozenset()
+    endpoint: str = ""
+    _server: Server | None = None
+    _nodes: dict[tuple[str, str], Node] = field(default_factory=dict)
+    _types: dict[tuple[str, str], type] = field(default_factory=dict)
+    _ns: int = 0
+
+    @property
+    def security_policy(self) -> str:
+        """The security policy the endpoint offers."""
+        return "None" if self.config.insecure else SECURE_POLICY
+
+    async def __aenter__(self) -> AssetServer:
+        cfg = self.config
+        if not cfg.insecure and cfg.credentials is None:
+            raise ValueError("a secure asset server needs credentials")
+        server = Server(user_manager=RoleUserManager(cfg.credentials) if cfg.credentials else None)
+        await server.init()
+        port = cfg.port or free_port(cfg.host)
+        self.endpoint = f"opc.tcp://{cfg.host}:{port}/transfertwin/{self.asset_id}"
+        server.set_endpoint(self.endpoint)
+        server.set_server_name(f"transfertwin {self.asset_id}")
+        await server.set_application_uri(f"urn:transfertwin:{self.asset_id}")
+        if cfg.insecure:
+            server.set_security_policy([ua.SecurityPolicyType.NoSecurity])
+        else:
+            cert, key = await ensure_certificate(cfg.cert_dir, self.asset_id, cfg.host)
+            await server.load_certificate(str(cert))
+            await server.load_private_key(str(key))
+            server.set_security_policy(
+                [ua.SecurityPolicyType.Basic256Sha256_SignAndEncrypt],
+                permission_ruleset=RoleRuleset(),
+            )
+            server.set_identity_tokens([ua.UserNameIdentityToken])
+        self._ns = await server.register_namespace(NAMESPACE)
+        await self._build(server)
+        await server.start()
+        self._server = server
+        log.info("%s serving at %s (%s)", self.asset_id, self.endpoint, self.security_policy)
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        if self._server is not None:
+            await self._server.stop()
+            self._server = None
+
+    # -- address space ----------------------------------------------------------------
+    async def _build(self, server: Server) -> None:
+        root = await server.nodes.objects.add_folder(
+            ua.NodeId(node_id(self.asset_id), self._ns), f"{self._ns}:AAS_{self.asset_id}"
+        )
+        for sm in self.submodels:
+            sm_node = await root.add_object(
+                ua.NodeId(node_id(self.asset_id, sm.id_short), self._ns),
+                f"{self._ns}:{sm.id_short}",
+            )
+            for element in sm.submodel_element:
+                await self._add_element(sm_node, sm.id_short, element)
+
+    async def _add_element(self, parent: Node, sm: str, element: aas.SubmodelElement) -> None:
+        nid = ua.NodeId(node_id(self.asset_id, sm, element.id_short), self._ns)
+        name = f"{self._ns}:{element.id_short}"
+        if isinstance(element, aas.Property):
+            ptype = _python_type(element.value_type)
+            value = element.value if element.value is not None else _DEFAULTS[ptype]
+            var = await parent.add_variable(nid, name, ua.Variant(ptype(value), _VARIANT[ptype]))
+            if (sm, element.id_short) in self.writable:
+                await var.set_writable()
+            self._nodes[(sm, element.id_short)] = var
+            self._types[(sm, element.id_short)] = ptype
+        elif isinstance(element, aas.Operation):
+            await self._add_method(parent, nid, name, element)
+        elif isinstance(element, aas.Capability):
+            cap = await parent.add_object(nid, name)
+            sem = element.semantic_id.key[0].value if element.semantic_id else ""
+            await cap.add_property(
+                ua.NodeId(node_id(self.asset_id, sm, element.id_short, "SemanticId"), self._ns),
+                f"{self._ns}:SemanticId", sem,
+            )  # fmt: skip
+
+    async def _add_method(self, parent: Node, nid: ua.NodeId, name: str, op: aas.Operation) -> None:
+        ins = [(v.id_short, _python_type(v.value_type)) for v in op.input_variable]
+        outs = [(v.id_short, _python_type(v.value_type)) for v in op.output_variable]
+        handler = self.handlers.get(op.id_short)
+
+        async def call(_parent: ua.NodeId, *args: ua.Variant) -> list[ua.Variant] | ua.StatusCode:
+            # A bad request becomes a status code for the caller, never a server failure.
+            if handler is None:
+                return ua.StatusCode(ua.StatusCodes.BadNotImplemented)
+            if len(args) != len(ins):
+                return ua.StatusCode(ua.StatusCodes.BadArgumentsMissing)
+            values = [a.Value for a in args]
+            try:
+                result = await handler(*values)
+            except (ValueError, KeyError, TypeError) as exc:
+                log.info("%s.%s refused: %s", self.asset_id, op.id_short, exc)
+                return ua.StatusCode(ua.StatusCodes.BadInvalidArgument)
+            result = result if isinstance(result, tuple) else (result,)
+            return [ua.Variant(t(v), _VARIANT[t]) for (_, t), v in zip(outs, result, strict=True)]
+
+        in_args = [_argument(n, t) for n, t in ins]
+        out_args = [_argument(n, t) for n, t in outs]
+        await parent.add_method(nid, name, call, in_args, out_args)
+
+    # -- discovery ------------------------------------------------------------------------
+    def register_peer(self, uri: str, url: str, name: str) -> None:
+        """Answer FindServers with this peer too (decentralised discovery)."""
+        registered = ua.RegisteredServer()
+        registered.ServerUri = uri
+        registered.ProductUri = "urn:transfertwin"
+        registered.ServerNames = [ua.LocalizedText(name)]
+        registered.ServerType = ua.ApplicationType.Server
+        registered.DiscoveryUrls = [url]
+        registered.IsOnline = True
+        self._server.iserver.register_server(registered)
+
+    def registered_peers(self) -> list[tuple[str, str]]:
+        """(application URI, discovery URL) of every server registered here."""
+        out = []
+        for uri, desc in list(self._server.iserver._known_servers.items()):
+            urls = desc.Server.DiscoveryUrls
+            if uri != f"urn:transfertwin:{self.asset_id}" and urls:
+                out.append((uri, urls[0]))
+        return out
+
+    def unregister_peer(self, uri: str) -> None:
+        """Stop answering FindServers with a peer that left."""
+        self._server.iserver._known_servers.pop(uri, None)
+
+    # -- values ---------------------------------------------------------------------------
+    async def set(self, submodel: str, prop: str, value: Any) -> None:
+        """Update a variable (the asset synchronising its own state)."""
+        ptype = self._types[(submodel, prop)]
+        await self._nodes[(submodel, prop)].write_value(ua.Variant(ptype(value), _VARIANT[ptype]))
+
+    async def get(self, submodel: str, prop: str) -> Any:
+        """Current value of a variable."""
+        return await self._nodes[(submodel, prop)].read_value()
+
+
+def _argument(name: str, ptype: type) -> ua.Argument:
+    arg = ua.Argument()
+    arg.Name = name
+    arg.DataType = ua.NodeId(_VARIANT[ptype].value)
+    arg.ValueRank = -1
+    arg.Description = ua.LocalizedText(name)
+    return arg

@@ -1,0 +1,65 @@
+"""Calibration of the virtual models against real experiments (Sec. 6.5)."""
+
+from transfertwin.study.calibration._evaluate import (
+    Evaluation,
+    Scores,
+    best_threshold,
+    choose_candidates,
+    cv_splits,
+    evaluate_predictions,
+    fold_predictions,
+    in_sample,
+    logistic_features,
+    logistic_probabilities,
+    score,
+)
+from transfertwin.study.calibration._metrics import RUN_METRICS, ConfusionMatrix, summarize_runs
+from transfertwin.study.calibration._replay import (
+    CalibrationResult,
+    CalibrationRun,
+    calibrate,
+    parse_object_map,
+    replay_specs,
+)
+from transfertwin.study.calibration._tuning import (
+    METRICS,
+    SIM_PARAMETER_SETS,
+    Trial,
+    best_trial,
+    scene_with,
+    simulation_parameter_study,
+    sweep,
+    tune_lhs,
+    tune_tpe,
+)
+
+__all__ = [
+    "METRICS",
+    "RUN_METRICS",
+    "SIM_PARAMETER_SETS",
+    "CalibrationResult",
+    "CalibrationRun",
+    "ConfusionMatrix",
+    "Evaluation",
+    "Scores",
+    "Trial",
+    "best_threshold",
+    "best_trial",
+    "calibrate",
+    "choose_candidates",
+    "cv_splits",
+    "evaluate_predictions",
+    "fold_predictions",
+    "in_sample",
+    "logistic_features",
+    "logistic_probabilities",
+    "parse_object_map",
+    "replay_specs",
+    "scene_with",
+    "score",
+    "simulation_parameter_study",
+    "summarize_runs",
+    "sweep",
+    "tune_lhs",
+    "tune_tpe",
+]

@@ -1,0 +1,319 @@
+"""Honest evaluation of a twin's predictions against real outcomes, beside baselines.
+
+The twin predicts P(success) for each real experiment (the share of successful repeated
+runs with placement noise). Everything that is tuned — which proxy object stands in for each
+real core, and the decision threshold that turns P into a bit for F0.5 — is chosen on the
+training rows of each fold only (`fold_predictions`), and the held-out rows are scored with
+that choice. The same protocol scores a logistic regression on the state and docking error
+and the base-rate predictor, on the same repeated stratified folds.
+
+Shapes: `n` real rows; `y` (n,) 0/1 outcomes; probabilities (n,) in [0, 1]; candidate
+predictions per object (k, n), one row per candidate proxy of that object.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from sklearn.linear_model import LogisticRegression
+from sklearn.model_selection import RepeatedStratifiedKFold
+from sklearn.pipeline import make_pipeline
+from sklearn.preprocessing import StandardScaler
+
+from transfertwin._errors import InputError
+from transfertwin.store import DOCKING_ERROR_COLUMNS
+from transfertwin.study.calibration._metrics import ConfusionMatrix
+
+__all__ = [
+    "Evaluation",
+    "Scores",
+    "best_threshold",
+    "choose_candidates",
+    "cv_splits",
+    "evaluate_predictions",
+    "fold_predictions",
+    "in_sample",
+    "logistic_features",
+    "logistic_probabilities",
+    "score",
+]
+
+_EPS = 1e-6
+
+
+@dataclass(frozen=True)
+class Scores:
+    """Metrics of probabilistic predictions at one threshold (App. A.2 for the bits)."""
+
+    f05: float
+    precision: float
+    recall: float
+    accuracy: float
+    brier: float
+    log_loss: float
+    threshold: float
+
+    def to_dict(self) -> dict[str, float]:
+        """Plain floats for JSON."""
+        return asdict(self)
+
+
+def score(p: np.ndarray, y: np.ndarray, threshold: float) -> Scores:
+    """F0.5, precision, recall, accuracy at `threshold` (success iff p >= threshold), and the
+    Brier score and log-loss of the probabilities (clipped to [1e-6, 1 - 1e-6])."""
+    p, y = np.asarray(p, dtype=float), np.asarray(y, dtype=int)
+    cm = ConfusionMatrix.from_predictions(p >= threshold, y.astype(bool))
+    q = np.clip(p, _EPS, 1 - _EPS)
+    loss = -float(np.mean(y * np.log(q) + (1 - y) * np.log(1 - q)))
+    brier = float(np.mean((p - y) ** 2))
+    return Scores(cm.f05, cm.precision, cm.recall, cm.accuracy, brier, loss, float(threshold))
+
+
+def best_threshold(p: np.ndarray, y: np.ndarray) -> float:
+    """The threshold in (0, 1] that maximises F0.5 of `p` against `y`.
+
+    Candidates are the distinct predicted values (predict success iff p >= t); ties go to
+    the lowest threshold, so a constant predictor says 'success' (the base-rate choice).
+    """
+    p, y = np.asarray(p, dtype=float), np.asarray(y, dtype=int)
+    best_t, best_f = 1.0, -1.0
+    for t in np.unique(np.clip(p, _EPS, 1.0)):
+        f = ConfusionMatrix.from_predictions(p >= t, y.astype(bool)).f05
+        if f > best_f + 1e-12:
+            best_t, best_f = float(t), f
+    return best_t
+
+
+def cv_splits(
+    y: np.ndarray, folds: int, repeats: int, seed: int
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(train, test) index pairs of repeated stratified K-fold; repeat r is splits
+    r*folds .. (r+1)*folds - 1 and covers every row once as test."""
+    y = np.asarray(y, dtype=int)
+    if folds < 2:
+        raise InputError(f"--folds must be at least 2, got {folds}")
+    if repeats < 1:
+        raise InputError(f"--repeats must be at least 1, got {repeats}")
+    if min(np.bincount(y, minlength=2)) < folds:
+        raise InputError(f"each outcome needs at least {folds} rows for {folds} folds")
+    rskf = RepeatedStratifiedKFold(n_splits=folds, n_repeats=repeats, random_state=seed)
+    return list(rskf.split(np.zeros(len(y)), y))
+
+
+def choose_candidates(
+    candidates: Mapping[str, np.ndarray],
+    objects: np.ndarray,
+    y: np.ndarray,
+    rows: np.ndarray,
+    penalty: float = 0.0,
+) -> dict[str, int]:
+    """Per object, the candidate proxy with the lowest Brier score on `rows` of that object.
+
+    Args:
+        candidates: Object id → predictions (k, n) of its k candidate proxies for all rows;
+            candidate 0 is the family prior, later ones move away from it.
+        objects: Object id per row (n,).
+        y: Real outcomes (n,).
+        rows: The row indices the choice may look at (a training fold).
+        penalty: Regularisation towards the prior: `penalty * k / (K - 1)` is added to
+            candidate k's Brier score (0: none).
+
+    Returns:
+        Object id → chosen candidate index.
+    """
+    chosen = {}
+    for obj, pred in candidates.items():
+        mine = rows[objects[rows] == obj]
+        if len(mine) == 0:
+            chosen[obj] = 0
+            continue
+        brier = np.mean((pred[:, mine] - y[mine]) ** 2, axis=1)
+        k = pred.shape[0]
+        brier = brier + penalty * np.arange(k) / max(k - 1, 1)
+        chosen[obj] = int(np.argmin(brier))
+    return chosen
+
+
+def _assemble(
+    candidates: Mapping[str, np.ndarray], objects: np.ndarray, chosen: Mapping[str, int]
+) -> np.ndarray:
+    p = np.full(len(objects), np.nan)
+    for obj, k in chosen.items():
+        mask = objects == obj
+        p[mask] = candidates[obj][k, mask]
+    if np.isnan(p).any():
+        missing = sorted(set(objects[np.isnan(p)]))
+        raise InputError(f"no twin predictions for object(s) {', '.join(missing)}")
+    return p
+
+
+def fold_predictions(
+    candidates: Mapping[str, np.ndarray],
+    objects: np.ndarray,
+    y: np.ndarray,
+    splits: Sequence[tuple[np.ndarray, np.ndarray]],
+    penalty: float = 0.0,
+) -> list[tuple[np.ndarray, np.ndarray, float, dict[str, int]]]:
+    """Per split: (test rows, their predictions, threshold, chosen candidates), where the
+    candidates and the threshold are chosen on the training rows only."""
+    out = []
+    for train, test in splits:
+        chosen = choose_candidates(candidates, objects, y, train, penalty)
+        p = _assemble(candidates, objects, chosen)
+        out.append((test, p[test], best_threshold(p[train], y[train]), chosen))
+    return out
+
+
+def in_sample(
+    candidates: Mapping[str, np.ndarray], objects: np.ndarray, y: np.ndarray, penalty: float
+) -> tuple[np.ndarray, float, dict[str, int]]:
+    """Predictions, threshold and candidates chosen on all rows (the optimistic figure)."""
+    rows = np.arange(len(y))
+    chosen = choose_candidates(candidates, objects, y, rows, penalty)
+    p = _assemble(candidates, objects, chosen)
+    return p, best_threshold(p, y), chosen
+
+
+def logistic_features(rows: Sequence[Mapping[str, object]]) -> np.ndarray:
+    """Features of the logistic baseline, (n, d): one-hot object, face, conveyor and
+    object×face; sin/cos of θ and 2θ per object×face; the docking error (mm, mm, deg)."""
+    objs = sorted({str(r["object_id"]) for r in rows})
+    groups = [(o, f) for o in objs for f in ("front", "back")]
+    feats = []
+    for r in rows:
+        o, f, c = str(r["object_id"]), str(r["face"]), str(r["conveyor"])
+        th = math.radians(float(r["theta_deg"]))
+        x = [float(o == k) for k in objs]
+        x += [float(f == "back")]
+        x += [float(c == k) for k in ("left", "right")]
+        trig = [math.sin(th), math.cos(th), math.sin(2 * th), math.cos(2 * th)]
+        for g in groups:
+            on = float((o, f) == g)
+            x += [on, *(on * v for v in trig)]
+        x += [float(r[k]) for k in DOCKING_ERROR_COLUMNS]
+        feats.append(x)
+    return np.asarray(feats, dtype=float)
+
+
+def logistic_probabilities(
+    X: np.ndarray, y: np.ndarray, train: np.ndarray, C: float = 1.0
+) -> np.ndarray:
+    """P(success) of every row from a logistic regression fitted on `train` rows
+    (standardised features, L2 penalty `C`)."""
+    model = make_pipeline(StandardScaler(), LogisticRegression(C=C, max_iter=2000))
+    model.fit(X[train], y[train])
+    return model.predict_proba(X)[:, 1]
+
+
+def _pooled(
+    parts: Sequence[tuple[np.ndarray, np.ndarray, float]], y: np.ndarray, n: int
+) -> tuple[dict[str, float], np.ndarray, np.ndarray]:
+    """Metrics of out-of-fold predictions of one repeat (each fold with its own threshold)."""
+    p, bits = np.full(n, np.nan), np.zeros(n, dtype=bool)
+    for test, pt, thr in parts:
+        p[test], bits[test] = pt, pt >= thr
+    cm = ConfusionMatrix.from_predictions(bits, y.astype(bool))
+    q = np.clip(p, _EPS, 1 - _EPS)
+    return {
+        "f05": cm.f05, "precision": cm.precision, "recall": cm.recall,
+        "accuracy": cm.accuracy, "brier": float(np.mean((p - y) ** 2)),
+        "log_loss": -float(np.mean(y * np.log(q) + (1 - y) * np.log(1 - q))),
+    }, p, bits  # fmt: skip
+
+
+def _mean_std(per_repeat: Sequence[dict[str, float]]) -> dict[str, float]:
+    out: dict[str, float] = {}
+    for key in per_repeat[0]:
+        values = np.array([r[key] for r in per_repeat])
+        out[key] = float(values.mean())
+        out[f"{key}_std"] = float(values.std(ddof=1)) if len(values) > 1 else 0.0
+    return out
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """Figures of the twin and the baselines on the same rows and folds.
+
+    Attributes:
+        figures: 'base_rate', 'logistic_in_sample', 'logistic_cv', 'twin_in_sample',
+            'twin_cv': metric → value ('*_std' over repeats for the CV figures).
+        per_object: Object id → confusion matrices (in-sample and first-repeat CV) and
+            counts.
+        twin_p, twin_oof, logistic_oof: Predictions (n,): the twin in-sample and both
+            models out-of-fold in the first repeat.
+        chosen: The candidates chosen on all rows (in-sample).
+    """
+
+    n: int
+    successes: int
+    folds: int
+    repeats: int
+    figures: dict[str, dict[str, float]]
+    per_object: dict[str, dict[str, object]]
+    twin_p: np.ndarray
+    twin_oof: np.ndarray
+    logistic_oof: np.ndarray
+    chosen: dict[str, int]
+
+
+def evaluate_predictions(
+    rows: Sequence[Mapping[str, object]],
+    candidates: Mapping[str, np.ndarray],
+    *,
+    folds: int = 5,
+    repeats: int = 5,
+    seed: int = 0,
+    penalty: float = 0.0,
+) -> Evaluation:
+    """Score the twin (from candidate predictions per object) against the base-rate and
+    logistic baselines, in-sample and in repeated stratified K-fold cross-validation.
+
+    In every fold the twin's candidates, its threshold and the logistic model and its
+    threshold are fitted on the training rows only.
+    """
+    y = np.array([int(r["success"]) for r in rows])
+    objects = np.array([str(r["object_id"]) for r in rows])
+    splits = cv_splits(y, folds, repeats, seed)
+    X = logistic_features(rows)
+    twin_parts, logit_parts = [], []
+    for train, test in splits:
+        chosen = choose_candidates(candidates, objects, y, train, penalty)
+        p = _assemble(candidates, objects, chosen)
+        twin_parts.append((test, p[test], best_threshold(p[train], y[train])))
+        q = logistic_probabilities(X, y, train)
+        logit_parts.append((test, q[test], best_threshold(q[train], y[train])))
+    twin_rep, logit_rep, oof = [], [], {}
+    for r in range(repeats):
+        block = slice(r * folds, (r + 1) * folds)
+        m, p_t, b_t = _pooled(twin_parts[block], y, len(y))
+        twin_rep.append(m)
+        m2, p_l, _ = _pooled(logit_parts[block], y, len(y))
+        logit_rep.append(m2)
+        if r == 0:
+            oof = {"twin": p_t, "twin_bits": b_t, "logistic": p_l}
+    p_in, thr_in, chosen_in = in_sample(candidates, objects, y, penalty)
+    q_in = logistic_probabilities(X, y, np.arange(len(y)))
+    base = np.full(len(y), y.mean())
+    figures = {
+        "base_rate": score(base, y, best_threshold(base, y)).to_dict(),
+        "logistic_in_sample": score(q_in, y, best_threshold(q_in, y)).to_dict(),
+        "logistic_cv": _mean_std(logit_rep),
+        "twin_in_sample": score(p_in, y, thr_in).to_dict(),
+        "twin_cv": _mean_std(twin_rep),
+    }
+    per_object = {}
+    for obj in sorted(set(objects)):
+        mask = objects == obj
+        per_object[obj] = {
+            "n": int(mask.sum()), "real_successes": int(y[mask].sum()),
+            "twin_mean_p": float(p_in[mask].mean()),
+            "in_sample": ConfusionMatrix.from_predictions(p_in[mask] >= thr_in,
+                                                          y[mask].astype(bool)).to_dict(),
+            "cv": ConfusionMatrix.from_predictions(oof["twin_bits"][mask],
+                                                   y[mask].astype(bool)).to_dict(),
+        }  # fmt: skip
+    return Evaluation(len(y), int(y.sum()), folds, repeats, figures, per_object, p_in,
+                      oof["twin"], oof["logistic"], chosen_in)  # fmt: skip

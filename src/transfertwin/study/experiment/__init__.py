@@ -1,0 +1,64 @@
+"""The virtual experiment E^V, study plans, profiles and the resumable runner (Sec. 6.2, 6.6)."""
+
+from transfertwin.study.experiment._demo import real_docking_error, run_demo
+from transfertwin.study.experiment._experiment import (
+    RESULT_COLUMNS,
+    ExperimentResult,
+    ExperimentSpec,
+    Frame,
+    run_experiment,
+    scene_controller,
+    system_for,
+)
+from transfertwin.study.experiment._plan import (
+    PRESETS,
+    Preset,
+    StudyPlan,
+    experiment_seeds,
+    parse_objects,
+    plan_parameters,
+)
+from transfertwin.study.experiment._profile import (
+    load_profile,
+    profile_toml,
+    save_profile,
+    scene_from_dict,
+    scene_to_dict,
+)
+from transfertwin.study.experiment._runner import (
+    ObjectSummary,
+    StudyOutcome,
+    check_plan,
+    run_rows,
+    run_study,
+    summarize,
+)
+
+__all__ = [
+    "PRESETS",
+    "RESULT_COLUMNS",
+    "ExperimentResult",
+    "ExperimentSpec",
+    "Frame",
+    "ObjectSummary",
+    "Preset",
+    "StudyOutcome",
+    "StudyPlan",
+    "check_plan",
+    "experiment_seeds",
+    "load_profile",
+    "parse_objects",
+    "plan_parameters",
+    "profile_toml",
+    "real_docking_error",
+    "run_demo",
+    "run_experiment",
+    "run_rows",
+    "run_study",
+    "save_profile",
+    "scene_controller",
+    "scene_from_dict",
+    "scene_to_dict",
+    "summarize",
+    "system_for",
+]

@@ -1,0 +1,251 @@
+"""The virtual experiment E^V (Sec. 6.2.2, Eq. 6.16–6.18): there and, if that worked, back.
+
+`run_experiment(spec) -> ExperimentResult` is one picklable call that runs unchanged in a
+loop, a process pool or a cluster task. Failures are data: a diverging simulation becomes
+a result with status 'unstable', any other crash one with status 'error'.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import logging
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from transfertwin.control import Clock, ObjectSensor, OTSController, TransferRecord, UnitHAL
+from transfertwin.objects import ObjectModel, load_object
+from transfertwin.ots import (
+    POSITIONS,
+    BeltThresholds,
+    TransferDirection,
+    check_theta_deg,
+    experiment_pre_transfer_set,
+    parse_conveyor,
+    parse_face,
+)
+from transfertwin.sim import DockingError, SceneConfig, SimulationUnstable, VirtualTransferSystem
+from transfertwin.store import DOCKING_ERROR_COLUMNS, RESULT_COLUMNS
+
+__all__ = [
+    "RESULT_COLUMNS",
+    "ExperimentResult",
+    "ExperimentSpec",
+    "Frame",
+    "run_experiment",
+    "scene_controller",
+    "system_for",
+]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class ExperimentSpec:
+    """Everything one E^V needs; picklable.
+
+    Attributes:
+        object_ref: Built-in core id ('o1'..'o37') or a mesh path.
+        face, conveyor, theta_deg: The pre-transfer state (Eq. 6.7–6.10); the position
+            (x, y) follows from the conveyor (Eq. 6.3).
+        docking_error: Docking error ξ applied to the TU (Eq. 6.11).
+        scene: Virtual system configuration (instance + physics parameters).
+        run: Repetition index r.
+        seed: Seed of this experiment's random choices (placement perturbation).
+        units: Length unit of a user mesh file.
+        record: Keep the object's pose at every sample (for rendering).
+    """
+
+    object_ref: str
+    face: str
+    conveyor: str
+    theta_deg: int
+    docking_error: DockingError = field(default_factory=DockingError)
+    scene: SceneConfig = field(default_factory=SceneConfig)
+    run: int = 0
+    seed: int = 0
+    units: str = "m"
+    record: bool = False
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "face", parse_face(self.face))
+        object.__setattr__(self, "conveyor", parse_conveyor(self.conveyor))
+        object.__setattr__(self, "theta_deg", check_theta_deg(self.theta_deg))
+
+
+@dataclass(frozen=True)
+class Frame:
+    """A recorded object pose: phase ('settle', 'there', 'back'), time (s), qpos (7,)."""
+
+    phase: str
+    t_s: float
+    qpos: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class ExperimentResult:
+    """The outcome of one E^V, one row of the results table (the result columns of
+    docs/architecture.md, "Contracts").
+
+    y1, y2 and success are None when they were not determined (invalid pre-transfer
+    state, unstable or crashed simulation); y2 is None when y1 = 0 (no return attempted).
+    t_end_s is the sum of both transfers' t_end. States are (11,) vectors (Eq. 5.4).
+    """
+
+    object_id: str
+    face: str
+    conveyor: str
+    theta_deg: int
+    run: int
+    seed: int
+    dock_err_x_mm: float
+    dock_err_y_mm: float
+    dock_err_theta_deg: float
+    y1: int | None
+    y2: int | None
+    success: int | None
+    t_end_s: float
+    status: str
+    t_end_1_s: float = math.nan
+    t_end_2_s: float = math.nan
+    message: str = ""
+    state_pre: tuple[float, ...] = ()
+    state_end_1: tuple[float, ...] = ()
+    state_end_2: tuple[float, ...] = ()
+    frames: tuple[Frame, ...] = field(default=(), repr=False, compare=False)
+
+    def row(self) -> dict[str, object]:
+        """The result as a flat row keyed by `RESULT_COLUMNS` (states as JSON lists)."""
+        out: dict[str, object] = {}
+        for name in RESULT_COLUMNS:
+            value = getattr(self, name)
+            if name.startswith("state_"):
+                value = json.dumps([round(v, 6) for v in value]) if value else ""
+            out[name] = value
+        return out
+
+
+@functools.lru_cache(maxsize=4)
+def _object(ref: str, units: str) -> ObjectModel:
+    return load_object(ref, units=units)
+
+
+@functools.lru_cache(maxsize=2)
+def system_for(ref: str, units: str, scene: SceneConfig) -> VirtualTransferSystem:
+    """The compiled virtual system for an object and scene, cached per process."""
+    obj = _object(ref, units)
+    return VirtualTransferSystem(
+        obj.hulls, obj.mass.mass_kg, obj.mass.com_m, obj.mass.inertia_kg_m2, scene
+    )
+
+
+def scene_controller(
+    scene: SceneConfig,
+    tm: UnitHAL,
+    tu: UnitHAL,
+    sensor: ObjectSensor,
+    clock: Clock,
+    on_sample: Callable[[], None] | None = None,
+) -> OTSController:
+    """The OTS controller configured by a scene: its t_max, belt speed and camera rate."""
+    return OTSController(
+        tm, tu, sensor, clock,
+        thresholds=BeltThresholds(t_max=scene.t_max_s),
+        belt_speed_m_s=scene.layout.belt_speed_m_s,
+        sample_period_s=scene.steps_per_sample() * scene.physics.timestep_s,
+        on_sample=on_sample,
+    )  # fmt: skip
+
+
+def _tuple(state: np.ndarray) -> tuple[float, ...]:
+    return tuple(float(v) for v in state)
+
+
+def _place_and_settle(system: VirtualTransferSystem, spec: ExperimentSpec) -> None:
+    """Put the object into the requested state, perturbed by the seed, and let it settle."""
+    placement = spec.scene.placement
+    rng = np.random.default_rng(spec.seed)
+    dx, dy = rng.normal(0.0, placement.sigma_xy_m, size=2)
+    dtheta = rng.normal(0.0, placement.sigma_theta_deg)
+    x, y = POSITIONS[spec.conveyor]
+    system.reset(spec.docking_error)
+    system.place(spec.face, math.radians(spec.theta_deg + dtheta), x + dx, y + dy)
+    system.clock.wait(placement.settle_time_s)
+
+
+def run_experiment(spec: ExperimentSpec, *, tu_hal: UnitHAL | None = None) -> ExperimentResult:
+    """Run E^V (Eq. 6.18): settle, check P_pre, transfer TM → TU, and back if y1 = 1.
+
+    Never raises for a simulation problem: the result's status says what happened
+    ('ok', 'invalid', 'unstable', 'error').
+
+    Args:
+        spec: The experiment.
+        tu_hal: The transfer unit's HAL; None uses the simulated unit directly. The CPS
+            passes an OPC UA HAL here that reaches the same simulated unit through its
+            server, which must give the same record.
+    """
+    base = {
+        "face": spec.face,
+        "conveyor": spec.conveyor,
+        "theta_deg": spec.theta_deg,
+        "run": spec.run,
+        "seed": spec.seed,
+    }
+    base.update(zip(DOCKING_ERROR_COLUMNS, spec.docking_error.as_mm_deg(), strict=True))
+    system = system_for(spec.object_ref, spec.units, spec.scene)
+    object_id = _object(spec.object_ref, spec.units).object_id
+    frames: list[Frame] = []
+    phase = ["settle"]
+
+    def record() -> None:
+        if spec.record:
+            frames.append(Frame(phase[0], float(system.data.time), _tuple(system.object_qpos())))
+
+    tu = tu_hal if tu_hal is not None else system.tu
+    controller = scene_controller(spec.scene, system.tm, tu, system, system.clock, record)
+    try:
+        _place_and_settle(system, spec)
+        phase[0] = "there"
+        system.clock.start()
+        s_pre = controller.state(spec.face, spec.conveyor)
+        if not bool(experiment_pre_transfer_set(controller.thresholds).contains(s_pre)):
+            return ExperimentResult(
+                object_id, **base, y1=None, y2=None, success=None, t_end_s=math.nan,
+                status="invalid", message="settled state is not a pre-transfer state (Eq. 6.1)",
+                state_pre=_tuple(s_pre), frames=tuple(frames),
+            )  # fmt: skip
+        there = controller.transfer(TransferDirection.TM_TO_TU, spec.face, spec.conveyor)
+        back: TransferRecord | None = None
+        if there.y == 1:
+            system.clock.wait(spec.scene.placement.settle_time_s)
+            phase[0] = "back"
+            back = controller.transfer(TransferDirection.TU_TO_TM, spec.face, None)
+    except SimulationUnstable as exc:
+        return ExperimentResult(
+            object_id, **base, y1=None, y2=None, success=None, t_end_s=math.nan,
+            status="unstable", message=str(exc), frames=tuple(frames),
+        )  # fmt: skip
+    except Exception as exc:  # failures are data: the batch goes on
+        log.exception("experiment %s failed", spec)
+        return ExperimentResult(
+            object_id, **base, y1=None, y2=None, success=None, t_end_s=math.nan,
+            status="error", message=f"{type(exc).__name__}: {exc}", frames=tuple(frames),
+        )  # fmt: skip
+    y1 = there.y
+    y2 = back.y if back is not None else None
+    t2 = back.t_end_s if back is not None else math.nan
+    message = "" if there.valid else "observed start state not in S_pre (Eq. 5.7)"
+    if back is not None and not back.valid:
+        message = "object not in a return pre-transfer state after transfer 1"
+    return ExperimentResult(
+        object_id, **base, y1=y1, y2=y2, success=int(y1 == 1 and y2 == 1),
+        t_end_s=there.t_end_s + (t2 if back is not None else 0.0), status="ok",
+        t_end_1_s=there.t_end_s, t_end_2_s=t2, message=message,
+        state_pre=_tuple(s_pre), state_end_1=_tuple(there.end_state),
+        state_end_2=_tuple(back.end_state) if back is not None else (),
+        frames=tuple(frames),
+    )  # fmt: skip

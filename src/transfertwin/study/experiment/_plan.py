@@ -1,0 +1,189 @@
+"""A study plan: objects × pre-transfer states × runs, each with its own seeds (Sec. 6.6).
+
+The plan is a pure value. Its JSON form and hash identify it in the result store, so a
+rerun resumes the same plan and a different plan on the same store is refused. Every
+experiment's seeds derive from (master seed, object id, state index, run) through
+`numpy.random.SeedSequence`, so a result does not depend on which worker ran it, in what
+order, or whether the study was interrupted.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import zlib
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from transfertwin._errors import InputError
+from transfertwin.objects import builtin_ids
+from transfertwin.ots import PreTransferState, experiment_states, filter_theta_step, state_index
+from transfertwin.sim import SceneConfig
+from transfertwin.study.docking import DockingErrorModel, docking_model_from_dict
+from transfertwin.study.experiment._experiment import ExperimentSpec
+from transfertwin.study.experiment._profile import scene_to_dict
+
+__all__ = ["PRESETS", "Preset", "StudyPlan", "experiment_seeds", "parse_objects", "plan_parameters"]
+
+
+@dataclass(frozen=True)
+class Preset:
+    """Defaults of a named study size."""
+
+    objects: tuple[str, ...]
+    theta_step: int
+    runs: int
+
+
+PRESETS: dict[str, Preset] = {
+    # About five minutes on a 2-core machine: the four cores of the real calibration.
+    "quick": Preset(("o1", "o18", "o23", "o32"), theta_step=30, runs=8),
+    # The study's Full State Experiments: 37 × 924 × 50 = 1,709,400 (Eq. 6.20).
+    "full": Preset(tuple(builtin_ids()), theta_step=1, runs=50),
+}
+
+
+def parse_objects(text: str) -> tuple[str, ...]:
+    """'all', or a comma-separated list of built-in ids and mesh paths."""
+    if text.strip() == "all":
+        return tuple(builtin_ids())
+    refs = tuple(part.strip() for part in text.split(",") if part.strip())
+    if not refs:
+        raise InputError("--objects is empty")
+    known = set(builtin_ids())
+    for ref in refs:
+        if ref not in known and not Path(ref).is_file():
+            raise InputError(
+                f"unknown object {ref!r}: expected o1..o37, 'all' or a path to a mesh file"
+            )
+    if len(set(refs)) != len(refs):
+        raise InputError("--objects lists an object twice")
+    return refs
+
+
+def experiment_seeds(master: int, object_id: str, state_idx: int, run: int) -> tuple[int, int]:
+    """(experiment seed, docking-error seed) of one experiment, from the master seed."""
+    key = (zlib.crc32(object_id.encode()), state_idx, run)
+    words = np.random.SeedSequence(master, spawn_key=key).generate_state(2)
+    return int(words[0]), int(words[1])
+
+
+@dataclass(frozen=True)
+class StudyPlan:
+    """What a study runs. Experiments are ordered object by object, then state, then run."""
+
+    objects: tuple[str, ...]
+    theta_step: int
+    runs: int
+    seed: int
+    docking: DockingErrorModel
+    scene: SceneConfig = field(default_factory=SceneConfig)
+    profile_name: str = "default"
+    units: str = "m"
+
+    def __post_init__(self) -> None:
+        if self.runs < 1:
+            raise InputError(f"--runs must be >= 1, got {self.runs}")
+        if not 1 <= self.theta_step <= 360:
+            raise InputError(f"--theta-step must be in 1..360, got {self.theta_step}")
+        if self.seed < 0:
+            raise InputError(f"--seed must be >= 0, got {self.seed}")
+        if not self.objects:
+            raise InputError("a study needs at least one object")
+
+    def states(self) -> tuple[PreTransferState, ...]:
+        """The pre-transfer states run for every object."""
+        return filter_theta_step(experiment_states(), self.theta_step)
+
+    @property
+    def n_experiments(self) -> int:
+        """Number of planned experiments."""
+        return len(self.objects) * len(self.states()) * self.runs
+
+    def describe(self) -> dict[str, object]:
+        """JSON-able description; identical plans have identical descriptions."""
+        return {
+            "objects": list(self.objects),
+            "theta_step": self.theta_step,
+            "runs": self.runs,
+            "seed": self.seed,
+            "docking": self.docking.describe(),
+            "profile": self.profile_name,
+            "units": self.units,
+            "scene": scene_to_dict(self.scene),
+        }
+
+    def to_json(self) -> str:
+        """Canonical JSON of `describe()`."""
+        return json.dumps(self.describe(), sort_keys=True, separators=(",", ":"))
+
+    @property
+    def plan_hash(self) -> str:
+        """sha256 of the canonical JSON."""
+        return hashlib.sha256(self.to_json().encode()).hexdigest()
+
+    @classmethod
+    def from_json(cls, text: str) -> StudyPlan:
+        """Rebuild a plan from `to_json()` output."""
+        from transfertwin.study.experiment._profile import scene_from_dict
+
+        d = json.loads(text)
+        return cls(
+            objects=tuple(d["objects"]),
+            theta_step=int(d["theta_step"]),
+            runs=int(d["runs"]),
+            seed=int(d["seed"]),
+            docking=docking_model_from_dict(d["docking"]),
+            scene=scene_from_dict(d["scene"]),
+            profile_name=str(d.get("profile", "default")),
+            units=str(d.get("units", "m")),
+        )
+
+    def keys(self, object_ids: dict[str, str]) -> Iterator[tuple[str, str, str, int, int]]:
+        """Store keys (object_id, face, conveyor, theta_deg, run) in plan order; cheap."""
+        for ref in self.objects:
+            for s in self.states():
+                for run in range(self.runs):
+                    yield object_ids[ref], s.face, s.conveyor, s.theta_deg, run
+
+    def specs(
+        self, object_ids: dict[str, str], skip: frozenset | set = frozenset()
+    ) -> Iterator[tuple[tuple, ExperimentSpec]]:
+        """(store key, spec) of every experiment not in `skip`, in plan order.
+
+        Args:
+            object_ids: Object reference → object id (the id used in result rows).
+            skip: Keys to leave out (done already); their docking errors are not drawn.
+        """
+        for ref in self.objects:
+            oid = object_ids[ref]
+            for s in self.states():
+                idx = state_index(s.face, s.conveyor, s.theta_deg)
+                for run in range(self.runs):
+                    if (oid, s.face, s.conveyor, s.theta_deg, run) in skip:
+                        continue
+                    exp_seed, dock_seed = experiment_seeds(self.seed, oid, idx, run)
+                    spec = ExperimentSpec(
+                        ref, s.face, s.conveyor, s.theta_deg,
+                        docking_error=self.docking.sample(dock_seed),
+                        scene=self.scene, run=run, seed=exp_seed, units=self.units,
+                    )  # fmt: skip
+                    yield (oid, s.face, s.conveyor, s.theta_deg, run), spec
+
+
+def plan_parameters(plan_json: str) -> dict[str, object]:
+    """A stored plan flattened to ``section.key`` entries (for reports' parameter tables).
+
+    Plan fields become ``plan.*``, the scene's scalars ``scene.*`` and its physics, layout
+    and placement settings ``physics.*``, ``layout.*`` and ``placement.*``.
+    """
+    plan = json.loads(plan_json)
+    scene = plan.pop("scene", {})
+    out = {f"plan.{k}": v for k, v in plan.items()}
+    out.update({f"scene.{k}": v for k, v in scene.items() if not isinstance(v, dict)})
+    for section in ("physics", "layout", "placement"):
+        out.update({f"{section}.{k}": v for k, v in scene.get(section, {}).items()})
+    return out

@@ -1,0 +1,178 @@
+"""The study runner: execute a plan on local workers into a result store, resumably.
+
+Each result is committed as soon as it arrives, keyed by (object, state, run), so an
+interrupted or killed study loses at most the experiments in flight; running the same plan
+on the same store again skips what is done. Workers are processes (``spawn``), each keeping
+its compiled virtual systems between experiments; the parent is the store's only writer.
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import multiprocessing as mp
+import time
+from collections import Counter, defaultdict
+from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import dataclass
+
+from transfertwin._errors import InputError
+from transfertwin.objects import load_object
+from transfertwin.store import ResultStore
+from transfertwin.study.experiment._experiment import ExperimentSpec, run_experiment
+from transfertwin.study.experiment._plan import StudyPlan
+
+__all__ = ["ObjectSummary", "StudyOutcome", "check_plan", "run_rows", "run_study", "summarize"]
+
+log = logging.getLogger(__name__)
+
+
+def _run_row(spec: ExperimentSpec) -> dict[str, object]:
+    """Worker entry point: one experiment → one result row."""
+    return run_experiment(spec).row()
+
+
+@dataclass(frozen=True)
+class ObjectSummary:
+    """Per-object tally of stored results."""
+
+    object_id: str
+    done: int
+    ok: int
+    successes: int
+    by_status: dict[str, int]
+
+    @property
+    def success_share(self) -> float:
+        """Successes among valid ('ok') experiments."""
+        return self.successes / self.ok if self.ok else float("nan")
+
+
+@dataclass(frozen=True)
+class StudyOutcome:
+    """What a `run_study` call did."""
+
+    planned: int
+    already_done: int
+    ran: int
+    interrupted: bool
+    seconds: float
+
+    @property
+    def rate(self) -> float:
+        """Experiments per second in this call."""
+        return self.ran / self.seconds if self.seconds > 0 else float("nan")
+
+
+def summarize(rows: Iterable[dict[str, object]]) -> list[ObjectSummary]:
+    """Tally result rows per object, in order of first appearance."""
+    counts: dict[str, Counter] = defaultdict(Counter)
+    wins: Counter = Counter()
+    for r in rows:
+        oid = str(r["object_id"])
+        counts[oid][str(r["status"])] += 1
+        if r["status"] == "ok" and r["success"] == 1:
+            wins[oid] += 1
+    return [
+        ObjectSummary(oid, sum(c.values()), c["ok"], wins[oid], dict(c))
+        for oid, c in counts.items()
+    ]
+
+
+def check_plan(plan: StudyPlan) -> dict[str, str]:
+    """Load every object of `plan` (meshes, hulls, units) before anything is written.
+
+    Returns:
+        Object reference → object id.
+
+    Raises:
+        InputError: An unreadable or invalid mesh, or two objects with the same id.
+    """
+    object_ids = {ref: load_object(ref, units=plan.units).object_id for ref in plan.objects}
+    if len(set(object_ids.values())) != len(object_ids):
+        ids = ", ".join(sorted(object_ids.values()))
+        raise InputError(f"two objects share an id ({ids}); rename the mesh files")
+    return object_ids
+
+
+def _pending(plan: StudyPlan, done: set[tuple]) -> tuple[int, Iterator[ExperimentSpec]]:
+    object_ids = check_plan(plan)
+    todo = sum(1 for key in plan.keys(object_ids) if key not in done)
+    return todo, (spec for _, spec in plan.specs(object_ids, done))
+
+
+def run_rows(specs: Iterable[ExperimentSpec], workers: int) -> Iterator[dict[str, object]]:
+    """Run experiments on `workers` processes; yields result rows as they complete
+    (unordered when workers > 1).
+
+    At most a few experiments per worker are in flight, so an interrupted run loses little.
+    A worker that dies (e.g. a crash inside the engine) raises `BrokenProcessPool` here
+    instead of hanging the study.
+    """
+    if workers <= 1:
+        for spec in specs:
+            yield _run_row(spec)
+        return
+    todo = iter(specs)
+    with ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn")) as pool:
+        pending = {pool.submit(_run_row, s) for s in itertools.islice(todo, 3 * workers)}
+        try:
+            while pending:
+                done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                for future in done:
+                    yield future.result()
+                    nxt = next(todo, None)
+                    if nxt is not None:
+                        pending.add(pool.submit(_run_row, nxt))
+        except BaseException:
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+
+
+def run_study(
+    plan: StudyPlan,
+    store: ResultStore,
+    *,
+    workers: int = 1,
+    max_experiments: int | None = None,
+    on_result: Callable[[dict[str, object]], None] | None = None,
+    on_progress: Callable[[int, int], None] | None = None,
+) -> StudyOutcome:
+    """Run every experiment of `plan` not yet in `store`.
+
+    Args:
+        plan: The study plan; stored on first use, and a different plan is refused.
+        store: Result store (single writer: this process).
+        workers: Worker processes; 1 runs in this process.
+        max_experiments: Stop after this many new results (for partial runs/timing).
+        on_result: Called with each stored row.
+        on_progress: Called with (done, total) of this call's experiments, once before the
+            first result and after each one.
+
+    Returns:
+        Counts and timing; `interrupted` is True after Ctrl-C (results so far are kept).
+    """
+    if workers < 1:
+        raise InputError(f"workers must be at least 1, got {workers}")
+    if max_experiments is not None and max_experiments < 1:
+        raise InputError(f"max_experiments must be at least 1, got {max_experiments}")
+    store.init_plan(plan.plan_hash, plan.to_json())
+    done = store.done_keys()
+    todo, specs = _pending(plan, done)
+    if max_experiments is not None:
+        todo = min(todo, max_experiments)
+        specs = itertools.islice(specs, todo)
+    report = on_progress or (lambda done, total: None)
+    ran, interrupted = 0, False
+    t0 = time.perf_counter()
+    report(0, todo)
+    try:
+        for row in run_rows(specs, workers):
+            ran += store.put([row])
+            if on_result is not None:
+                on_result(row)
+            report(ran, todo)
+    except KeyboardInterrupt:
+        interrupted = True
+    return StudyOutcome(plan.n_experiments, len(done), ran, interrupted, time.perf_counter() - t0)

@@ -1,0 +1,29 @@
+"""Validation of virtual against physical results (Sec. 6.7)."""
+
+from transfertwin.study.validation._validation import (
+    NEWCOMBE_HYBRID_SCORE,
+    VALIDATION_COLUMNS,
+    DifferenceInterval,
+    StateComparison,
+    ValidationResult,
+    compare,
+    newcombe_difference,
+    summary_json_text,
+    validate,
+    validation_csv_text,
+    write_validation,
+)
+
+__all__ = [
+    "NEWCOMBE_HYBRID_SCORE",
+    "VALIDATION_COLUMNS",
+    "DifferenceInterval",
+    "StateComparison",
+    "ValidationResult",
+    "compare",
+    "newcombe_difference",
+    "summary_json_text",
+    "validate",
+    "validation_csv_text",
+    "write_validation",
+]

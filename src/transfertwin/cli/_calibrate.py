@@ -7,12 +7,11 @@ import csv
 import io
 import json
 import math
-import os
 from pathlib import Path
 
 from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
-from transfertwin.cli._common import positive_int
+from transfertwin.cli._common import positive_int, worker_count
 from transfertwin.cli._paths import out_dir
 
 __all__ = ["register"]
@@ -30,16 +29,17 @@ def _real_rows(path: str) -> list[dict[str, object]]:
 def _common(args: argparse.Namespace):
     """(rows, base scene, profile name, calibrate kwargs) from shared options."""
     from transfertwin.sim import SceneConfig
-    from transfertwin.study.calibration import parse_object_map
+    from transfertwin.study.calibration import check_real_rows, parse_object_map
     from transfertwin.study.experiment import load_profile
 
     rows = _real_rows(args.real)
+    check_real_rows(rows, args.real)
     if args.limit:
         rows = rows[: args.limit]
     name, scene = load_profile(args.profile) if args.profile else ("default", SceneConfig())
     ids = sorted({str(r["object_id"]) for r in rows})
     mapping = parse_object_map(args.object_map, ids)
-    workers = args.workers or (os.cpu_count() or 1)
+    workers = worker_count(args.workers)
     calib = {"runs": args.runs, "object_map": mapping, "seed": args.seed, "workers": workers,
              "units": args.units}  # fmt: skip
     return rows, scene, name, calib
@@ -196,10 +196,11 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     from transfertwin.report import fidelity_plot_data, figure_png, plot_fidelity
     from transfertwin.study.calibration import calibrate, evaluate_predictions
 
+    if args.folds < 2:
+        raise InputError(f"--folds must be at least 2, got {args.folds}")
+    positive_int("--repeats", args.repeats)
     rows, scene, name, calib = _common(args)
     out = out_dir(args.out)
-    positive_int("--folds", args.folds)
-    positive_int("--repeats", args.repeats)
     result = calibrate(rows, scene=scene, **calib)
     p = result.probabilities()
     objects = np.array([str(r["object_id"]) for r in rows])
@@ -248,7 +249,7 @@ def _shared(p: argparse.ArgumentParser) -> None:
     p.add_argument("--profile", help="physics profile TOML to start from")
     p.add_argument("--object-map", help="real id to mesh: o1=PATH,o18=o5 (default: same id)")
     p.add_argument("--units", default="m", help="length unit of mapped mesh files")
-    p.add_argument("--workers", type=int, default=0, help="worker processes (default: cores)")
+    p.add_argument("--workers", type=int, help="worker processes (default: all cores)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--limit", type=int, default=0, help="use only the first N real rows")
     p.add_argument("--out", required=True, help="output directory")

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import os
 
 from transfertwin._errors import InputError
 
-__all__ = ["Parser", "parse_dock_error", "positive_int"]
+__all__ = ["Parser", "parse_dock_error", "positive_int", "worker_count"]
 
 
 class Parser(argparse.ArgumentParser):
@@ -35,3 +36,10 @@ def positive_int(option: str, value: int) -> int:
     if value < 1:
         raise InputError(f"{option} must be at least 1, got {value}")
     return value
+
+
+def worker_count(value: int | None) -> int:
+    """``--workers``: at least 1; None means one per CPU core."""
+    if value is None:
+        return os.cpu_count() or 1
+    return positive_int("--workers", value)

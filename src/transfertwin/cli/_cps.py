@@ -20,8 +20,20 @@ def _workdir(path: str, must_exist: bool) -> Path:
         return out_dir(path)
     wd = Path(path)
     if not (wd / "cps.json").is_file():
-        raise InputError(f"{path}: no cps.json here; start the CPS with 'transfertwin cps up'")
+        raise InputError(f"{path}: the CPS is not running (no cps.json); start it with "
+                         "'transfertwin cps up'")  # fmt: skip
     return wd
+
+
+def _run_client(wd: Path, coro_fn):
+    """Run a client coroutine; a CPS that does not answer is reported in one line."""
+    try:
+        return asyncio.run(coro_fn())
+    except (TimeoutError, ConnectionError, OSError) as exc:
+        raise InputError(
+            f"{wd}: the CPS is not running or not answering "
+            f"({type(exc).__name__}); start it with 'transfertwin cps up'"
+        ) from None
 
 
 def _load(wd: Path) -> tuple[dict, object]:
@@ -89,7 +101,7 @@ def cmd_status(args: argparse.Namespace) -> int:
         ) as kg:
             return json.loads(await kg.call("Query", _ASSETS_QUERY))  # fmt: skip
 
-    rows = asyncio.run(ask())
+    rows = _run_client(wd, ask)
     table = Table(title="assets in the knowledge graph")
     for col in ("id", "class", "type", "status", "state", "endpoint"):
         table.add_column(col)
@@ -142,7 +154,7 @@ def cmd_order(args: argparse.Namespace) -> int:
             await asyncio.wait_for(done.wait(), timeout=args.timeout)
             return op
 
-    op = asyncio.run(order())
+    op = _run_client(wd, order)
     log = (wd / "cps.log").read_text().splitlines() if (wd / "cps.log").exists() else []
     start = min((i for i, line in enumerate(log) if f"TMS: {op} " in line), default=0)
     for line in log[start:]:

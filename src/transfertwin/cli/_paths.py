@@ -9,6 +9,7 @@ a refused or failed command leaves nothing behind.
 from __future__ import annotations
 
 import os
+import tempfile
 from pathlib import Path
 
 from transfertwin._errors import InputError
@@ -17,12 +18,17 @@ __all__ = ["out_dir", "out_file"]
 
 
 def _writable_dir(path: str, directory: Path) -> None:
+    """InputError unless a file can be created in `directory` (probed with a temporary file
+    that is removed at once: permission bits alone miss read-only and virtual file systems)."""
     if not directory.exists():
         raise InputError(f"{path}: directory {directory} does not exist")
     if not directory.is_dir():
         raise InputError(f"{path}: {directory} is not a directory")
-    if not os.access(directory, os.W_OK | os.X_OK):
-        raise InputError(f"{path}: directory {directory} is not writable")
+    try:
+        with tempfile.TemporaryFile(dir=directory):
+            pass
+    except OSError as exc:
+        raise InputError(f"{path}: cannot write in {directory}: {exc.strerror}") from None
 
 
 def out_file(path: str, suffixes: tuple[str, ...]) -> Path:

@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import os
 from pathlib import Path
 
 from rich.console import Console
 from rich.table import Table
 
-from transfertwin.cli._common import parse_dock_error, positive_int
+from transfertwin.cli._common import parse_dock_error, positive_int, worker_count
 from transfertwin.cli._paths import out_dir, out_file
 from transfertwin.cli._progress import progress_bar
 
@@ -48,7 +47,7 @@ def cmd_study_run(args: argparse.Namespace) -> int:
     from transfertwin.study.experiment import check_plan, run_study, summarize
 
     db = out_file(args.db, (".sqlite", ".sqlite3", ".db"))
-    workers = positive_int("--workers", args.workers) if args.workers else (os.cpu_count() or 1)
+    workers = worker_count(args.workers)
     if args.max_experiments is not None:
         positive_int("--max-experiments", args.max_experiments)
     plan = _plan_from_args(args)
@@ -144,7 +143,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--runs", type=int, help="repetitions per state (default: preset)")
     p.add_argument("--theta-step", type=int, help="keep θ multiples of this (default: preset)")
     p.add_argument("--preset", choices=("quick", "full"), default="quick")
-    p.add_argument("--workers", type=int, default=0, help="worker processes (default: cores)")
+    p.add_argument("--workers", type=int, help="worker processes (default: all cores)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--profile", help="physics profile TOML (default: built-in defaults)")
     p.add_argument("--units", default="m", help="length unit of mesh files (default m)")

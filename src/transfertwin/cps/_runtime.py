@@ -116,6 +116,7 @@ class Cps(AssetApplications):
             self.kg.leave(aid)
             await asset.server.__aexit__(None, None, None)
         self.assets.clear()
+        (self.config.workdir / "cps.json").unlink(missing_ok=True)  # no stale endpoints
         log.info("CPS down")
 
     def describe(self) -> dict[str, object]:

@@ -77,3 +77,40 @@ def test_a_different_plan_on_the_same_db_is_refused(tmp_path, box_stl):
     assert other.returncode == 2
     assert "different study plan" in other.stderr
     assert len(other.stderr.strip().splitlines()) == 1
+
+
+def _children(pid: int) -> set[int]:
+    kids: set[int] = set()
+    for task in os.listdir(f"/proc/{pid}/task"):
+        with open(f"/proc/{pid}/task/{task}/children") as fh:
+            kids |= {int(p) for p in fh.read().split()}
+    return kids
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().split(")")[-1].split()[0] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+def test_workers_exit_when_the_runner_is_killed(tmp_path, box_stl):
+    db = tmp_path / "orphans.sqlite"
+    proc = subprocess.Popen(_cmd(db, box_stl, 2), stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, start_new_session=True)  # fmt: skip
+    try:
+        deadline = time.monotonic() + 240
+        while _count(db) < 2 and time.monotonic() < deadline and proc.poll() is None:
+            time.sleep(0.05)
+        assert proc.poll() is None, "study finished before it could be killed"
+        workers = _children(proc.pid)
+        assert len(workers) >= 2  # two pool workers (and the resource tracker)
+        os.kill(proc.pid, signal.SIGKILL)  # the runner alone: no clean-up runs
+        proc.wait(timeout=30)
+        deadline = time.monotonic() + 20
+        while any(_alive(w) for w in workers) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not [w for w in workers if _alive(w)], "orphaned workers still running"
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL) if proc.poll() is None else None

@@ -18,6 +18,7 @@ from transfertwin.study.calibration._replay import (
     CalibrationResult,
     CalibrationRun,
     calibrate,
+    check_real_rows,
     parse_object_map,
     replay_specs,
 )
@@ -46,6 +47,7 @@ __all__ = [
     "best_threshold",
     "best_trial",
     "calibrate",
+    "check_real_rows",
     "choose_candidates",
     "cv_splits",
     "evaluate_predictions",

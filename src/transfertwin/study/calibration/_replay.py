@@ -21,6 +21,7 @@ import numpy as np
 
 from transfertwin._errors import InputError
 from transfertwin.objects import builtin_ids
+from transfertwin.ots import check_theta_deg, parse_conveyor, parse_face
 from transfertwin.sim import DockingError, SceneConfig
 from transfertwin.store import DOCKING_ERROR_COLUMNS
 from transfertwin.study.calibration._metrics import ConfusionMatrix, summarize_runs
@@ -30,6 +31,7 @@ __all__ = [
     "CalibrationResult",
     "CalibrationRun",
     "calibrate",
+    "check_real_rows",
     "parse_object_map",
     "replay_specs",
 ]
@@ -59,15 +61,27 @@ def parse_object_map(text: str | None, object_ids: Sequence[str]) -> dict[str, s
     return mapping
 
 
-def _check_rows(rows: Sequence[Mapping[str, object]]) -> None:
+def check_real_rows(rows: Sequence[Mapping[str, object]], source: str = "real table") -> None:
+    """InputError naming `source` and the first bad row (1-based, after the header) unless
+    every row is a valid real experiment: a known face and conveyor, an integer θ in
+    -179..180, success 0 or 1 and a finite docking error."""
     if not rows:
-        raise InputError("the real result table has no rows")
+        raise InputError(f"{source}: no rows")
     missing = [c for c in _REQUIRED if c not in rows[0]]
     if missing:
-        raise InputError(f"the real result table lacks column(s): {', '.join(missing)}")
-    for i, r in enumerate(rows):
-        if r["success"] not in (0, 1):
-            raise InputError(f"real row {i}: success must be 0 or 1, got {r['success']!r}")
+        raise InputError(f"{source}: missing column(s) {', '.join(missing)}")
+    for i, r in enumerate(rows, start=1):
+        try:
+            parse_face(str(r["face"]))
+            parse_conveyor(str(r["conveyor"]))
+            check_theta_deg(r["theta_deg"])
+            if r["success"] not in (0, 1):
+                raise InputError(f"success must be 0 or 1, got {r['success']!r}")
+            errors = [float(r[c]) for c in DOCKING_ERROR_COLUMNS]
+            if not all(math.isfinite(e) for e in errors):
+                raise InputError("docking error must be finite")
+        except (InputError, TypeError, ValueError) as exc:
+            raise InputError(f"{source}: row {i}: {exc}") from None
 
 
 def replay_specs(
@@ -159,7 +173,7 @@ def calibrate(
         units: Length unit of mapped mesh files.
         on_result: Called after each experiment (progress).
     """
-    _check_rows(rows)
+    check_real_rows(rows)
     if runs < 1:
         raise InputError(f"--runs must be >= 1, got {runs}")
     ids = sorted({str(r["object_id"]) for r in rows})

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from transfertwin._errors import InputError
 from transfertwin.control import Clock, ObjectSensor, OTSController, TransferRecord, UnitHAL
 from transfertwin.objects import ObjectModel, load_object
 from transfertwin.ots import (
@@ -74,6 +75,8 @@ class ExperimentSpec:
         object.__setattr__(self, "face", parse_face(self.face))
         object.__setattr__(self, "conveyor", parse_conveyor(self.conveyor))
         object.__setattr__(self, "theta_deg", check_theta_deg(self.theta_deg))
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
+            raise InputError(f"seed must be a non-negative integer, got {self.seed!r}")
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,8 @@ from __future__ import annotations
 import itertools
 import logging
 import multiprocessing as mp
+import os
+import threading
 import time
 from collections import Counter, defaultdict
 from collections.abc import Callable, Iterable, Iterator
@@ -26,6 +28,18 @@ from transfertwin.study.experiment._plan import StudyPlan
 __all__ = ["ObjectSummary", "StudyOutcome", "check_plan", "run_rows", "run_study", "summarize"]
 
 log = logging.getLogger(__name__)
+
+
+def _exit_with_parent(parent_pid: int, period_s: float = 0.5) -> None:
+    """Worker initializer: a daemon thread that ends this worker once its parent is gone
+    (e.g. killed with SIGKILL, which runs no clean-up), so no orphan keeps computing."""
+
+    def watch() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(period_s)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
 
 
 def _run_row(spec: ExperimentSpec) -> dict[str, object]:
@@ -115,7 +129,10 @@ def run_rows(specs: Iterable[ExperimentSpec], workers: int) -> Iterator[dict[str
             yield _run_row(spec)
         return
     todo = iter(specs)
-    with ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn")) as pool:
+    ctx = mp.get_context("spawn")
+    with ProcessPoolExecutor(
+        workers, mp_context=ctx, initializer=_exit_with_parent, initargs=(os.getpid(),)
+    ) as pool:
         pending = {pool.submit(_run_row, s) for s in itertools.islice(todo, 3 * workers)}
         try:
             while pending:

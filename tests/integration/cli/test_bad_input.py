@@ -1,0 +1,107 @@
+"""Every command refuses bad input the same way: exit code 2, one line on stderr, no
+traceback, and no file left behind (issue: reliability, item 8)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+from transfertwin.cli import main
+from transfertwin.data import calibration_csv_path
+
+HEADER = (
+    "experiment_id,transfer_unit,object_id,theta_deg,face,conveyor,success,"
+    "dock_err_x_mm,dock_err_y_mm,dock_err_theta_deg\n"
+)
+T = ["transfer", "--object", "o1", "--face", "front", "--conveyor", "both", "--theta", "0"]
+STUDY = ["study", "run", "--db", "s.sqlite", "--objects", "o1", "--theta-step", "180"]
+
+BAD: list[tuple[str, list[str]]] = [
+    ("negative seed", [*T, "--seed", "-3", "--image", "neg.png"]),
+    ("theta out of range", [*T[:-1], "999"]),
+    ("unknown face", [*T[:4], "up", *T[5:]]),
+    ("unknown conveyor", [*T[:6], "middle", *T[7:]]),
+    ("unknown object", ["transfer", "--object", "o99", *T[3:]]),
+    ("missing mesh", ["transfer", "--object", "missing.stl", *T[3:]]),
+    ("short docking error", [*T, "--dock-error", "1,2"]),
+    ("image not png", [*T, "--image", "x.jpg"]),
+    ("image in /sys", [*T, "--image", "/sys/x.png"]),
+    ("image under a file", [*T, "--image", "real.csv/x.png"]),
+    ("mesh in mm read as m", ["study", "run", "--db", "s.sqlite", "--objects", "box_mm.stl"]),
+    ("corrupt mesh", ["study", "run", "--db", "s.sqlite", "--objects", "corrupt.stl"]),
+    ("zero max experiments", [*STUDY, "--max-experiments", "0"]),
+    ("zero workers", [*STUDY, "--workers", "0"]),
+    ("negative workers", [*STUDY, "--workers", "-1"]),
+    ("negative study seed", [*STUDY, "--seed", "-1"]),
+    ("zero runs", [*STUDY, "--runs", "0"]),
+    ("unknown docking model", [*STUDY, "--docking", "bogus"]),
+    ("missing profile", [*STUDY, "--profile", "missing.toml"]),
+    ("db without a db suffix", ["study", "run", "--db", "s.txt", "--objects", "o1"]),
+    ("status of a missing db", ["study", "status", "--db", "missing.sqlite"]),
+    ("export of a missing db", ["study", "export", "--db", "missing.sqlite", "--out", "x.csv"]),
+    ("analyze a missing table", ["analyze", "missing.csv", "--out", "rep"]),
+    ("analyze into /sys", ["analyze", "real.csv", "--out", "/sys/rep"]),
+    ("calibrate header-only table", ["calibrate", "run", "--real", "header.csv", "--out", "c"]),
+    ("calibrate bad theta", ["calibrate", "run", "--real", "bad_theta.csv", "--out", "c"]),
+    ("calibrate zero runs", ["calibrate", "run", "--runs", "0", "--out", "c"]),
+    ("calibrate zero workers", ["calibrate", "run", "--workers", "0", "--out", "c"]),
+    ("evaluate one fold", ["calibrate", "evaluate", "--folds", "1", "--out", "e"]),
+    ("docking fit missing csv", ["docking", "fit", "missing.csv", "--out", "m.json"]),
+    ("docking sample zero", ["docking", "sample", "missing.json", "-n", "0", "--out", "s.csv"]),
+    (
+        "validate missing tables",
+        ["validate", "--virtual", "a.csv", "--physical", "b.csv", "--out", "v"],
+    ),
+    ("export unknown core", ["objects", "export", "o99", "--out", "x.stl"]),
+    ("export as obj", ["objects", "export", "o1", "--out", "x.obj"]),
+    ("cps status without a cps", ["cps", "status", "--workdir", "nowhere"]),
+    (
+        "cps order without a cps",
+        [
+            "cps",
+            "order",
+            "--workdir",
+            "nowhere",
+            "--from",
+            "TU_A",
+            "--to",
+            "TU_C",
+            "--object",
+            "o5",
+        ],
+    ),
+    ("demo into /sys", ["demo", "--out", "/sys/demo"]),
+    ("unknown command", ["frobnicate"]),
+]
+
+
+@pytest.fixture
+def workdir(tmp_path: Path, box_stl: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    (tmp_path / "box_mm.stl").write_bytes(box_stl.read_bytes())
+    (tmp_path / "corrupt.stl").write_bytes(b"solid nothing\nendsolid\n")
+    (tmp_path / "real.csv").write_text(calibration_csv_path().read_text())
+    (tmp_path / "header.csv").write_text(HEADER)
+    first = calibration_csv_path().read_text().splitlines()[1].split(",")
+    first[3] = "999"
+    (tmp_path / "bad_theta.csv").write_text(HEADER + ",".join(first[:10]) + "\n")
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+def _tree(root: Path) -> set[str]:
+    return {str(p.relative_to(root)) for p in root.rglob("*")}
+
+
+@pytest.mark.parametrize(("case", "argv"), BAD, ids=[c for c, _ in BAD])
+def test_bad_input_exits_2_with_one_line_and_leaves_nothing(case, argv, workdir, capfd) -> None:
+    before = _tree(workdir)
+    code = main(argv)
+    out, err = capfd.readouterr()
+    assert code == 2, (case, err)
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("transfertwin: error: "), err
+    assert "Traceback" not in out + err
+    assert _tree(workdir) == before, f"{case} left files behind"
+    assert not os.path.exists("/sys/x.png")

@@ -1,50 +1,52 @@
 """Shared baseline of the benchmarks: the raw engine time of the same experiments.
 
-`raw_replay_seconds` re-runs each experiment's physics with no Python in the loop: the same
-placement and settling, then the belts forward for transfer 1's duration and backward for
-transfer 2's, each as a single `mj_step(nstep=...)` call. The result is the time the engine
-alone needs for exactly the steps the experiments took.
+Every `VirtualTransferSystem` times its own `mj_step` calls (`engine_seconds`,
+`engine_steps`): that is the time the engine alone needs for exactly the steps the
+experiments took, measured on the very same calls. `timed_experiments` runs specs in this
+process and returns wall time, engine time and steps, so overhead = wall / engine.
 """
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Sequence
+from dataclasses import dataclass
 
-import mujoco
-
-from transfertwin.study import ExperimentResult, ExperimentSpec, system_for
-
-
-def _drive(system, speed: float) -> None:
-    for belt in ("left", "right"):
-        system.tm.set_belt_speed(belt, speed)
-        system.tu.set_belt_speed(belt, speed)
+from transfertwin.study import ExperimentResult, ExperimentSpec, run_experiment, system_for
 
 
-def raw_replay_seconds(
-    specs: Sequence[ExperimentSpec], results: Sequence[ExperimentResult]
-) -> tuple[float, int]:
-    """(seconds, physics steps) of the engine alone for the given experiments."""
-    total, steps = 0.0, 0
-    for spec, res in zip(specs, results, strict=True):
+@dataclass(frozen=True)
+class Timed:
+    """Experiments run in one process: results, wall and engine seconds, engine steps."""
+
+    results: tuple[ExperimentResult, ...]
+    wall_s: float
+    engine_s: float
+    steps: int
+
+    @property
+    def rate(self) -> float:
+        return len(self.results) / self.wall_s
+
+    @property
+    def steps_per_experiment(self) -> float:
+        return self.steps / len(self.results)
+
+    @property
+    def overhead(self) -> float:
+        """Wall time over the time spent in mj_step (1.0 = all time in the engine)."""
+        return self.wall_s / self.engine_s
+
+
+def timed_experiments(specs: Sequence[ExperimentSpec]) -> Timed:
+    """Run `specs` in order in this process (compiling each scene outside the timing)."""
+    results, wall, engine, steps = [], 0.0, 0.0, 0
+    for spec in specs:
         system = system_for(spec.object_ref, spec.units, spec.scene)
-        dt = system.model.opt.timestep
-        settle = round(spec.scene.placement.settle_time_s / dt)
-        n1 = 0 if math.isnan(res.t_end_1_s) else round(res.t_end_1_s / dt)
-        n2 = 0 if math.isnan(res.t_end_2_s) else settle + round(res.t_end_2_s / dt)
-        speed = spec.scene.layout.belt_speed_m_s
-        system.reset(spec.docking_error)
-        system.place(spec.face, math.radians(spec.theta_deg), -0.325, 0.0)
+        s0, e0 = system.engine_steps, system.engine_seconds
         t0 = time.perf_counter()
-        mujoco.mj_step(system.model, system.data, nstep=settle)
-        _drive(system, speed)
-        if n1:
-            mujoco.mj_step(system.model, system.data, nstep=n1)
-        _drive(system, -speed)
-        if n2:
-            mujoco.mj_step(system.model, system.data, nstep=n2)
-        total += time.perf_counter() - t0
-        steps += settle + n1 + n2
-    return total, steps
+        results.append(run_experiment(spec))
+        wall += time.perf_counter() - t0
+        engine += system.engine_seconds - e0
+        steps += system.engine_steps - s0
+    return Timed(tuple(results), wall, engine, steps)

@@ -1,10 +1,15 @@
-"""Study runner throughput on 1 and 2 workers against the raw engine stepping rate.
+"""Study throughput, fast defaults against the 'reference' profile, in the same run.
 
-Runs the same small plan with 1 and with N worker processes into fresh SQLite stores and
-prints experiments/s, the scaling ratio, and the engine-bound limit computed from the raw
-`mj_step` rate of the same compiled scene measured in the same run.
+For each profile the same plan (objects x states x runs, resampled real docking errors)
+runs three ways:
 
-    .venv/bin/python benchmarks/study_throughput.py [--objects o1,o18] [--runs 2] [--workers 2]
+- in-process loop: exp/s, physics steps per experiment and the overhead ratio = wall time
+  over the time spent in `mj_step` for exactly these experiments (1.00 = no framework cost);
+- `run_study` with 1 worker into a fresh SQLite store (adds the store and the runner);
+- `run_study` with N worker processes (`--workers 0` skips it; keep it short on 2 cores).
+
+    PYTHONPATH=src .venv/bin/python benchmarks/study_throughput.py \
+        [--objects o1,o18] [--theta-step 45] [--runs 2] [--workers 2] [--profiles fast,reference]
 """
 
 from __future__ import annotations
@@ -13,20 +18,16 @@ import argparse
 import tempfile
 from pathlib import Path
 
-from _engine import raw_replay_seconds
+from _engine import timed_experiments
+from transfertwin.sim import scene_profile
 from transfertwin.store import SQLiteResultStore
-from transfertwin.study import (
-    ResampledDockingErrors,
-    StudyPlan,
-    run_experiment,
-    run_study,
-)
+from transfertwin.study import ResampledDockingErrors, StudyPlan, run_study
 
 
-def _timed(plan: StudyPlan, workers: int, tmp: Path) -> tuple[float, int]:
-    with SQLiteResultStore(tmp / f"w{workers}.sqlite") as store:
+def _study_rate(plan: StudyPlan, workers: int, tmp: Path) -> float:
+    with SQLiteResultStore(tmp / f"{plan.profile_name}-w{workers}.sqlite") as store:
         outcome = run_study(plan, store, workers=workers)
-    return outcome.rate, outcome.ran
+    return outcome.rate
 
 
 def main() -> None:
@@ -34,29 +35,39 @@ def main() -> None:
     parser.add_argument("--objects", default="o1,o18")
     parser.add_argument("--theta-step", type=int, default=45)
     parser.add_argument("--runs", type=int, default=2)
-    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--workers", type=int, default=2, help="0 skips the pool run")
+    parser.add_argument("--profiles", default="fast,reference")
     args = parser.parse_args()
-    plan = StudyPlan(tuple(args.objects.split(",")), args.theta_step, args.runs, 0,
-                     ResampledDockingErrors.from_csv())  # fmt: skip
+    docking = ResampledDockingErrors.from_csv()
+    objects = tuple(args.objects.split(","))
+    rows = {}
     with tempfile.TemporaryDirectory() as tmp:
-        rate1, n = _timed(plan, 1, Path(tmp))
-        rate_n, _ = _timed(plan, args.workers, Path(tmp))
-        # engine alone on the same plan's first experiments, replayed without Python
-        ids = {ref: ref for ref in plan.objects}
-        sample = [spec for _, spec in plan.specs(ids)][:: max(1, n // 20)]
-        raw_s, raw_steps = raw_replay_seconds(sample, [run_experiment(s) for s in sample])
-    engine = len(sample) / raw_s
-    print(
-        f"plan: {len(plan.objects)} objects x {len(plan.states())} states x {plan.runs} runs"
-        f" = {n} experiments"
-    )
-    print(f"1 worker           : {rate1:8.2f} experiments/s")
-    print(f"{args.workers} workers          : {rate_n:8.2f} experiments/s")
-    print(f"scaling            : {rate_n / rate1:8.2f}x  (ideal {args.workers}.00x)")
-    print(f"raw mj_step rate   : {raw_steps / raw_s:8.0f} steps/s (same experiments, 1 thread)")
-    print(f"engine-bound limit : {engine:8.2f} experiments/s per worker "
-          f"(~{raw_steps / len(sample):.0f} steps/experiment)")  # fmt: skip
-    print(f"1-worker efficiency: {rate1 / engine:8.2f}  (1.0 = all time in mj_step)")
+        for name in args.profiles.split(","):
+            plan = StudyPlan(objects, args.theta_step, args.runs, 0, docking,
+                             scene=scene_profile(name), profile_name=name)  # fmt: skip
+            specs = [spec for _, spec in plan.specs({o: o for o in objects})]
+            timed = timed_experiments(specs)
+            rate1 = _study_rate(plan, 1, Path(tmp))
+            rate_n = _study_rate(plan, args.workers, Path(tmp)) if args.workers > 1 else None
+            ok = sum(r.status == "ok" for r in timed.results)
+            wins = sum(r.success == 1 for r in timed.results)
+            rows[name] = (timed, rate1, rate_n, ok, wins)
+            print(f"[{name}] {plan.n_experiments} experiments ({ok} ok, {wins} successes)",
+                  flush=True)  # fmt: skip
+    print(f"\n{'profile':<10} {'loop exp/s':>10} {'steps/exp':>9} {'engine exp/s':>12} "
+          f"{'overhead':>8} {'study 1w':>9} {'study ' + str(args.workers) + 'w':>9}")  # fmt: skip
+    for name, (timed, rate1, rate_n, _, _) in rows.items():
+        engine_rate = len(timed.results) / timed.engine_s
+        pool = f"{rate_n:9.2f}" if rate_n is not None else f"{'-':>9}"
+        print(f"{name:<10} {timed.rate:10.2f} {timed.steps_per_experiment:9.0f} "
+              f"{engine_rate:12.2f} {timed.overhead:8.3f} {rate1:9.2f} {pool}")  # fmt: skip
+    if "fast" in rows and "reference" in rows:
+        f, r = rows["fast"][0], rows["reference"][0]
+        print(
+            f"\nspeed-up fast/reference: {f.rate / r.rate:.2f}x (in-process loop), "
+            f"{rows['fast'][1] / rows['reference'][1]:.2f}x (study, 1 worker); "
+            f"steps {f.steps_per_experiment:.0f} vs {r.steps_per_experiment:.0f}"
+        )
 
 
 if __name__ == "__main__":

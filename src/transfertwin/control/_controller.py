@@ -70,6 +70,23 @@ class TransferRecord:
         return self.trace.final_state if self.trace is not None else self.start_state
 
 
+class _StallDetector:
+    """True once the AABB centre (x, y, z) stayed within `tol` of one point for `period` s."""
+
+    def __init__(self, period: float | None, tol: float, s0: np.ndarray) -> None:
+        self.period, self.tol = period, tol
+        self._anchor = (float(s0[Col.X]), float(s0[Col.Y]), float(s0[Col.Z]))
+        self._since = float(s0[Col.T])
+
+    def __call__(self, s: np.ndarray) -> bool:
+        x, y, z, t = float(s[Col.X]), float(s[Col.Y]), float(s[Col.Z]), float(s[Col.T])
+        ax, ay, az = self._anchor
+        if max(abs(x - ax), abs(y - ay), abs(z - az)) > self.tol:
+            self._anchor, self._since = (x, y, z), t
+            return False
+        return self.period is not None and t - self._since >= self.period - 1e-9
+
+
 class OTSController:
     """Runs object transfers between a transport module and a transfer unit.
 
@@ -81,6 +98,10 @@ class OTSController:
         belt_speed_m_s: Surface speed of running belts.
         sample_period_s: Period at which the state is observed and the sets evaluated.
         on_sample: Optional callback run after every observation (e.g. to record frames).
+        stall_time_s: Early timeout: a transfer whose object's AABB centre stays within
+            `stall_tol_m` of one point for this long ends at once as the timeout it would
+            become (t_end = the timeout time); None always waits for t_max.
+        stall_tol_m: Displacement below which the object counts as immobile (m).
     """
 
     def __init__(
@@ -94,8 +115,12 @@ class OTSController:
         belt_speed_m_s: float,
         sample_period_s: float,
         on_sample: Callable[[], None] | None = None,
+        stall_time_s: float | None = None,
+        stall_tol_m: float = 0.002,
     ) -> None:
         self.tm, self.tu = tm, tu
+        self.stall_time_s = stall_time_s
+        self.stall_tol_m = stall_tol_m
         self.sensor, self.clock = sensor, clock
         self.thresholds = thresholds
         self.speed = belt_speed_m_s
@@ -160,6 +185,7 @@ class OTSController:
                 stopped[0] = True
             return self.state(face, conveyor)
 
+        stall = _StallDetector(self.stall_time_s, self.stall_tol_m, s0)
         try:
             trace = run_transfer(
                 s0,
@@ -170,6 +196,7 @@ class OTSController:
                 dt=self.dt,
                 t_max=self.thresholds.t_max + self.dt,
                 time_index=int(Col.T),
+                stop=stall if self.stall_time_s is not None else None,
             )
         finally:
             self.stop_all()

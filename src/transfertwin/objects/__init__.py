@@ -21,10 +21,19 @@ from transfertwin.objects._load import export_object, load_object
 from transfertwin.objects._mass import DEFAULT_DENSITY_KG_M3, MassProperties, mass_properties
 from transfertwin.objects._mesh import UNITS_TO_M, MeshError, load_mesh
 from transfertwin.objects._model import ObjectModel
+from transfertwin.objects._proxy import (
+    PROXY_SUFFIX,
+    Protrusion,
+    ProxySpec,
+    proxy_model,
+    read_proxy,
+    write_proxy,
+)
 
 __all__ = [
     "BUILTIN_COUNT",
     "DEFAULT_DENSITY_KG_M3",
+    "PROXY_SUFFIX",
     "UNITS_TO_M",
     "BuiltinDataError",
     "CoreSpec",
@@ -32,6 +41,8 @@ __all__ = [
     "MassProperties",
     "MeshError",
     "ObjectModel",
+    "Protrusion",
+    "ProxySpec",
     "builtin_ids",
     "core_spec",
     "decompose_hulls",
@@ -41,4 +52,7 @@ __all__ = [
     "load_mesh",
     "load_object",
     "mass_properties",
+    "proxy_model",
+    "read_proxy",
+    "write_proxy",
 ]

@@ -13,6 +13,7 @@ from transfertwin.objects._hulls import decompose_hulls
 from transfertwin.objects._mass import mass_properties
 from transfertwin.objects._mesh import MESH_SUFFIXES, load_mesh
 from transfertwin.objects._model import ObjectModel
+from transfertwin.objects._proxy import PROXY_SUFFIX, proxy_model, read_proxy
 from transfertwin.objects._stl import mesh_content_hash, write_stl
 
 __all__ = ["export_object", "load_object"]
@@ -29,10 +30,12 @@ def load_object(
     """Load a built-in core or a user mesh as an `ObjectModel`.
 
     ``"o1"``..``"o37"`` are the built-in cores (shipped mesh and hulls, mass from
-    their spec; memoised). Anything else is a path to an STL/OBJ/PLY file: it is
-    loaded with `load_mesh`, shifted so that its centre of mass is the origin,
-    and decomposed with `decompose_hulls` (cached in ``cache_dir``). Its axes
-    must already follow F_O (+x to the pinion, +z up on face 'front').
+    their spec; memoised). A ``*.proxy.json`` file is a calibrated proxy (see
+    `transfertwin.objects.ProxySpec`): its base object plus protrusion hulls.
+    Anything else is a path to an STL/OBJ/PLY file: it is loaded with
+    `load_mesh`, shifted so that its centre of mass is the origin, and decomposed
+    with `decompose_hulls` (cached in ``cache_dir``). Its axes must already follow
+    F_O (+x to the pinion, +z up on face 'front').
 
     Args:
         ref: Built-in id, or path to a mesh file. A built-in id wins over a
@@ -53,6 +56,15 @@ def load_object(
             mass/density is invalid.
         MeshError: If the mesh file is unusable (see `load_mesh`).
     """
+    if str(ref).endswith(PROXY_SUFFIX):
+        spec = read_proxy(ref)
+        if is_builtin_id(spec.base) or spec.base.endswith(PROXY_SUFFIX):
+            base = load_object(spec.base, mass_kg=mass_kg, density_kg_m3=density_kg_m3)
+        else:  # a mesh path relative to the proxy file
+            mesh = Path(ref).parent / spec.base
+            base = load_object(mesh, units=units, mass_kg=mass_kg, density_kg_m3=density_kg_m3,
+                               cache_dir=cache_dir)  # fmt: skip
+        return proxy_model(base, spec)
     if is_builtin_id(ref):
         model = load_builtin(str(ref))
         if mass_kg is None and density_kg_m3 is None:

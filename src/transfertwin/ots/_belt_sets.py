@@ -27,7 +27,9 @@ Decisions the equations leave open:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -61,6 +63,14 @@ def _aabb_within(
     )
 
 
+def _within_one(
+    x: float, y: float, sx: float, sy: float,
+    x_min: float, x_max: float, y_min: float, y_max: float,
+) -> bool:  # fmt: skip
+    """Scalar `_aabb_within` for one state (same comparisons, same float64 arithmetic)."""
+    return x - sx >= x_min and x + sx <= x_max and y - sy >= y_min and y + sy <= y_max
+
+
 @dataclass(frozen=True)
 class BeltPreTransferSet:
     """Pre-transfer states S_pre (Eq. 5.7; Eq. 6.1 with another ``x_min``).
@@ -72,6 +82,7 @@ class BeltPreTransferSet:
         t0_tol: Allowed ``|t - t0|``, seconds.
     """
 
+    one_dim: ClassVar[int] = N_COLS  # state length `contains_one` handles
     asset: int
     x_min: float
     x_max: float
@@ -83,6 +94,15 @@ class BeltPreTransferSet:
     def contains(self, states: ArrayLike) -> np.ndarray:
         """Membership per state; ``(N, 11) -> (N,)``, ``(11,) -> ()``."""
         return batched_contains(states, self._mask, N_COLS)
+
+    def contains_one(self, s: np.ndarray) -> bool:
+        """Scalar fast path of `contains` for one state (11,); same comparisons."""
+        x, y, sx, sy = float(s[Col.X]), float(s[Col.Y]), float(s[Col.SX]), float(s[Col.SY])
+        return (
+            float(s[Col.A]) == self.asset
+            and abs(float(s[Col.T]) - self.t0) <= self.t0_tol
+            and _within_one(x, y, sx, sy, self.x_min, self.x_max, self.y_min, self.y_max)
+        )
 
     def _mask(self, s: np.ndarray) -> np.ndarray:
         return (
@@ -104,6 +124,7 @@ class BeltSuccessSet:
         direction: TM_TO_TU needs ``x > x_threshold``, TU_TO_TM ``x < x_threshold``.
     """
 
+    one_dim: ClassVar[int] = N_COLS  # state length `contains_one` handles
     asset: int
     x_min: float
     x_max: float
@@ -116,6 +137,20 @@ class BeltSuccessSet:
     def contains(self, states: ArrayLike) -> np.ndarray:
         """Membership per state; ``(N, 11) -> (N,)``, ``(11,) -> ()``."""
         return batched_contains(states, self._mask, N_COLS)
+
+    def contains_one(self, s: np.ndarray) -> bool:
+        """Scalar fast path of `contains` for one state (11,); same comparisons."""
+        x, y, sx, sy = float(s[Col.X]), float(s[Col.Y]), float(s[Col.SX]), float(s[Col.SY])
+        if self.direction is TransferDirection.TM_TO_TU:
+            beyond = x > self.x_threshold
+        else:
+            beyond = x < self.x_threshold
+        return (
+            float(s[Col.A]) == self.asset
+            and float(s[Col.T]) < self.t_max
+            and beyond
+            and _within_one(x, y, sx, sy, self.x_min, self.x_max, self.y_min, self.y_max)
+        )
 
     def _mask(self, s: np.ndarray) -> np.ndarray:
         x = s[:, Col.X]
@@ -141,6 +176,7 @@ class BeltFailureSet:
         z_fall: Failure once ``z - s_z < z_fall``, metres; ``None`` disables.
     """
 
+    one_dim: ClassVar[int] = N_COLS  # state length `contains_one` handles
     x_min: float
     x_max: float
     y_min: float
@@ -151,6 +187,26 @@ class BeltFailureSet:
     def contains(self, states: ArrayLike) -> np.ndarray:
         """Membership per state; ``(N, 11) -> (N,)``, ``(11,) -> ()``."""
         return batched_contains(states, self._mask, N_COLS)
+
+    def contains_one(self, s: np.ndarray) -> bool:
+        """Scalar fast path of `contains` for one state (11,); same comparisons."""
+        x, y, sx, sy = float(s[Col.X]), float(s[Col.Y]), float(s[Col.SX]), float(s[Col.SY])
+        t = float(s[Col.T])
+        values = [x, y, sx, sy, t]
+        if self.z_fall is not None:
+            z, sz = float(s[Col.Z]), float(s[Col.SZ])
+            values += [z, sz]
+            if z - sz < self.z_fall:
+                return True
+        if not all(math.isfinite(v) for v in values):
+            return True
+        return (
+            t > self.t_max
+            or x - sx < self.x_min
+            or x + sx > self.x_max
+            or y - sy < self.y_min
+            or y + sy > self.y_max
+        )
 
     def _mask(self, s: np.ndarray) -> np.ndarray:
         read = [Col.X, Col.Y, Col.SX, Col.SY, Col.T]

@@ -72,6 +72,16 @@ def outcome_codes(states: ArrayLike, success: StateSet, failure: StateSet) -> np
         int8 array ``(N,)`` (or shape ``()``): 1 for S+ \\ S-, 0 for S-, and
         `NON_TERMINAL` (-1) for the non-terminal states S' (Eq. 4.7).
     """
+    if (
+        isinstance(states, np.ndarray)
+        and states.ndim == 1
+        and states.dtype == np.float64
+        and states.shape[0] == getattr(success, "one_dim", None) == getattr(failure, "one_dim", 0)
+    ):
+        # Scalar fast path for one state (sets that offer `contains_one`, e.g. the belt
+        # sets): same result as the batch path, without its array overhead per sample.
+        code = 0 if failure.contains_one(states) else (1 if success.contains_one(states) else -1)
+        return np.array(code, dtype=np.int8)
     batch, single = as_state_batch(states)
     codes = np.full(batch.shape[0], NON_TERMINAL, dtype=np.int8)
     codes[success.contains(batch)] = 1
@@ -163,6 +173,7 @@ def run_transfer(
     t_max: float,
     time_index: int | None = None,
     max_steps: int | None = None,
+    stop: Callable[[np.ndarray], bool] | None = None,
 ) -> TransferTrace:
     """Run the discrete transfer process of Eq. 4.11 to its end (Eq. 4.9).
 
@@ -178,6 +189,11 @@ def run_transfer(
         time_index: Component of the state that holds time in seconds, or
             ``None`` if the state has no time (then ``t0 = 0``).
         max_steps: Optional cap on the number of transitions.
+        stop: Optional early timeout: called with each new non-terminal state; True
+            means the state will not change before the timeout (e.g. a stuck object),
+            so the trace ends now as the loop would end at the timeout: its last state
+            is the current one carried forward to the last sample time ``t0 + n·dt``
+            (evaluated against S+ and S- like any other state).
 
     Returns:
         The trace, ending at the first state in S+ ∪ S- or at the timeout.
@@ -202,6 +218,7 @@ def run_transfer(
     if max_steps is not None:
         n_max = min(n_max, max_steps)
     states = [state]
+    steps = [0]  # transition index of each state (the time is t0 + index * dt)
     code = int(outcome_codes(state, success, failure))
     i = 0
     while code == NON_TERMINAL and i < n_max:
@@ -210,9 +227,20 @@ def run_transfer(
         if time_index is not None:
             state[time_index] = t0 + i * dt
         states.append(state)
+        steps.append(i)
         code = int(outcome_codes(state, success, failure))
+        if code == NON_TERMINAL and stop is not None and i < n_max and stop(state.copy()):
+            # Fast-forward: the state stays put until the timeout the loop would reach.
+            state = state.copy()
+            i = n_max
+            if time_index is not None:
+                state[time_index] = t0 + i * dt
+            states.append(state)
+            steps.append(i)
+            code = int(outcome_codes(state, success, failure))
+            break
 
-    times = t0 + dt * np.arange(len(states), dtype=float)
+    times = t0 + dt * np.asarray(steps, dtype=float)
     stacked = np.stack(states)
     stacked.setflags(write=False)
     times.setflags(write=False)

@@ -1,11 +1,13 @@
 """MuJoCo virtual models of the belt transfer system and their virtual HAL (Sec. 5.2.1)."""
 
 from transfertwin.sim._config import (
+    PROFILES,
     DockingError,
     LayoutConfig,
     PhysicsConfig,
     PlacementConfig,
     SceneConfig,
+    scene_profile,
 )
 from transfertwin.sim._docking import tu_pose_in_tip_frame
 from transfertwin.sim._names import (
@@ -29,6 +31,7 @@ from transfertwin.sim._system import (
 __all__ = [
     "OBJECT_BODY",
     "OBJECT_JOINT",
+    "PROFILES",
     "TU_BODY",
     "DockingError",
     "LayoutConfig",
@@ -45,5 +48,6 @@ __all__ = [
     "object_hull",
     "object_quat",
     "render_strip",
+    "scene_profile",
     "tu_pose_in_tip_frame",
 ]

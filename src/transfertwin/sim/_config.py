@@ -15,11 +15,13 @@ from dataclasses import dataclass, field, fields, replace
 from transfertwin._errors import InputError
 
 __all__ = [
+    "PROFILES",
     "DockingError",
     "LayoutConfig",
     "PhysicsConfig",
     "PlacementConfig",
     "SceneConfig",
+    "scene_profile",
 ]
 
 _SOLVERS = ("PGS", "CG", "Newton")
@@ -37,6 +39,9 @@ def _positive(owner: str, **values: float) -> None:
 class PhysicsConfig:
     """MuJoCo solver settings (our analogue of the study's Tables A.3/A.4).
 
+    Defaults are the fast settings (5 ms implicitfast steps), validated against the
+    'reference' profile (2 ms steps) in SPEED.md; see `scene_profile`.
+
     Attributes:
         timestep_s: Physics step (s).
         integrator: One of Euler, RK4, implicit, implicitfast.
@@ -47,14 +52,16 @@ class PhysicsConfig:
         tolerance: Solver tolerance.
         impratio: Frictional-to-normal impedance ratio (>1 reduces slip).
         noslip_iterations: Extra no-slip solver iterations (0 disables).
-        multiccd: Multiple contact points per convex pair (MuJoCo 4's default: on).
+        multiccd: Multiple contact points per convex pair (MuJoCo 4's default: on). Off
+            makes steps ~20 % cheaper, but a single-hull object (a box) then rocks and
+            sinks ~6 mm into the belt; kept on (SPEED.md).
         condim: Contact dimensionality of object contacts (3: sliding friction; 4 adds
             torsional, 6 adds rolling).
         solref: Contact stiffness/damping time constants (s, -).
         solimp: Contact impedance (d0, dwidth, width, midpoint, power).
     """
 
-    timestep_s: float = 0.002
+    timestep_s: float = 0.005
     integrator: str = "implicitfast"
     solver: str = "Newton"
     cone: str = "elliptic"
@@ -152,15 +159,32 @@ class PlacementConfig:
     stopped for `settle_time_s`. Real placement is never exact: each run draws a small
     pose perturbation from its seed (`sigma_xy_m`, `sigma_theta_deg`); set both to 0
     for an exact placement.
+
+    With `rest_speed_m_s` set, settling ends early once the object is at rest: after at
+    least `min_settle_time_s`, as soon as its rest speed (`VirtualTransferSystem.
+    object_rest_speed`: body-origin speed plus 0.1 m times the angular speed) is below
+    `rest_speed_m_s`, checked every `rest_check_s`; `settle_time_s` stays the upper bound.
+    None settles for exactly `settle_time_s` (the reference behaviour). The same rule
+    applies to the pause between the two transfers of E^V.
     """
 
     drop_height_m: float = 0.002
     settle_time_s: float = 0.6
     sigma_xy_m: float = 0.002
     sigma_theta_deg: float = 1.0
+    rest_speed_m_s: float | None = 0.005
+    min_settle_time_s: float = 0.1
+    rest_check_s: float = 0.02
 
     def __post_init__(self) -> None:
-        _positive("PlacementConfig", settle_time_s=self.settle_time_s)
+        _positive(
+            "PlacementConfig",
+            settle_time_s=self.settle_time_s,
+            min_settle_time_s=self.min_settle_time_s,
+            rest_check_s=self.rest_check_s,
+        )
+        if self.rest_speed_m_s is not None:
+            _positive("PlacementConfig", rest_speed_m_s=self.rest_speed_m_s)
         if self.drop_height_m < 0 or self.sigma_xy_m < 0 or self.sigma_theta_deg < 0:
             raise InputError("PlacementConfig heights and sigmas must be >= 0")
 
@@ -174,15 +198,24 @@ class SceneConfig:
         gap_m: Nominal gap d_gap between the TM tip and the TU's first belt end
             (study's best 11.88 mm).
         camera_rate_hz: Rate at which the object's state is sampled and the sets are
-            evaluated (a depth camera's frame rate).
+            evaluated (a depth camera's frame rate; 15 Hz, 'reference': 30 Hz). Each
+            sample costs Python work, so it bounds the framework overhead per step.
         t_max_s: Timeout of one OTS (Eq. 5.8/5.9).
+        stall_time_s: Early timeout: when the object's AABB centre has stayed within
+            `stall_tol_m` of one point for this long while a transfer runs, nothing will
+            change before t_max (a stuck or stopped object), so the transfer ends now as
+            the timeout it would become, with t_end = the timeout time. None waits for
+            t_max (the reference behaviour).
+        stall_tol_m: Displacement below which the object counts as immobile.
         physics, layout, placement: Sub-configurations.
     """
 
     mu: float = 0.489
     gap_m: float = 0.01188
-    camera_rate_hz: float = 30.0
+    camera_rate_hz: float = 15.0
     t_max_s: float = 30.0
+    stall_time_s: float | None = 5.0
+    stall_tol_m: float = 0.002
     physics: PhysicsConfig = field(default_factory=PhysicsConfig)
     layout: LayoutConfig = field(default_factory=LayoutConfig)
     placement: PlacementConfig = field(default_factory=PlacementConfig)
@@ -193,6 +226,9 @@ class SceneConfig:
         if not (math.isfinite(self.gap_m) and 0 <= self.gap_m < 0.5):
             raise InputError(f"gap must be in [0, 500) mm, got {self.gap_m * 1000:g} mm")
         _positive("SceneConfig", camera_rate_hz=self.camera_rate_hz, t_max_s=self.t_max_s)
+        _positive("SceneConfig", stall_tol_m=self.stall_tol_m)
+        if self.stall_time_s is not None:
+            _positive("SceneConfig", stall_time_s=self.stall_time_s)
 
     def steps_per_sample(self) -> int:
         """Physics steps between two camera samples (at least 1)."""
@@ -253,3 +289,27 @@ class DockingError:
     def as_mm_deg(self) -> tuple[float, float, float]:
         """(x_mm, y_mm, theta_deg) for result tables."""
         return self.x_m * 1000.0, self.y_m * 1000.0, math.degrees(self.theta_rad)
+
+
+def _reference() -> SceneConfig:
+    return SceneConfig(
+        physics=PhysicsConfig(timestep_s=0.002, multiccd=True, condim=4),
+        placement=PlacementConfig(settle_time_s=0.6, rest_speed_m_s=None),
+        camera_rate_hz=30.0,
+        stall_time_s=None,
+    )
+
+
+#: Named scenes. 'fast' is `SceneConfig()` (the defaults); 'reference' is the settings the
+#: fast defaults were validated against (2 ms steps, multi-CCD, fixed 0.6 s settling, no
+#: early timeout: every transfer runs to its terminal state or t_max).
+PROFILES = {"fast": SceneConfig, "reference": _reference}
+
+
+def scene_profile(name: str, **changes: object) -> SceneConfig:
+    """The named scene of `PROFILES` ('fast', 'reference'), with dotted overrides."""
+    try:
+        base = PROFILES[name]()
+    except KeyError:
+        raise InputError(f"unknown profile {name!r}; built-in: {', '.join(PROFILES)}") from None
+    return base.with_overrides(**changes) if changes else base

@@ -33,8 +33,9 @@ def test_invalid_values_are_input_errors():
 
 
 def test_camera_sampling_is_whole_physics_steps():
-    cfg = SceneConfig(camera_rate_hz=30.0)
+    cfg = SceneConfig(camera_rate_hz=30.0).with_overrides(**{"physics.timestep_s": 0.002})
     assert cfg.steps_per_sample() == 17  # 1/30 s at 2 ms steps, rounded
+    assert SceneConfig().steps_per_sample() == 13  # 1/15 s at 5 ms steps, rounded
 
 
 def test_physics_config_reaches_the_compiled_model():

@@ -160,6 +160,8 @@ def scene_controller(
         belt_speed_m_s=scene.layout.belt_speed_m_s,
         sample_period_s=scene.steps_per_sample() * scene.physics.timestep_s,
         on_sample=on_sample,
+        stall_time_s=scene.stall_time_s,
+        stall_tol_m=scene.stall_tol_m,
     )  # fmt: skip
 
 
@@ -176,7 +178,25 @@ def _place_and_settle(system: VirtualTransferSystem, spec: ExperimentSpec) -> No
     x, y = POSITIONS[spec.conveyor]
     system.reset(spec.docking_error)
     system.place(spec.face, math.radians(spec.theta_deg + dtheta), x + dx, y + dy)
-    system.clock.wait(placement.settle_time_s)
+    settle(system, spec.scene)
+
+
+def settle(system: VirtualTransferSystem, scene: SceneConfig) -> None:
+    """Let the object settle with the belts stopped (`PlacementConfig`): for settle_time_s,
+    or, with rest detection on, until it is at rest (at least min_settle_time_s)."""
+    placement = scene.placement
+    if placement.rest_speed_m_s is None:
+        system.clock.wait(placement.settle_time_s)
+        return
+    dt = system.model.opt.timestep
+    total = max(1, round(placement.settle_time_s / dt))
+    done = min(total, max(1, round(placement.min_settle_time_s / dt)))
+    check = max(1, round(placement.rest_check_s / dt))
+    system.clock.wait(done * dt)
+    while done < total and system.object_rest_speed() >= placement.rest_speed_m_s:
+        n = min(check, total - done)
+        system.clock.wait(n * dt)
+        done += n
 
 
 def run_experiment(spec: ExperimentSpec, *, tu_hal: UnitHAL | None = None) -> ExperimentResult:
@@ -224,7 +244,7 @@ def run_experiment(spec: ExperimentSpec, *, tu_hal: UnitHAL | None = None) -> Ex
         there = controller.transfer(TransferDirection.TM_TO_TU, spec.face, spec.conveyor)
         back: TransferRecord | None = None
         if there.y == 1:
-            system.clock.wait(spec.scene.placement.settle_time_s)
+            settle(system, spec.scene)
             phase[0] = "back"
             back = controller.transfer(TransferDirection.TU_TO_TM, spec.face, None)
     except SimulationUnstable as exc:

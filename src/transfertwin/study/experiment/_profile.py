@@ -11,7 +11,10 @@ setting that differs from the defaults, e.g.::
     solver = "Newton"
     impratio = 1.0
 
-Files are parsed here, at the edge; the rest of the code sees frozen configs only.
+Files are parsed here, at the edge; the rest of the code sees frozen configs only. A setting
+that is off (None, e.g. ``stall_time_s`` of the 'reference' profile) is written as "none".
+`load_profile` also accepts the name of a built-in profile (`transfertwin.sim.PROFILES`:
+'fast', the defaults, and 'reference') instead of a path.
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from pathlib import Path
 
 from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
-from transfertwin.sim import SceneConfig
+from transfertwin.sim import PROFILES, SceneConfig, scene_profile
 
 __all__ = ["load_profile", "profile_toml", "save_profile", "scene_from_dict", "scene_to_dict"]
 
@@ -37,6 +40,10 @@ def scene_to_dict(cfg: SceneConfig) -> dict[str, object]:
     return out
 
 
+def _none(value: object) -> object:
+    return None if value == "none" else value
+
+
 def scene_from_dict(data: dict[str, object], *, where: str = "profile") -> SceneConfig:
     """Inverse of `scene_to_dict`; also accepts `gap_mm` for `gap_m` in the scene section."""
     flat: dict[str, object] = {}
@@ -46,11 +53,11 @@ def scene_from_dict(data: dict[str, object], *, where: str = "profile") -> Scene
             if not isinstance(value, dict):
                 raise InputError(f"{where}: [{key}] must be a table")
             for sub, v in value.items():
-                flat[f"{key}.{sub}"] = tuple(v) if isinstance(v, list) else v
+                flat[f"{key}.{sub}"] = tuple(v) if isinstance(v, list) else _none(v)
         elif key == "gap_mm":
             flat["gap_m"] = float(value) / 1000.0
         elif key in scene_keys:
-            flat[key] = value
+            flat[key] = _none(value)
         else:
             raise InputError(f"{where}: unknown scene setting {key!r}")
     try:
@@ -60,7 +67,9 @@ def scene_from_dict(data: dict[str, object], *, where: str = "profile") -> Scene
 
 
 def load_profile(path: str | Path) -> tuple[str, SceneConfig]:
-    """Read a profile file; returns (name, scene)."""
+    """Read a profile file, or a built-in profile by name; returns (name, scene)."""
+    if isinstance(path, str) and path in PROFILES and not Path(path).is_file():
+        return path, scene_profile(path)
     path = Path(path)
     try:
         data = tomllib.loads(path.read_text())
@@ -79,6 +88,8 @@ def load_profile(path: str | Path) -> tuple[str, SceneConfig]:
 
 
 def _toml_value(value: object) -> str:
+    if value is None:
+        return '"none"'
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, str):

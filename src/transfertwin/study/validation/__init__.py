@@ -1,5 +1,11 @@
 """Validation of virtual against physical results (Sec. 6.7)."""
 
+from transfertwin.study.validation._agreement import (
+    Agreement,
+    SideOutcome,
+    compare_scenes,
+    run_side,
+)
 from transfertwin.study.validation._validation import (
     NEWCOMBE_HYBRID_SCORE,
     VALIDATION_COLUMNS,
@@ -17,11 +23,15 @@ from transfertwin.study.validation._validation import (
 __all__ = [
     "NEWCOMBE_HYBRID_SCORE",
     "VALIDATION_COLUMNS",
+    "Agreement",
     "DifferenceInterval",
+    "SideOutcome",
     "StateComparison",
     "ValidationResult",
     "compare",
+    "compare_scenes",
     "newcombe_difference",
+    "run_side",
     "summary_json_text",
     "validate",
     "validation_csv_text",

@@ -1,0 +1,34 @@
+"""The fast defaults agree with the 'reference' profile (small sample; the full-size check
+is benchmarks/agreement.py), in a scene that produces failures so agreement is not trivial."""
+
+from __future__ import annotations
+
+from transfertwin.ots import experiment_states, filter_theta_step
+from transfertwin.sim import DockingError, scene_profile
+from transfertwin.study import ExperimentSpec
+from transfertwin.study.validation import compare_scenes
+
+
+def _specs(objects: tuple[str, ...], step: int) -> list[ExperimentSpec]:
+    error = DockingError.from_mm_deg(-8.55, 2.84, 1.44)
+    return [
+        ExperimentSpec(o, s.face, s.conveyor, s.theta_deg, docking_error=error, seed=i)
+        for o in objects
+        for i, s in enumerate(filter_theta_step(experiment_states(), step))
+    ]
+
+
+def test_fast_profile_agrees_with_reference_where_transfers_fail():
+    extra = {"gap_m": 0.03}  # a wide gap: some objects fall in
+    a = compare_scenes("gap30", _specs(("o1", "o32"), 90), scene_profile("fast", **extra),
+                       scene_profile("reference", **extra))  # fmt: skip
+    assert a.agree, a.line()
+    assert a.fast.steps < 0.6 * a.reference.steps
+    assert a.paired_same >= 0.75 * a.fast.n, a.line()
+
+
+def test_reference_profile_keeps_the_old_settings():
+    ref = scene_profile("reference")
+    assert ref.physics.timestep_s == 0.002 and ref.physics.multiccd
+    assert ref.placement.rest_speed_m_s is None and ref.placement.settle_time_s == 0.6
+    assert ref.stall_time_s is None and ref.steps_per_sample() == 17

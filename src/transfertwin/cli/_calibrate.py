@@ -9,10 +9,13 @@ import json
 import math
 from pathlib import Path
 
+from rich.console import Console
+
 from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
 from transfertwin.cli._common import positive_int, worker_count
 from transfertwin.cli._paths import out_dir
+from transfertwin.cli._progress import progress_bar
 
 __all__ = ["register"]
 
@@ -201,21 +204,27 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     positive_int("--repeats", args.repeats)
     rows, scene, name, calib = _common(args)
     out = out_dir(args.out)
-    result = calibrate(rows, scene=scene, **calib)
-    p = result.probabilities()
     objects = np.array([str(r["object_id"]) for r in rows])
-    candidates = {o: p[None, :] for o in sorted(set(objects))}
+    if args.objects:
+        candidates, groups = _fitted_candidates(Path(args.objects), rows)
+        runs = None
+    else:
+        result = calibrate(rows, scene=scene, **calib)
+        p = result.probabilities()
+        candidates = {o: p[None, :] for o in sorted(set(objects))}
+        groups, runs = objects, len(result.runs)
     ev = evaluate_predictions(rows, candidates, folds=args.folds, repeats=args.repeats,
-                              seed=args.seed)  # fmt: skip
+                              seed=args.seed, penalty=args.penalty, groups=groups)  # fmt: skip
     y = np.array([int(r["success"]) for r in rows])
-    runs = len(result.runs)
-    sim = {o: (round(float(p[objects == o].sum()) * runs), int((objects == o).sum()) * runs)
-           for o in candidates}  # fmt: skip
+    r = runs or 1
+    sim = {o: (round(float(ev.twin_p[objects == o].sum()) * r), int((objects == o).sum()) * r)
+           for o in sorted(set(objects))}  # fmt: skip
     held_out = {"twin (held out)": ev.twin_oof, "logistic (held out)": ev.logistic_oof}
     plot = fidelity_plot_data(y, held_out, objects, sim)
     payload = {
         "profile": name, "real": args.real, "n_real": ev.n, "real_successes": ev.successes,
-        "runs": runs, "folds": ev.folds, "repeats": ev.repeats, "seed": args.seed,
+        "runs": runs, "objects": args.objects, "chosen": ev.chosen, "folds": ev.folds,
+        "repeats": ev.repeats, "seed": args.seed,
         **ev.figures, "per_object": ev.per_object,
         "note": "CV: candidates and thresholds are chosen on training folds only; "
                 "logistic: one-hot state, sin/cos of theta and 2 theta per object and face, "
@@ -228,6 +237,57 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         print(f"{key:15s} f05 {f['f05']:.3f}  precision {f['precision']:.3f}  "
               f"recall {f['recall']:.3f}  brier {f['brier']:.3f}")  # fmt: skip
     print(out / "evaluation.json")
+    return 0
+
+
+def _fitted_candidates(folder: Path, rows):
+    """Candidates per 'object:face' from `calibrate object` outputs in `folder`."""
+    import numpy as np
+
+    from transfertwin.study.calibration import load_candidates
+
+    ids = np.array([int(r["experiment_id"]) for r in rows])
+    candidates = {}
+    for obj in sorted({str(r["object_id"]) for r in rows}):
+        path = folder / f"{obj}.candidates.npz"
+        if not path.is_file():
+            raise InputError(f"{path}: missing; run 'transfertwin calibrate object --object {obj}'")
+        for group, (pred, _) in load_candidates(path, ids).items():
+            candidates[group] = pred
+    groups = np.array([f"{r['object_id']}:{r['face']}" for r in rows])
+    missing = sorted(set(groups) - set(candidates))
+    if missing:
+        raise InputError(f"{folder}: no fitted candidates for {', '.join(missing)}")
+    return candidates, groups
+
+
+def cmd_object(args: argparse.Namespace) -> int:
+    """Calibrate a proxy for one real object from its real outcomes (no scan needed)."""
+    from transfertwin.objects import write_proxy
+    from transfertwin.study.calibration import fit_proxy, save_candidates
+
+    if args.family != "core":
+        raise InputError(f"--family {args.family!r}: only 'core' (procedural cores) is known")
+    depths = [float(v) / 1000 for v in _parse_values(args.depths_mm)]
+    if any(d < 0 or d > 0.1 for d in depths):
+        raise InputError("--depths-mm must lie in 0..100")
+    positive_int("--runs", args.runs)
+    rows, scene, _, calib = _common(args)
+    out = out_dir(args.out)
+    with progress_bar(f"calibrate {args.object}", Console(stderr=True)) as on_progress:
+        fit = fit_proxy(rows, args.object, depths_m=depths, work_dir=out / "candidates",
+                        scene=scene, runs=args.runs, seed=args.seed, workers=calib["workers"],
+                        penalty=args.penalty, on_progress=on_progress)  # fmt: skip
+    proxy = write_proxy(fit.spec, out / f"{args.object}.proxy.json")
+    save_candidates(fit, out / f"{args.object}.candidates.npz")
+    for f in fit.faces:
+        shares = ", ".join(f"{d * 1000:g} mm {p.mean():.2f}"
+                           for d, p in zip(f.depths_m, f.probabilities, strict=True))  # fmt: skip
+        print(
+            f"{args.object} {f.face}: real {f.actual.mean():.2f} (n {len(f.actual)}); "
+            f"simulated by depth: {shares}; chosen {f.depths_m[f.chosen] * 1000:g} mm"
+        )
+    print(f"{proxy} (a calibrated proxy, not a scan)")
     return 0
 
 
@@ -273,10 +333,23 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sets", help="labels to run, e.g. S0,S3,S5 (default: all)")
     p.add_argument("--metric", default="f05")
     p.set_defaults(func=cmd_simstudy)
+    p = csub.add_parser("object", help="calibrate a proxy object from real outcomes (no scan)")
+    _shared(p)
+    p.add_argument("--object", required=True, help="real object id, e.g. o1")
+    p.add_argument("--family", default="core", help="shape family of the proxy (core)")
+    p.add_argument("--depths-mm", default="6,10,14,18,20,22,24,26,28",
+                   help="candidate protrusion depths below a face (0 is always tried)")  # fmt: skip
+    p.add_argument("--penalty", type=float, default=0.02,
+                   help="Brier penalty at the deepest candidate (towards the prior)")  # fmt: skip
+    p.set_defaults(func=cmd_object, runs=2)
     p = csub.add_parser("evaluate", help="twin vs baselines, in-sample and cross-validated")
     _shared(p)
     p.add_argument("--folds", type=int, default=5, help="stratified folds K (default 5)")
     p.add_argument("--repeats", type=int, default=5, help="repetitions of the K folds")
+    p.add_argument("--objects", help="folder of 'calibrate object' outputs: proxies are "
+                   "chosen in the training folds (default: simulate --profile)")  # fmt: skip
+    p.add_argument("--penalty", type=float, default=0.02,
+                   help="Brier penalty at the deepest proxy candidate")  # fmt: skip
     p.set_defaults(func=cmd_evaluate)
     p = csub.add_parser("tune", help="tune mu and gap (LHS rounds or TPE); save a profile")
     _shared(p)

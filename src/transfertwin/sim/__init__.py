@@ -10,6 +10,7 @@ from transfertwin.sim._config import (
     scene_profile,
 )
 from transfertwin.sim._docking import tu_pose_in_tip_frame
+from transfertwin.sim._gap import GapAreaLayout, conveyor_span, gap_area_m2, gap_width_m
 from transfertwin.sim._names import (
     OBJECT_BODY,
     OBJECT_JOINT,
@@ -34,6 +35,7 @@ __all__ = [
     "PROFILES",
     "TU_BODY",
     "DockingError",
+    "GapAreaLayout",
     "LayoutConfig",
     "MujocoUnitHAL",
     "PhysicsConfig",
@@ -45,6 +47,9 @@ __all__ = [
     "barrier_sensor",
     "belt_geom",
     "build_spec",
+    "conveyor_span",
+    "gap_area_m2",
+    "gap_width_m",
     "object_hull",
     "object_quat",
     "render_strip",

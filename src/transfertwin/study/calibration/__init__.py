@@ -14,6 +14,13 @@ from transfertwin.study.calibration._evaluate import (
     score,
 )
 from transfertwin.study.calibration._metrics import RUN_METRICS, ConfusionMatrix, summarize_runs
+from transfertwin.study.calibration._object_fit import (
+    FaceFit,
+    ProxyFit,
+    fit_proxy,
+    load_candidates,
+    save_candidates,
+)
 from transfertwin.study.calibration._replay import (
     CalibrationResult,
     CalibrationRun,
@@ -42,6 +49,8 @@ __all__ = [
     "CalibrationRun",
     "ConfusionMatrix",
     "Evaluation",
+    "FaceFit",
+    "ProxyFit",
     "Scores",
     "Trial",
     "best_threshold",
@@ -51,12 +60,15 @@ __all__ = [
     "choose_candidates",
     "cv_splits",
     "evaluate_predictions",
+    "fit_proxy",
     "fold_predictions",
     "in_sample",
+    "load_candidates",
     "logistic_features",
     "logistic_probabilities",
     "parse_object_map",
     "replay_specs",
+    "save_candidates",
     "scene_with",
     "score",
     "simulation_parameter_study",

@@ -267,21 +267,24 @@ def evaluate_predictions(
     repeats: int = 5,
     seed: int = 0,
     penalty: float = 0.0,
+    groups: np.ndarray | None = None,
 ) -> Evaluation:
-    """Score the twin (from candidate predictions per object) against the base-rate and
+    """Score the twin (from candidate predictions per group) against the base-rate and
     logistic baselines, in-sample and in repeated stratified K-fold cross-validation.
 
     In every fold the twin's candidates, its threshold and the logistic model and its
-    threshold are fitted on the training rows only.
+    threshold are fitted on the training rows only. `groups` (n,) names the candidate set
+    of each row (default: its object id; e.g. 'o1:back' for per-face proxies).
     """
     y = np.array([int(r["success"]) for r in rows])
     objects = np.array([str(r["object_id"]) for r in rows])
+    units = objects if groups is None else np.asarray(groups)
     splits = cv_splits(y, folds, repeats, seed)
     X = logistic_features(rows)
     twin_parts, logit_parts = [], []
     for train, test in splits:
-        chosen = choose_candidates(candidates, objects, y, train, penalty)
-        p = _assemble(candidates, objects, chosen)
+        chosen = choose_candidates(candidates, units, y, train, penalty)
+        p = _assemble(candidates, units, chosen)
         twin_parts.append((test, p[test], best_threshold(p[train], y[train])))
         q = logistic_probabilities(X, y, train)
         logit_parts.append((test, q[test], best_threshold(q[train], y[train])))
@@ -294,7 +297,7 @@ def evaluate_predictions(
         logit_rep.append(m2)
         if r == 0:
             oof = {"twin": p_t, "twin_bits": b_t, "logistic": p_l}
-    p_in, thr_in, chosen_in = in_sample(candidates, objects, y, penalty)
+    p_in, thr_in, chosen_in = in_sample(candidates, units, y, penalty)
     q_in = logistic_probabilities(X, y, np.arange(len(y)))
     base = np.full(len(y), y.mean())
     figures = {

@@ -13,7 +13,7 @@ import sys
 from collections.abc import Sequence
 
 from transfertwin._errors import InputError
-from transfertwin.cli import _calibrate, _cps, _docking, _study, _transfer, _validate
+from transfertwin.cli import _calibrate, _cps, _data, _docking, _study, _transfer, _validate
 from transfertwin.cli._common import Parser
 
 __all__ = ["build_parser", "main"]
@@ -26,7 +26,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = Parser(prog="transfertwin", description=__doc__.splitlines()[0])
     parser.add_argument("-v", "--verbose", action="store_true", help="debug logging")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for group in (_transfer, _study, _calibrate, _cps, _docking, _validate):
+    for group in (_transfer, _study, _calibrate, _cps, _docking, _validate, _data):
         group.register(sub)
     return parser
 

@@ -273,6 +273,8 @@ def cmd_object(args: argparse.Namespace) -> int:
         raise InputError("--depths-mm must lie in 0..100")
     positive_int("--runs", args.runs)
     rows, scene, _, calib = _common(args)
+    if args.object not in {str(r["object_id"]) for r in rows}:
+        raise InputError(f"{args.real}: no rows of object {args.object!r}")
     out = out_dir(args.out)
     with progress_bar(f"calibrate {args.object}", Console(stderr=True)) as on_progress:
         fit = fit_proxy(rows, args.object, depths_m=depths, work_dir=out / "candidates",

@@ -10,7 +10,13 @@ from transfertwin.sim._config import (
     scene_profile,
 )
 from transfertwin.sim._docking import tu_pose_in_tip_frame
-from transfertwin.sim._gap import GapAreaLayout, conveyor_span, gap_area_m2, gap_width_m
+from transfertwin.sim._gap import (
+    GapAreaLayout,
+    conveyor_span,
+    gap_area_m2,
+    gap_areas_cm2,
+    gap_width_m,
+)
 from transfertwin.sim._names import (
     OBJECT_BODY,
     OBJECT_JOINT,
@@ -49,6 +55,7 @@ __all__ = [
     "build_spec",
     "conveyor_span",
     "gap_area_m2",
+    "gap_areas_cm2",
     "gap_width_m",
     "object_hull",
     "object_quat",

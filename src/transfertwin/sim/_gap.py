@@ -26,6 +26,7 @@ of `GapAreaLayout.fitted()` reproduce the data (R² ≈ 0.999, bias ≈ 0).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,7 +34,7 @@ import numpy as np
 from transfertwin.sim._config import DockingError, LayoutConfig
 from transfertwin.sim._docking import tu_pose_in_tip_frame
 
-__all__ = ["GapAreaLayout", "conveyor_span", "gap_area_m2", "gap_width_m"]
+__all__ = ["GapAreaLayout", "conveyor_span", "gap_area_m2", "gap_areas_cm2", "gap_width_m"]
 
 
 @dataclass(frozen=True)
@@ -103,3 +104,13 @@ def gap_area_m2(geo: GapAreaLayout, error: DockingError, conveyor: str) -> float
     t = float(np.tan(psi))
     signed = (tx + t * ty) * (y1 - y0) - 0.5 * t * (y1 * y1 - y0 * y0)
     return abs(signed) if geo.absolute else signed
+
+
+def gap_areas_cm2(
+    geo: GapAreaLayout, errors_mm_deg: np.ndarray, conveyors: Sequence[str]
+) -> np.ndarray:
+    """`gap_area_m2` in cm² for many docking errors (n, 3: mm, mm, deg) and conveyors (n,)."""
+    return np.array([
+        gap_area_m2(geo, DockingError.from_mm_deg(*map(float, e)), str(c)) * 1e4
+        for e, c in zip(np.asarray(errors_mm_deg, dtype=float), conveyors, strict=True)
+    ])  # fmt: skip

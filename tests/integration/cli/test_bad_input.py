@@ -73,6 +73,12 @@ BAD: list[tuple[str, list[str]]] = [
         ],
     ),
     ("demo into /sys", ["demo", "--out", "/sys/demo"]),
+    ("data export not csv", ["data", "calibration", "--out", "real.txt"]),
+    (
+        "calibrate object unknown family",
+        ["calibrate", "object", "--object", "o1", "--family", "x", "--out", "o"],
+    ),
+    ("calibrate object unknown id", ["calibrate", "object", "--object", "o99", "--out", "o"]),
     ("unknown command", ["frobnicate"]),
 ]
 

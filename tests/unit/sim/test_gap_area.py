@@ -7,17 +7,14 @@ import numpy as np
 import pytest
 
 from transfertwin.data import calibration_csv_path
-from transfertwin.sim import DockingError, GapAreaLayout, LayoutConfig, gap_area_m2, gap_width_m
+from transfertwin.sim import DockingError, GapAreaLayout, LayoutConfig, gap_areas_cm2, gap_width_m
 from transfertwin.store import DOCKING_ERROR_COLUMNS, read_results
 
 
 def _areas(geo: GapAreaLayout) -> tuple[np.ndarray, np.ndarray]:
     rows = read_results(calibration_csv_path())
-    sim = np.array([
-        gap_area_m2(geo, DockingError.from_mm_deg(*(float(r[c]) for c in DOCKING_ERROR_COLUMNS)),
-                    str(r["conveyor"])) * 1e4
-        for r in rows
-    ])  # fmt: skip
+    errors = np.array([[float(r[c]) for c in DOCKING_ERROR_COLUMNS] for r in rows])
+    sim = gap_areas_cm2(geo, errors, [str(r["conveyor"]) for r in rows])
     return sim, np.array([float(r["gap_area_cm2"]) for r in rows])
 
 

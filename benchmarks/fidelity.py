@@ -25,9 +25,10 @@ from transfertwin.objects import write_proxy
 from transfertwin.sim import GapAreaLayout, LayoutConfig, SceneConfig, gap_areas_cm2
 from transfertwin.store import DOCKING_ERROR_COLUMNS, read_results
 from transfertwin.study.calibration import (
+    candidates_path,
     evaluate_predictions,
     fit_proxy,
-    load_candidates,
+    fitted_candidates,
     save_candidates,
 )
 from transfertwin.study.fullstate import clopper_pearson
@@ -55,18 +56,14 @@ def main() -> None:
     rows = read_results(calibration_csv_path())
     _gap_fit(rows)
     folder = Path(args.objects)
-    ids = np.array([int(r["experiment_id"]) for r in rows])
-    candidates = {}
     for obj in sorted({str(r["object_id"]) for r in rows}, key=lambda o: int(o[1:])):
-        path = folder / f"{obj}.candidates.npz"
-        if not path.is_file():
+        if not candidates_path(folder, obj).is_file():
             fit = fit_proxy(rows, obj, depths_m=DEPTHS_M, work_dir=folder / "candidates",
                             scene=SceneConfig(), runs=args.runs, workers=args.workers,
                             penalty=args.penalty)  # fmt: skip
             write_proxy(fit.spec, folder / f"{obj}.proxy.json")
-            save_candidates(fit, path)
-        candidates |= {g: p for g, (p, _) in load_candidates(path, ids).items()}
-    groups = np.array([f"{r['object_id']}:{r['face']}" for r in rows])
+            save_candidates(fit, candidates_path(folder, obj))
+    candidates, groups = fitted_candidates(folder, rows)
     ev = evaluate_predictions(rows, candidates, folds=5, repeats=5, seed=0,
                               penalty=args.penalty, groups=groups)  # fmt: skip
     print(f"{'predictor':20s} {'F0.5':>6s} {'prec':>6s} {'recall':>6s} {'brier':>6s}")

@@ -197,7 +197,11 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     import numpy as np
 
     from transfertwin.report import fidelity_plot_data, figure_png, plot_fidelity
-    from transfertwin.study.calibration import calibrate, evaluate_predictions
+    from transfertwin.study.calibration import (
+        calibrate,
+        evaluate_predictions,
+        fitted_candidates,
+    )
 
     if args.folds < 2:
         raise InputError(f"--folds must be at least 2, got {args.folds}")
@@ -206,7 +210,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     out = out_dir(args.out)
     objects = np.array([str(r["object_id"]) for r in rows])
     if args.objects:
-        candidates, groups = _fitted_candidates(Path(args.objects), rows)
+        candidates, groups = fitted_candidates(Path(args.objects), rows)
         runs = None
     else:
         result = calibrate(rows, scene=scene, **calib)
@@ -240,31 +244,10 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _fitted_candidates(folder: Path, rows):
-    """Candidates per 'object:face' from `calibrate object` outputs in `folder`."""
-    import numpy as np
-
-    from transfertwin.study.calibration import load_candidates
-
-    ids = np.array([int(r["experiment_id"]) for r in rows])
-    candidates = {}
-    for obj in sorted({str(r["object_id"]) for r in rows}):
-        path = folder / f"{obj}.candidates.npz"
-        if not path.is_file():
-            raise InputError(f"{path}: missing; run 'transfertwin calibrate object --object {obj}'")
-        for group, (pred, _) in load_candidates(path, ids).items():
-            candidates[group] = pred
-    groups = np.array([f"{r['object_id']}:{r['face']}" for r in rows])
-    missing = sorted(set(groups) - set(candidates))
-    if missing:
-        raise InputError(f"{folder}: no fitted candidates for {', '.join(missing)}")
-    return candidates, groups
-
-
 def cmd_object(args: argparse.Namespace) -> int:
     """Calibrate a proxy for one real object from its real outcomes (no scan needed)."""
     from transfertwin.objects import write_proxy
-    from transfertwin.study.calibration import fit_proxy, save_candidates
+    from transfertwin.study.calibration import candidates_path, fit_proxy, save_candidates
 
     if args.family != "core":
         raise InputError(f"--family {args.family!r}: only 'core' (procedural cores) is known")
@@ -281,7 +264,7 @@ def cmd_object(args: argparse.Namespace) -> int:
                         scene=scene, runs=args.runs, seed=args.seed, workers=calib["workers"],
                         penalty=args.penalty, on_progress=on_progress)  # fmt: skip
     proxy = write_proxy(fit.spec, out / f"{args.object}.proxy.json")
-    save_candidates(fit, out / f"{args.object}.candidates.npz")
+    save_candidates(fit, candidates_path(out, args.object))
     for f in fit.faces:
         shares = ", ".join(f"{d * 1000:g} mm {p.mean():.2f}"
                            for d, p in zip(f.depths_m, f.probabilities, strict=True))  # fmt: skip

@@ -17,7 +17,9 @@ from transfertwin.study.calibration._metrics import RUN_METRICS, ConfusionMatrix
 from transfertwin.study.calibration._object_fit import (
     FaceFit,
     ProxyFit,
+    candidates_path,
     fit_proxy,
+    fitted_candidates,
     load_candidates,
     save_candidates,
 )
@@ -56,11 +58,13 @@ __all__ = [
     "best_threshold",
     "best_trial",
     "calibrate",
+    "candidates_path",
     "check_real_rows",
     "choose_candidates",
     "cv_splits",
     "evaluate_predictions",
     "fit_proxy",
+    "fitted_candidates",
     "fold_predictions",
     "in_sample",
     "load_candidates",

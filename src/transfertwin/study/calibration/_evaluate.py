@@ -66,10 +66,15 @@ def score(p: np.ndarray, y: np.ndarray, threshold: float) -> Scores:
     Brier score and log-loss of the probabilities (clipped to [1e-6, 1 - 1e-6])."""
     p, y = np.asarray(p, dtype=float), np.asarray(y, dtype=int)
     cm = ConfusionMatrix.from_predictions(p >= threshold, y.astype(bool))
+    brier, loss = _probability_scores(p, y)
+    return Scores(cm.f05, cm.precision, cm.recall, cm.accuracy, brier, loss, float(threshold))
+
+
+def _probability_scores(p: np.ndarray, y: np.ndarray) -> tuple[float, float]:
+    """Brier score and log-loss (probabilities clipped to [1e-6, 1 - 1e-6])."""
     q = np.clip(p, _EPS, 1 - _EPS)
     loss = -float(np.mean(y * np.log(q) + (1 - y) * np.log(1 - q)))
-    brier = float(np.mean((p - y) ** 2))
-    return Scores(cm.f05, cm.precision, cm.recall, cm.accuracy, brier, loss, float(threshold))
+    return float(np.mean((p - y) ** 2)), loss
 
 
 def best_threshold(p: np.ndarray, y: np.ndarray) -> float:
@@ -216,11 +221,10 @@ def _pooled(
     for test, pt, thr in parts:
         p[test], bits[test] = pt, pt >= thr
     cm = ConfusionMatrix.from_predictions(bits, y.astype(bool))
-    q = np.clip(p, _EPS, 1 - _EPS)
+    brier, loss = _probability_scores(p, y)
     return {
         "f05": cm.f05, "precision": cm.precision, "recall": cm.recall,
-        "accuracy": cm.accuracy, "brier": float(np.mean((p - y) ** 2)),
-        "log_loss": -float(np.mean(y * np.log(q) + (1 - y) * np.log(1 - q))),
+        "accuracy": cm.accuracy, "brier": brier, "log_loss": loss,
     }, p, bits  # fmt: skip
 
 
@@ -281,11 +285,10 @@ def evaluate_predictions(
     units = objects if groups is None else np.asarray(groups)
     splits = cv_splits(y, folds, repeats, seed)
     X = logistic_features(rows)
-    twin_parts, logit_parts = [], []
+    twin_parts = [(test, p, thr) for test, p, thr, _ in
+                  fold_predictions(candidates, units, y, splits, penalty)]  # fmt: skip
+    logit_parts = []
     for train, test in splits:
-        chosen = choose_candidates(candidates, units, y, train, penalty)
-        p = _assemble(candidates, units, chosen)
-        twin_parts.append((test, p[test], best_threshold(p[train], y[train])))
         q = logistic_probabilities(X, y, train)
         logit_parts.append((test, q[test], best_threshold(q[train], y[train])))
     twin_rep, logit_rep, oof = [], [], {}

@@ -28,7 +28,15 @@ from transfertwin.study.calibration._evaluate import choose_candidates
 from transfertwin.study.calibration._replay import check_real_rows, replay_specs
 from transfertwin.study.experiment import run_rows
 
-__all__ = ["FaceFit", "ProxyFit", "fit_proxy", "load_candidates", "save_candidates"]
+__all__ = [
+    "FaceFit",
+    "ProxyFit",
+    "candidates_path",
+    "fit_proxy",
+    "fitted_candidates",
+    "load_candidates",
+    "save_candidates",
+]
 
 
 @dataclass(frozen=True)
@@ -134,6 +142,11 @@ def fit_proxy(
     return ProxyFit(spec, tuple(fits))
 
 
+def candidates_path(folder: Path, object_id: str) -> Path:
+    """Where `calibrate object` keeps the candidates of `object_id` in `folder`."""
+    return folder / f"{object_id}.candidates.npz"
+
+
 def save_candidates(fit: ProxyFit, path: Path) -> Path:
     """The candidates' predictions as .npz (read back by `load_candidates`)."""
     arrays = {}
@@ -151,6 +164,7 @@ def load_candidates(
 ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Group 'object:face' → (candidate predictions (k, n) aligned with `experiment_ids`,
     NaN on other rows; row mask (n,)). InputError if a fitted row is missing."""
+    pos = {int(e): j for j, e in enumerate(experiment_ids)}
     with np.load(path) as data:
         obj = str(data["object_id"])
         out = {}
@@ -158,7 +172,6 @@ def load_candidates(
             if f"{face}_p" not in data:
                 continue
             p, ids = data[f"{face}_p"], data[f"{face}_ids"]
-            pos = {int(e): j for j, e in enumerate(experiment_ids)}
             if any(int(e) not in pos for e in ids):
                 raise InputError(f"{path}: fitted rows missing from the real table")
             full = np.full((p.shape[0], len(experiment_ids)), np.nan)
@@ -168,3 +181,22 @@ def load_candidates(
             mask[cols] = True
             out[f"{obj}:{face}"] = (full, mask)
     return out
+
+
+def fitted_candidates(
+    folder: Path, rows: Sequence[Mapping[str, object]]
+) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """Candidate predictions per 'object:face' group for `rows` from the `calibrate object`
+    outputs in `folder`, and each row's group (n,). InputError if anything is missing."""
+    ids = np.array([int(r["experiment_id"]) for r in rows])
+    candidates = {}
+    for obj in sorted({str(r["object_id"]) for r in rows}):
+        path = candidates_path(folder, obj)
+        if not path.is_file():
+            raise InputError(f"{path}: missing; run 'transfertwin calibrate object --object {obj}'")
+        candidates |= {group: pred for group, (pred, _) in load_candidates(path, ids).items()}
+    groups = np.array([f"{r['object_id']}:{r['face']}" for r in rows])
+    missing = sorted(set(groups) - set(candidates))
+    if missing:
+        raise InputError(f"{folder}: no fitted candidates for {', '.join(missing)}")
+    return candidates, groups

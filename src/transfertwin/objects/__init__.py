@@ -10,12 +10,22 @@ Public surface:
   from the solenoid, +z up on face 'front', origin at the centre of mass).
 - `builtin_ids`, `core_spec` / `CoreSpec`, `generate_core`: the 37 procedural
   starter-motor cores o1..o37 (the study's object set, Eq. 5.3).
+- `Protrusion` / `ProxySpec` / `proxy_model`: calibrated proxies (features below a face);
+  `features_document` / `prior_features` / `features_version`: the built-in cores' shipped
+  resting features (`load_builtin(id, features=False)` is the plain body).
 """
 
-from transfertwin.objects._builtin import BuiltinDataError, builtin_ids
+from transfertwin.objects._builtin import (
+    BuiltinDataError,
+    builtin_ids,
+    features_version,
+    is_builtin_id,
+    load_builtin,
+)
 from transfertwin.objects._core_draw import core_spec
 from transfertwin.objects._core_spec import BUILTIN_COUNT, CoreSpec, Dent
 from transfertwin.objects._cores import generate_core
+from transfertwin.objects._features import features_document, prior_features
 from transfertwin.objects._hulls import decompose_hulls, default_cache_dir
 from transfertwin.objects._load import export_object, load_object
 from transfertwin.objects._mass import DEFAULT_DENSITY_KG_M3, MassProperties, mass_properties
@@ -48,10 +58,15 @@ __all__ = [
     "decompose_hulls",
     "default_cache_dir",
     "export_object",
+    "features_document",
+    "features_version",
     "generate_core",
+    "is_builtin_id",
+    "load_builtin",
     "load_mesh",
     "load_object",
     "mass_properties",
+    "prior_features",
     "proxy_model",
     "read_proxy",
     "write_proxy",

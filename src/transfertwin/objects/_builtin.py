@@ -3,11 +3,13 @@
 ``transfertwin/data/cores`` holds, per core, ``oN.stl`` (binary STL, metres,
 frame F_O), ``oN.hulls.npz`` (its CoACD hulls) and one ``manifest.json`` with the
 SHA-256 of every file; ``scripts/make_cores.py`` makes them. A file whose hash
-differs from the manifest is refused.
+differs from the manifest is refused. ``features.json`` adds each core's resting
+features (see `transfertwin.objects._features`; ``scripts/make_core_features.py``).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import hashlib
 import json
@@ -18,9 +20,11 @@ from typing import TYPE_CHECKING
 from transfertwin.objects._core_draw import core_spec
 from transfertwin.objects._core_spec import BUILTIN_COUNT
 from transfertwin.objects._cores import mesh_from_stl_bytes
+from transfertwin.objects._features import FEATURES_NAME, read_features
 from transfertwin.objects._hulls import hulls_from_npz_bytes
 from transfertwin.objects._mass import mass_properties
 from transfertwin.objects._model import ObjectModel
+from transfertwin.objects._proxy import ProxySpec, proxy_model
 from transfertwin.objects._stl import mesh_content_hash
 
 if TYPE_CHECKING:
@@ -31,6 +35,7 @@ __all__ = [
     "BuiltinDataError",
     "builtin_ids",
     "cores_data_dir",
+    "features_version",
     "is_builtin_id",
     "load_builtin",
     "load_builtin_from",
@@ -63,11 +68,14 @@ def cores_data_dir() -> Traversable:
 
 
 @functools.cache
-def load_builtin(object_id: str) -> ObjectModel:
+def load_builtin(object_id: str, *, features: bool = True) -> ObjectModel:
     """Load a built-in core from package data (memoised: one instance per id).
 
     Args:
         object_id: ``"o1"``..``"o37"``.
+        features: Add the core's shipped resting features (flange ears, studs: one
+            protrusion per face, see `transfertwin.objects._features`); False gives the
+            plain procedural body.
 
     Returns:
         The model; its mass is the core's specified mass.
@@ -76,15 +84,30 @@ def load_builtin(object_id: str) -> ObjectModel:
         KeyError: If ``object_id`` is not a built-in id.
         BuiltinDataError: If the package data is missing or corrupt.
     """
-    return load_builtin_from(cores_data_dir(), object_id)
+    return load_builtin_from(cores_data_dir(), object_id, features=features)
 
 
-def load_builtin_from(directory: Traversable, object_id: str) -> ObjectModel:
+@functools.cache
+def features_version() -> str:
+    """SHA-256 (first 16 hex digits) of the shipped ``features.json``; "none" without one.
+
+    Study plans record it, so a store filled with other features is not resumed.
+    """
+    path = cores_data_dir().joinpath(FEATURES_NAME)
+    if not path.is_file():
+        return "none"
+    return hashlib.sha256(path.read_bytes()).hexdigest()[:16]
+
+
+def load_builtin_from(
+    directory: Traversable, object_id: str, *, features: bool = True
+) -> ObjectModel:
     """Load a built-in core from ``directory`` (not memoised), checking file hashes.
 
     Args:
         directory: Directory with ``manifest.json`` and the core files.
         object_id: ``"o1"``..``"o37"``.
+        features: Add the resting features listed in the directory's ``features.json``.
 
     Returns:
         The model.
@@ -101,7 +124,7 @@ def load_builtin_from(directory: Traversable, object_id: str) -> ObjectModel:
     stl = _read_checked(directory, entry["stl"], entry["stl_sha256"])
     hulls = hulls_from_npz_bytes(_read_checked(directory, entry["hulls"], entry["hulls_sha256"]))
     mesh = mesh_from_stl_bytes(stl, f"{object_id}.stl")
-    return ObjectModel(
+    body = ObjectModel(
         object_id=object_id,
         mesh=mesh,
         hulls=hulls,
@@ -110,6 +133,16 @@ def load_builtin_from(directory: Traversable, object_id: str) -> ObjectModel:
         content_hash=mesh_content_hash(mesh),
         spec=core_spec(int(entry["index"])),
     )
+    if not features:
+        return body
+    try:
+        prots = read_features(directory).get(object_id, ())
+    except ValueError as exc:
+        raise BuiltinDataError(f"core data: {exc}") from exc
+    if not any(p.depth_m > 0 for p in prots):
+        return body
+    featured = proxy_model(body, ProxySpec(object_id, object_id, prots))
+    return dataclasses.replace(featured, source="builtin", spec=body.spec)
 
 
 def _read_manifest(directory: Traversable) -> dict:

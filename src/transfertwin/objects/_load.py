@@ -58,7 +58,9 @@ def load_object(
     """
     if str(ref).endswith(PROXY_SUFFIX):
         spec = read_proxy(ref)
-        if is_builtin_id(spec.base) or spec.base.endswith(PROXY_SUFFIX):
+        if is_builtin_id(spec.base):  # the plain body: the proxy's features replace the shipped
+            base = _with_mass(load_builtin(spec.base, features=False), mass_kg, density_kg_m3)
+        elif spec.base.endswith(PROXY_SUFFIX):
             base = load_object(spec.base, mass_kg=mass_kg, density_kg_m3=density_kg_m3)
         else:  # a mesh path relative to the proxy file
             mesh = Path(ref).parent / spec.base
@@ -66,11 +68,7 @@ def load_object(
                                cache_dir=cache_dir)  # fmt: skip
         return proxy_model(base, spec)
     if is_builtin_id(ref):
-        model = load_builtin(str(ref))
-        if mass_kg is None and density_kg_m3 is None:
-            return model
-        mass = mass_properties(model.mesh, mass_kg=mass_kg, density_kg_m3=density_kg_m3)
-        return dataclasses.replace(model, mass=mass)
+        return _with_mass(load_builtin(str(ref)), mass_kg, density_kg_m3)
     path = _mesh_path(ref)
     mesh = _centred(load_mesh(path, units))
     mass = mass_properties(mesh, mass_kg=mass_kg, density_kg_m3=density_kg_m3)
@@ -115,6 +113,16 @@ def export_object(ref: str | Path, out_path: str | Path, *, units: str = "m") ->
     except OSError as exc:
         raise InputError(f"{out}: cannot write file ({exc.strerror or exc})") from exc
     return out
+
+
+def _with_mass(
+    model: ObjectModel, mass_kg: float | None, density_kg_m3: float | None
+) -> ObjectModel:
+    """``model`` with its mass overridden, if either override is given."""
+    if mass_kg is None and density_kg_m3 is None:
+        return model
+    mass = mass_properties(model.mesh, mass_kg=mass_kg, density_kg_m3=density_kg_m3)
+    return dataclasses.replace(model, mass=mass)
 
 
 def _mesh_path(ref: object) -> Path:

@@ -6,13 +6,20 @@ import numpy as np
 import pytest
 
 from transfertwin._errors import InputError
-from transfertwin.objects import Protrusion, ProxySpec, load_object, read_proxy, write_proxy
+from transfertwin.objects import (
+    Protrusion,
+    ProxySpec,
+    load_builtin,
+    load_object,
+    read_proxy,
+    write_proxy,
+)
 
 
 def test_front_protrusion_reaches_depth_below_the_lowest_point(tmp_path) -> None:
     spec = ProxySpec("o1x", "o1", (Protrusion("front", 0.02), Protrusion("back", 0.0)))
     path = write_proxy(spec, tmp_path / "o1x.proxy.json")
-    base, proxy = load_object("o1"), load_object(str(path))
+    base, proxy = load_builtin("o1", features=False), load_object(str(path))
     assert proxy.object_id == "o1x" and len(proxy.hulls) == len(base.hulls) + 1
     low = np.vstack(base.hulls)[:, 2].min()
     assert np.vstack(proxy.hulls)[:, 2].min() == pytest.approx(low - 0.02)

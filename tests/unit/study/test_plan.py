@@ -42,6 +42,17 @@ def test_plan_hash_is_stable_and_sensitive():
     assert _plan().plan_hash != _plan(seed=6).plan_hash
 
 
+def test_plan_of_built_in_cores_records_their_shipped_features(monkeypatch):
+    from transfertwin.objects import features_version
+
+    plan = _plan()
+    before = plan.plan_hash
+    assert plan.describe()["core_features"] == features_version() != "none"
+    assert _plan(objects=("/data/part.stl",)).describe()["core_features"] is None
+    monkeypatch.setattr("transfertwin.study.experiment._plan.features_version", lambda: "other")
+    assert _plan().plan_hash != before  # other features: the store is not resumed
+
+
 def test_plan_json_round_trips():
     plan = _plan(docking=ResampledDockingErrors.from_csv(), scene=SceneConfig(gap_m=0.02))
     again = StudyPlan.from_json(plan.to_json())

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from transfertwin._errors import InputError
-from transfertwin.objects import builtin_ids
+from transfertwin.objects import builtin_ids, features_version, is_builtin_id
 from transfertwin.ots import PreTransferState, experiment_states, filter_theta_step, state_index
 from transfertwin.sim import SceneConfig
 from transfertwin.study.docking import DockingErrorModel, docking_model_from_dict
@@ -114,6 +114,7 @@ class StudyPlan:
             "profile": self.profile_name,
             "units": self.units,
             "scene": scene_to_dict(self.scene),
+            "core_features": features_version() if any(map(is_builtin_id, self.objects)) else None,
         }
 
     def to_json(self) -> str:

@@ -14,6 +14,7 @@ from transfertwin.study.calibration import (
     evaluate_predictions,
     fold_predictions,
     score,
+    shrink,
 )
 
 
@@ -63,6 +64,26 @@ def test_fold_hygiene_no_choice_depends_on_the_test_fold() -> None:
         ((_, p2, t2, c2),) = fold_predictions(cands, objects, poisoned, [(train, test)])
         assert (c1, t1) == (c2, t2) and np.array_equal(p1, p2)
         assert set(train).isdisjoint(test)
+
+
+def test_shrinkage_bounds_the_log_loss_of_hard_shares_and_keeps_their_order() -> None:
+    rng = np.random.default_rng(5)
+    n = 200
+    p = rng.choice([0.0, 0.5, 1.0], n)
+    y = (rng.random(n) < 0.15 + 0.7 * p).astype(int)  # informative but noisy
+    train = np.arange(0, n, 2)
+    q = shrink(p, y, train)
+    assert score(q[train], y[train], 0.5).log_loss < score(p[train], y[train], 0.5).log_loss
+    assert 0 < q.min() and q.max() < 1
+    assert np.array_equal(np.argsort(q, kind="stable"), np.argsort(p, kind="stable"))
+    assert best_threshold(q, y) > 0 and score(q, y, best_threshold(q, y)).f05 == pytest.approx(
+        score(p, y, best_threshold(p, y)).f05
+    )
+    poisoned = y.copy()
+    poisoned[1::2] = 1 - poisoned[1::2]  # the rows outside `train` do not matter
+    assert np.array_equal(shrink(p, poisoned, train), q)
+    perfect = np.array([0.0, 1.0] * 20)
+    assert np.array_equal(shrink(perfect, perfect.astype(int), np.arange(40)), perfect)
 
 
 def test_regularisation_keeps_the_prior_when_the_gain_is_small() -> None:

@@ -12,6 +12,7 @@ from transfertwin.study.calibration._evaluate import (
     logistic_features,
     logistic_probabilities,
     score,
+    shrink,
 )
 from transfertwin.study.calibration._metrics import RUN_METRICS, ConfusionMatrix, summarize_runs
 from transfertwin.study.calibration._object_fit import (
@@ -75,6 +76,7 @@ __all__ = [
     "save_candidates",
     "scene_with",
     "score",
+    "shrink",
     "simulation_parameter_study",
     "summarize_runs",
     "sweep",

@@ -1,12 +1,13 @@
 """Honest evaluation of a twin's predictions against real outcomes, beside baselines.
 
-The twin predicts P(success) for each real experiment (the share of successful repeated
-runs with placement noise, shrunk towards the training base rate by `shrink`, since a share
-of R = 2 runs is 0, 0.5 or 1 and a hard 0 or 1 costs an unbounded log-loss). Everything that
+The twin predicts P(success) for each real experiment: the share of successful repeated
+runs with placement noise, shrunk towards the training base rate by `shrink` (a share of
+R = 2 runs is 0, 0.5 or 1, and a hard 0 or 1 costs an unbounded log-loss). Everything that
 is tuned — which proxy object stands in for each real core, the shrinkage and the decision
-threshold that turns P into a bit for F0.5 — is chosen on the training rows of each fold only (`fold_predictions`), and the held-out rows are scored with
-that choice. The same protocol scores a logistic regression on the state and docking error
-and the base-rate predictor, on the same repeated stratified folds.
+threshold that turns P into a bit for F0.5 — is chosen on the training rows of each fold
+only (`fold_predictions`), and the held-out rows are scored with that choice. The same
+protocol scores a logistic regression on the state and docking error and the base-rate
+predictor, on the same repeated stratified folds.
 
 Shapes: `n` real rows; `y` (n,) 0/1 outcomes; probabilities (n,) in [0, 1]; candidate
 predictions per object (k, n), one row per candidate proxy of that object.

@@ -74,7 +74,7 @@ def test_shrinkage_bounds_the_log_loss_of_hard_shares_and_keeps_their_order() ->
     train = np.arange(0, n, 2)
     q = shrink(p, y, train)
     assert score(q[train], y[train], 0.5).log_loss < score(p[train], y[train], 0.5).log_loss
-    assert 0 < q.min() and q.max() < 1
+    assert q.min() > 0 and q.max() < 1
     assert np.array_equal(np.argsort(q, kind="stable"), np.argsort(p, kind="stable"))
     assert best_threshold(q, y) > 0 and score(q, y, best_threshold(q, y)).f05 == pytest.approx(
         score(p, y, best_threshold(p, y)).f05

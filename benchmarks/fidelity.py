@@ -5,9 +5,12 @@ then the twin with calibrated proxy objects (per core and face) against the alwa
 predictor and a logistic regression, in-sample and in repeated stratified 5-fold
 cross-validation (every choice made on training folds only), and each core's simulated
 success share against the real Clopper–Pearson 95 % interval. Targets (issue: fidelity):
-twin in-sample F0.5 >= 0.84 with recall <= 0.95; twin CV F0.5 above the logistic baseline.
+twin in-sample F0.5 >= 0.84 with recall <= 0.95; twin CV F0.5 above the logistic baseline;
+with `--study STORE` (e.g. `out/quick.sqlite` of `./dev.sh run`: o1, o18, o23, o32 × the
+30°-step grid on the default profile and the shipped cores), at least 3 of 4 cores with both
+outcomes and an overall success share between 0.4 and 0.9.
 
-    python benchmarks/fidelity.py [--objects DIR] [--runs 2] [--workers 2]
+    python benchmarks/fidelity.py [--objects DIR] [--runs 2] [--workers 2] [--study STORE]
 
 `--objects DIR` reuses `transfertwin calibrate object` outputs; missing cores are fitted
 into DIR first (about 2 minutes per core on 2 workers).
@@ -46,13 +49,31 @@ def _gap_fit(rows) -> None:
         print(f"gap area, {label:22s} R2 {r2:7.4f}  bias {np.mean(sim - real):+6.2f} cm2")
 
 
+def _study_grid(path: str) -> None:
+    """Success shares per core of a finished study store, against the grid targets."""
+    rows = read_results(path)
+    objects = sorted({str(r["object_id"]) for r in rows}, key=lambda o: (len(o), o))
+    mixed = 0
+    for obj in objects:
+        ok = np.array([int(r["success"]) for r in rows if r["object_id"] == obj])
+        mixed += 0 < ok.sum() < len(ok)
+        print(f"study {obj}: success share {ok.mean():.2f} over {len(ok)} runs")
+    share = float(np.mean([int(r["success"]) for r in rows]))
+    met = mixed >= min(3, len(objects)) and 0.4 <= share <= 0.9
+    print(f"target study grid: {mixed}/{len(objects)} cores with both outcomes (>= 3), "
+          f"overall share {share:.2f} (0.4..0.9): {'met' if met else 'not met'}")  # fmt: skip
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--objects", default="out/fidelity-objects")
     parser.add_argument("--runs", type=int, default=2)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--penalty", type=float, default=0.02)
+    parser.add_argument("--study", help="a finished study store to check the grid targets on")
     args = parser.parse_args()
+    if args.study:
+        _study_grid(args.study)
     rows = read_results(calibration_csv_path())
     _gap_fit(rows)
     folder = Path(args.objects)

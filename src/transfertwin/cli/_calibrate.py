@@ -96,7 +96,9 @@ def _parse_values(text: str) -> list[object]:
     return values
 
 
-def _write_trials(out: Path, trials, metric: str, title: str) -> None:
+def _write_trials(out: Path, records, keys, metric: str, title: str) -> None:
+    """trials.csv (one row per `(label, TunedTrial)`: parameters, objective, metrics) and
+    scores.png (the objective metric per run)."""
     from transfertwin.report import (
         figure_png,
         plot_score_distribution,
@@ -104,56 +106,164 @@ def _write_trials(out: Path, trials, metric: str, title: str) -> None:
     )
 
     buf = io.StringIO()
-    keys = sorted({k for t in trials for k in t.params})
+    metrics = ("f05", "f05_std", "precision", "recall", "accuracy", "brier", "not_ok")
     writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(["label", *keys, f"{metric}_mean", f"{metric}_std", "runs"])
-    for t in trials:
-        s = t.result.summary()["metrics"][metric]
-        writer.writerow([t.label, *(t.params.get(k, "") for k in keys), f"{s['mean']:.6f}",
-                         f"{s['std']:.6f}", len(t.result.runs)])  # fmt: skip
+    writer.writerow(["label", *keys, "objective", *metrics, "penalty", "runs"])
+    for label, t in records:
+        writer.writerow([label, *(t.params.get(k, "") for k in keys), _fmt(t.objective),
+                         *(_fmt(t.metrics[m]) for m in metrics), _fmt(t.penalty),
+                         len(t.scores)])  # fmt: skip
     write_atomic(out / "trials.csv", buf.getvalue())
-    labels = [f"{t.label} " + ",".join(f"{k}={v}" for k, v in t.params.items()) for t in trials]
-    data = score_distribution_data(labels, [t.scores() for t in trials], metric)
+    labels = [f"{label} " + ",".join(f"{k}={v}" for k, v in t.params.items())
+              for label, t in records]  # fmt: skip
+    data = score_distribution_data(labels, [list(t.scores) for _, t in records], metric)
     fig = plot_score_distribution(data)
     fig.suptitle(title)
     write_atomic(out / "scores.png", figure_png(fig))
+
+
+def _fmt(value: float) -> str:
+    return "" if not math.isfinite(value) else f"{value:.6f}"
+
+
+def _check_metric(metric: str) -> None:
+    from transfertwin.study.calibration import METRICS
+
+    if metric not in METRICS:
+        raise InputError(f"unknown metric {metric!r}: choose one of {', '.join(METRICS)}")
+
+
+def _records(trials) -> list:
+    from transfertwin.study.calibration import tuned_trial
+
+    return [(t.label, tuned_trial(i, t)) for i, t in enumerate(trials)]
+
+
+def _keys(trials) -> list[str]:
+    return sorted({k for t in trials for k in t.params})
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     """One-at-a-time sweep of one setting."""
     from transfertwin.study.calibration import best_trial, sweep
 
+    _check_metric(args.metric)
     rows, scene, _, calib = _common(args)
     out = out_dir(args.out)
     trials = sweep(rows, args.param, _parse_values(args.values), base=scene, metric=args.metric,
                    on_trial=lambda t: print(f"{t.label} {t.params}: {t.score:.3f}"),
                    **calib)  # fmt: skip
-    _write_trials(out, trials, args.metric, f"sweep of {args.param}")
+    _write_trials(out, _records(trials), _keys(trials), args.metric, f"sweep of {args.param}")
     best = best_trial(trials)
     print(f"best: {best.params} {args.metric} = {best.score:.3f}; {out / 'trials.csv'}")
     return 0
 
 
+def _space_text(args: argparse.Namespace) -> str:
+    """--space, or the μ/gap box of the shorthand options (which may not repeat --space)."""
+    from transfertwin.study.calibration import default_space
+
+    mu = (0.2 if args.mu_min is None else args.mu_min, 0.8 if args.mu_max is None else args.mu_max)
+    gap = (5.0 if args.gap_min_mm is None else args.gap_min_mm,
+           40.0 if args.gap_max_mm is None else args.gap_max_mm)  # fmt: skip
+    if not args.space:
+        return default_space(mu, gap)
+    given_mu = args.mu_min is not None or args.mu_max is not None
+    given_gap = args.gap_min_mm is not None or args.gap_max_mm is not None
+    names = {part.partition("=")[0].strip() for part in args.space.split(",")}
+    if (given_mu and "mu" in names) or (given_gap and names & {"gap_mm", "gap_m"}):
+        raise InputError("give a parameter's bounds either in --space or as --mu-*/--gap-*-mm")
+    extra = (([f"mu={mu[0]!r}:{mu[1]!r}"] if given_mu else [])
+             + ([f"gap_mm={gap[0]!r}:{gap[1]!r}"] if given_gap else []))  # fmt: skip
+    return ",".join([args.space, *extra])
+
+
+def _check_object_dims(space, rows) -> None:
+    present = {(str(r["object_id"]), str(r["face"])) for r in rows}
+    for d in space.object_dims():
+        if d.object_face not in present:
+            oid, face = d.object_face
+            raise InputError(f"--space: {d.name}: the real rows hold no {oid} on face {face}")
+
+
 def cmd_tune(args: argparse.Namespace) -> int:
-    """Tune μ_k and d_gap by Latin hypercube rounds or TPE; save the winner as a profile."""
-    from transfertwin.study.calibration import best_trial, scene_with, tune_lhs, tune_tpe
+    """Tune a joint space of scene settings and proxy depths by TPE (resumable, RDB storage)
+    or Latin hypercube rounds; save the best trial as a profile and its proxies."""
+    from transfertwin.cli._paths import out_file
+    from transfertwin.objects import write_proxy
+    from transfertwin.study.calibration import (
+        best_trial,
+        parse_space,
+        scene_with,
+        trial_proxies,
+        tune_lhs,
+        tune_tpe,
+        tuned_trial,
+    )
     from transfertwin.study.experiment import save_profile
 
+    _check_metric(args.metric)
+    positive_int("--trials", args.trials)
+    if not (math.isfinite(args.penalty) and args.penalty >= 0):
+        raise InputError(f"--penalty must be >= 0, got {args.penalty}")
+    if args.method == "lhs" and (args.storage or args.study_name):
+        raise InputError("--storage and --study-name are for --method tpe (lhs is not resumable)")
+    if args.storage and "://" not in args.storage:
+        raise InputError(f"--storage {args.storage!r}: expected an RDB URL such as sqlite:///t.db")
     rows, scene, _, calib = _common(args)
+    space = parse_space(_space_text(args), scene)
+    _check_object_dims(space, rows)
     out = out_dir(args.out)
-    bounds = {"mu": (args.mu_min, args.mu_max), "gap_mm": (args.gap_min_mm, args.gap_max_mm)}
-    show = lambda t: print(f"{t.label} {t.params}: {t.score:.3f}")  # noqa: E731
+    profile = out_file(args.save_profile, (".toml",)) if args.save_profile else None
+    profile = profile or out / "profile.toml"
+    out.mkdir(parents=True, exist_ok=True)
+    storage = args.storage or f"sqlite:///{(out / 'tune.sqlite').resolve()}"
+    work = out / "trials"
+    metric = args.metric
+    show = lambda t: print(f"T{t.number} {t.params}: {metric} "  # noqa: E731
+                           f"{t.metrics[metric]:.3f}, objective {t.objective:.4f}")  # fmt: skip
     if args.method == "lhs":
-        trials = tune_lhs(rows, bounds, base=scene, n_per_round=args.trials, rounds=2,
-                          metric=args.metric, on_trial=show, **calib)  # fmt: skip
+        lhs = tune_lhs(rows, space, base=scene, n_per_round=args.trials, rounds=2,
+                       metric=args.metric, penalty=args.penalty, work_dir=work,
+                       on_trial=lambda t: print(f"{t.label} {t.params}: {t.score:.3f}"),
+                       **calib)  # fmt: skip
+        records = [(t.label, tuned_trial(i, t)) for i, t in enumerate(lhs)]
+        best = records[lhs.index(best_trial(lhs))][1]
+        where = "latin hypercube (not stored)"
     else:
-        trials = tune_tpe(rows, bounds, base=scene, n_trials=args.trials,
-                          metric=args.metric, on_trial=show, **calib)  # fmt: skip
-    _write_trials(out, trials, args.metric, f"instance-parameter tuning ({args.method})")
-    best = best_trial(trials)
-    profile = Path(args.save_profile) if args.save_profile else out / "profile.toml"
-    save_profile(profile, args.name, scene_with(scene, best.params))
-    print(f"best: {best.params} {args.metric} = {best.score:.3f}; profile {profile}")
+        with progress_bar("tune", Console(stderr=True)) as on_progress:
+            study = tune_tpe(rows, space, base=scene, n_trials=args.trials, metric=args.metric,
+                             penalty=args.penalty, storage=storage, study_name=args.study_name,
+                             work_dir=work, on_trial=show, on_progress=on_progress,
+                             **calib)  # fmt: skip
+        records = [(f"T{t.number}", t) for t in study.trials]
+        best = study.best()
+        where = f"study {study.name} in {storage}"
+        print(f"{where}: {len(study.trials)} complete trials ({study.added} added now"
+              + (f", {study.stale} interrupted marked failed" if study.stale else "") + ")")
+    if work.is_dir() and not any(work.iterdir()):
+        work.rmdir()
+    _write_trials(out, records, space.names(), args.metric,
+                  f"calibrate tune ({args.method}, {args.metric})")  # fmt: skip
+    mapping = dict(calib["object_map"])
+    for oid, spec in trial_proxies(best.params, calib["object_map"]).items():
+        mapping[oid] = str(write_proxy(spec, out / "objects" / f"{oid}.proxy.json"))
+    object_map = ",".join(f"{k}={v}" for k, v in sorted(mapping.items()))
+    label = next(lbl for lbl, t in records if t is best)
+    comment = (f"calibrate tune: {where}, best trial {label}, {metric} "
+               f"{best.metrics[metric]:.4f}\nreplay with --object-map {object_map}")  # fmt: skip
+    save_profile(profile, args.name, scene_with(scene, best.params), comment)
+    payload = {
+        "method": args.method, "study": where, "trial": label, "params": best.params,
+        "objective": best.objective, "metric": args.metric, "metrics": best.metrics,
+        "penalty": best.penalty, "space": space.text(), "profile": str(profile),
+        "object_map": object_map, "n_trials": len(records),
+        "note": "tuned proxies are calibrated stand-ins, not scans; use the object map with "
+                "the profile (--profile, --object-map)",
+    }  # fmt: skip
+    write_atomic(out / "best.json", json.dumps(_json_safe(payload), indent=2) + "\n")
+    print(f"best: {label} {best.params} {args.metric} = {best.metrics[args.metric]:.3f}; "
+          f"profile {profile}; object map {object_map}")  # fmt: skip
     return 0
 
 
@@ -168,6 +278,7 @@ def cmd_simstudy(args: argparse.Namespace) -> int:
     )
     from transfertwin.study.experiment import save_profile
 
+    _check_metric(args.metric)
     rows, scene, _, calib = _common(args)
     sets = SIM_PARAMETER_SETS
     if args.sets:
@@ -181,7 +292,7 @@ def cmd_simstudy(args: argparse.Namespace) -> int:
         rows, base=scene, sets=sets, metric=args.metric,
         on_trial=lambda t: print(f"{t.label} {t.params}: {t.score:.3f}"), **calib,
     )  # fmt: skip
-    _write_trials(out, trials, args.metric, "simulation-parameter study")
+    _write_trials(out, _records(trials), _keys(trials), args.metric, "simulation-parameter study")
     best = best_trial(trials)
     chosen = {"label": best.label, "params": best.params, args.metric: best.score}
     write_atomic(out / "chosen.json", json.dumps(chosen, indent=2) + "\n")
@@ -336,15 +447,27 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--penalty", type=float, default=0.02,
                    help="Brier penalty at the deepest proxy candidate")  # fmt: skip
     p.set_defaults(func=cmd_evaluate)
-    p = csub.add_parser("tune", help="tune mu and gap (LHS rounds or TPE); save a profile")
+    p = csub.add_parser("tune", help="tune scene settings and proxy depths jointly (TPE, "
+                        "resumable; or LHS rounds); save the best as a profile")  # fmt: skip
     _shared(p)
     p.add_argument("--method", choices=("lhs", "tpe"), default="tpe")
-    p.add_argument("--trials", type=int, default=12, help="trials (per round for lhs)")
-    p.add_argument("--mu-min", type=float, default=0.2)
-    p.add_argument("--mu-max", type=float, default=0.8)
-    p.add_argument("--gap-min-mm", type=float, default=5.0)
-    p.add_argument("--gap-max-mm", type=float, default=40.0)
-    p.add_argument("--metric", default="f05")
+    p.add_argument("--trials", type=int, default=12,
+                   help="complete trials in the study (tpe; earlier runs count), or trials per "
+                   "round (lhs)")  # fmt: skip
+    p.add_argument("--space", help="NAME=LO:HI[:log],... e.g. mu=0.3:0.8,gap_mm=8:16,"
+                   "layout.pulley_radius_m=0.01:0.025,physics.solref[0]=0.002:0.02:log,"
+                   "object.o1.front_depth_mm=0:30 (default: mu and gap_mm)")  # fmt: skip
+    p.add_argument("--mu-min", type=float, help="shorthand: mu=MIN:MAX (default 0.2:0.8)")
+    p.add_argument("--mu-max", type=float)
+    p.add_argument("--gap-min-mm", type=float, help="shorthand: gap_mm=MIN:MAX (default 5:40)")
+    p.add_argument("--gap-max-mm", type=float)
+    p.add_argument("--metric", default="f05",
+                   help="objective: f05 (default, maximised) or brier (minimised; the Brier "
+                   "score of P(success) per row over the runs)")  # fmt: skip
+    p.add_argument("--penalty", type=float, default=0.02,
+                   help="weight of the proxy-depth penalty towards the family prior")  # fmt: skip
+    p.add_argument("--storage", help="optuna RDB URL (tpe; default sqlite:///OUT/tune.sqlite)")
+    p.add_argument("--study-name", help="study name (default: derived from the settings)")
     p.add_argument("--name", default="calibrated", help="name of the saved profile")
     p.add_argument("--save-profile", help="profile path (default OUT/profile.toml)")
     p.set_defaults(func=cmd_tune)

@@ -26,16 +26,26 @@ _RESULT_KEYS = (
 def cmd_transfer(args: argparse.Namespace) -> int:
     """One virtual experiment E^V: there and, if that worked, back."""
     from transfertwin.sim import SceneConfig, render_strip
-    from transfertwin.study.experiment import ExperimentSpec, run_experiment, system_for
+    from transfertwin.study.experiment import (
+        ExperimentSpec,
+        load_profile,
+        run_experiment,
+        system_for,
+    )
 
     image = out_file(args.image, (".png",)) if args.image else None
+    scene = load_profile(args.profile)[1] if args.profile else SceneConfig()
+    if args.mu is not None:
+        scene = scene.with_overrides(mu=args.mu)
+    if args.gap_mm is not None:
+        scene = scene.with_overrides(gap_m=args.gap_mm / 1000.0)
     spec = ExperimentSpec(
         object_ref=args.object,
         face=args.face,
         conveyor=args.conveyor,
         theta_deg=args.theta,
         docking_error=parse_dock_error(args.dock_error),
-        scene=SceneConfig(mu=args.mu, gap_m=args.gap_mm / 1000.0),
+        scene=scene,
         seed=args.seed,
         units=args.units,
         record=image is not None,
@@ -142,8 +152,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--conveyor", required=True, help="left, right or both")
     p.add_argument("--theta", required=True, type=int, help="yaw in integer degrees, -179..180")
     p.add_argument("--dock-error", default="0,0,0", help="X_MM,Y_MM,THETA_DEG (default 0,0,0)")
-    p.add_argument("--mu", type=float, default=0.489, help="dynamic friction (default 0.489)")
-    p.add_argument("--gap-mm", type=float, default=11.88, help="nominal gap (default 11.88)")
+    p.add_argument("--profile", help="physics profile TOML or built-in name (default: defaults)")
+    p.add_argument("--mu", type=float, help="dynamic friction (default: the profile's, 0.489)")
+    p.add_argument("--gap-mm", type=float, help="nominal gap (default: the profile's, 11.88)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--image", help="write a strip of frames from t0 to t_end to this PNG")

@@ -99,10 +99,12 @@ def _toml_value(value: object) -> str:
     return repr(value)
 
 
-def profile_toml(name: str, cfg: SceneConfig) -> str:
-    """The TOML text of a profile holding every setting of `cfg`."""
+def profile_toml(name: str, cfg: SceneConfig, comment: str | None = None) -> str:
+    """The TOML text of a profile holding every setting of `cfg`, after `comment` as
+    ``#`` lines (if given)."""
     data = scene_to_dict(cfg)
-    lines = [f"name = {_toml_value(name)}", "", "[scene]"]
+    lines = [f"# {line}".rstrip() for line in (comment or "").splitlines()]
+    lines += [f"name = {_toml_value(name)}", "", "[scene]"]
     for key, value in data.items():
         if key not in _SECTIONS:
             lines.append(f"{key} = {_toml_value(value)}")
@@ -112,6 +114,8 @@ def profile_toml(name: str, cfg: SceneConfig) -> str:
     return "\n".join(lines) + "\n"
 
 
-def save_profile(path: str | Path, name: str, cfg: SceneConfig) -> Path:
-    """Write a profile atomically."""
-    return write_atomic(path, profile_toml(name, cfg))
+def save_profile(
+    path: str | Path, name: str, cfg: SceneConfig, comment: str | None = None
+) -> Path:
+    """Write a profile atomically (with `comment` as leading ``#`` lines)."""
+    return write_atomic(path, profile_toml(name, cfg, comment))

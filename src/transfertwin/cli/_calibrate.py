@@ -239,8 +239,11 @@ def cmd_tune(args: argparse.Namespace) -> int:
         records = [(f"T{t.number}", t) for t in study.trials]
         best = study.best()
         where = f"study {study.name} in {storage}"
-        print(f"{where}: {len(study.trials)} complete trials ({study.added} added now"
-              + (f", {study.stale} interrupted marked failed" if study.stale else "") + ")")
+        print(
+            f"{where}: {len(study.trials)} complete trials ({study.added} added now"
+            + (f", {study.stale} interrupted marked failed" if study.stale else "")
+            + ")"
+        )
     if work.is_dir() and not any(work.iterdir()):
         work.rmdir()
     _write_trials(out, records, space.names(), args.metric,

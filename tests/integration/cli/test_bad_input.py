@@ -16,6 +16,7 @@ HEADER = (
     "dock_err_x_mm,dock_err_y_mm,dock_err_theta_deg\n"
 )
 T = ["transfer", "--object", "o1", "--face", "front", "--conveyor", "both", "--theta", "0"]
+TUNE = ["calibrate", "tune", "--out", "t", "--limit", "6"]
 STUDY = ["study", "run", "--db", "s.sqlite", "--objects", "o1", "--theta-step", "180"]
 
 BAD: list[tuple[str, list[str]]] = [
@@ -79,6 +80,25 @@ BAD: list[tuple[str, list[str]]] = [
         ["calibrate", "object", "--object", "o1", "--family", "x", "--out", "o"],
     ),
     ("calibrate object unknown id", ["calibrate", "object", "--object", "o99", "--out", "o"]),
+    ("tune unknown space setting", [*TUNE, "--space", "friction=0:1"]),
+    ("tune space low above high", [*TUNE, "--space", "mu=0.8:0.3"]),
+    ("tune space not a range", [*TUNE, "--space", "mu=0.3"]),
+    ("tune log space from zero", [*TUNE, "--space", "mu=0:0.8:log"]),
+    ("tune space string setting", [*TUNE, "--space", "physics.solver=1:2"]),
+    ("tune space whole tuple", [*TUNE, "--space", "physics.solref=0.002:0.02"]),
+    ("tune space value refused", [*TUNE, "--space", "layout.pulley_radius_m=0.01:0.4"]),
+    ("tune unknown object face", [*TUNE, "--space", "object.o1.side_depth_mm=0:30"]),
+    ("tune object without rows", [*TUNE, "--space", "object.o99.front_depth_mm=0:30"]),
+    ("tune depth beyond 100 mm", [*TUNE, "--space", "object.o1.front_depth_mm=0:300"]),
+    ("tune mu twice", [*TUNE, "--space", "mu=0.3:0.5", "--mu-min", "0.2"]),
+    ("tune shorthand low above high", [*TUNE, "--mu-min", "0.9"]),
+    ("tune unknown metric", [*TUNE, "--metric", "auc"]),
+    ("tune zero trials", [*TUNE, "--trials", "0"]),
+    ("tune negative penalty", [*TUNE, "--penalty", "-1"]),
+    ("tune storage not a url", [*TUNE, "--storage", "t.sqlite"]),
+    ("tune lhs with storage", [*TUNE, "--method", "lhs", "--storage", "sqlite:///t.sqlite"]),
+    ("tune profile not toml", [*TUNE, "--save-profile", "p.txt"]),
+    ("transfer missing profile", [*T, "--profile", "missing.toml"]),
     ("unknown command", ["frobnicate"]),
 ]
 

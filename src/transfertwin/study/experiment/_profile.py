@@ -114,8 +114,6 @@ def profile_toml(name: str, cfg: SceneConfig, comment: str | None = None) -> str
     return "\n".join(lines) + "\n"
 
 
-def save_profile(
-    path: str | Path, name: str, cfg: SceneConfig, comment: str | None = None
-) -> Path:
+def save_profile(path: str | Path, name: str, cfg: SceneConfig, comment: str | None = None) -> Path:
     """Write a profile atomically (with `comment` as leading ``#`` lines)."""
     return write_atomic(path, profile_toml(name, cfg, comment))

@@ -175,7 +175,7 @@ def _open(storage: str | None, name: str, settings: Mapping[str, object], metric
     import optuna
     from optuna.trial import TrialState
 
-    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    optuna.logging.set_verbosity(optuna.logging.ERROR)
     if storage is None:
         store = optuna.storages.InMemoryStorage()
     else:

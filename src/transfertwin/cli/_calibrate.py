@@ -193,6 +193,7 @@ def cmd_tune(args: argparse.Namespace) -> int:
     from transfertwin.objects import write_proxy
     from transfertwin.study.calibration import (
         best_trial,
+        open_storage,
         parse_space,
         scene_with,
         trial_proxies,
@@ -216,8 +217,11 @@ def cmd_tune(args: argparse.Namespace) -> int:
     out = out_dir(args.out)
     profile = out_file(args.save_profile, (".toml",)) if args.save_profile else None
     profile = profile or out / "profile.toml"
-    out.mkdir(parents=True, exist_ok=True)
+    if args.method == "tpe" and not args.storage:
+        out.mkdir(parents=True, exist_ok=True)  # for the default sqlite storage
     storage = args.storage or f"sqlite:///{(out / 'tune.sqlite').resolve()}"
+    if args.method == "tpe":
+        open_storage(storage)
     work = out / "trials"
     metric = args.metric
     show = lambda t: print(f"T{t.number} {t.params}: {metric} "  # noqa: E731

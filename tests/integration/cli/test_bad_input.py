@@ -96,6 +96,7 @@ BAD: list[tuple[str, list[str]]] = [
     ("tune zero trials", [*TUNE, "--trials", "0"]),
     ("tune negative penalty", [*TUNE, "--penalty", "-1"]),
     ("tune storage not a url", [*TUNE, "--storage", "t.sqlite"]),
+    ("tune storage unreachable", [*TUNE, "--storage", "sqlite:////nonexistent/dir/t.db"]),
     ("tune lhs with storage", [*TUNE, "--method", "lhs", "--storage", "sqlite:///t.sqlite"]),
     ("tune profile not toml", [*TUNE, "--save-profile", "p.txt"]),
     ("transfer missing profile", [*T, "--profile", "missing.toml"]),

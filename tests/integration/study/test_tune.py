@@ -159,6 +159,10 @@ def test_best_trial_is_saved_as_a_profile_with_proxies_that_other_commands_accep
            str(out / "profile.toml"), "--object-map", best["object_map"], "--out",
            str(tmp_path / "again")]  # fmt: skip
     assert main(run) == 0
+    study = ["study", "run", "--db", str(tmp_path / "s.sqlite"), "--objects", str(proxy),
+             "--theta-step", "180", "--runs", "1", "--max-experiments", "1", "--workers", "1",
+             "--profile", str(out / "profile.toml")]  # fmt: skip
+    assert main(study) == 0
 
 
 def test_lhs_searches_the_same_joint_space(tmp_path):

@@ -45,6 +45,7 @@ __all__ = [
     "STARTUP_TRIALS",
     "TuneStudy",
     "TunedTrial",
+    "open_storage",
     "study_name_for",
     "study_settings",
     "tune_tpe",
@@ -170,19 +171,27 @@ def _suggest(ot, space: SearchSpace) -> dict[str, object]:
     return params
 
 
+def open_storage(url: str):
+    """optuna's RDB storage at `url` (created if missing); InputError if it cannot be
+    opened."""
+    import optuna
+    from sqlalchemy.exc import SQLAlchemyError
+
+    optuna.logging.set_verbosity(optuna.logging.ERROR)
+    try:
+        return optuna.storages.RDBStorage(url)
+    except (ValueError, ImportError, SQLAlchemyError) as exc:
+        reason = str(exc).splitlines()[0]
+        raise InputError(f"--storage {url!r}: cannot open ({reason})") from None
+
+
 def _open(storage: str | None, name: str, settings: Mapping[str, object], metric: str):
     """(optuna study, number of stale trials marked failed)."""
     import optuna
     from optuna.trial import TrialState
 
     optuna.logging.set_verbosity(optuna.logging.ERROR)
-    if storage is None:
-        store = optuna.storages.InMemoryStorage()
-    else:
-        try:
-            store = optuna.storages.RDBStorage(storage)
-        except (ValueError, ImportError) as exc:
-            raise InputError(f"--storage {storage!r}: {exc}") from None
+    store = optuna.storages.InMemoryStorage() if storage is None else open_storage(storage)
     direction = "maximize" if higher_is_better(metric) else "minimize"
     study = optuna.create_study(storage=store, study_name=name, direction=direction,
                                 load_if_exists=True)  # fmt: skip

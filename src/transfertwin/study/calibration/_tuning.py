@@ -16,6 +16,7 @@ replays its rows with proxies written to a work folder under a content-addressed
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import logging
@@ -122,8 +123,9 @@ def replay_trial(
     scene = scene_with(base, params)
     if not proxies:
         return calibrate(rows, scene=scene, object_map=mapping, **calib)
-    with tempfile.TemporaryDirectory(prefix="tune-") as tmp:
-        folder = Path(work_dir) if work_dir is not None else Path(tmp)
+    temporary = tempfile.TemporaryDirectory(prefix="tune-") if work_dir is None else None
+    with temporary or contextlib.nullcontext():
+        folder = Path(temporary.name if temporary is not None else work_dir)
         folder.mkdir(parents=True, exist_ok=True)
         written = []
         try:

@@ -17,6 +17,7 @@ Public surface:
 
 from transfertwin.objects._builtin import (
     BuiltinDataError,
+    builtin_features,
     builtin_ids,
     features_version,
     is_builtin_id,
@@ -53,6 +54,7 @@ __all__ = [
     "ObjectModel",
     "Protrusion",
     "ProxySpec",
+    "builtin_features",
     "builtin_ids",
     "core_spec",
     "decompose_hulls",

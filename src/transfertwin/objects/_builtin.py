@@ -24,7 +24,7 @@ from transfertwin.objects._features import FEATURES_NAME, read_features
 from transfertwin.objects._hulls import hulls_from_npz_bytes
 from transfertwin.objects._mass import mass_properties
 from transfertwin.objects._model import ObjectModel
-from transfertwin.objects._proxy import ProxySpec, proxy_model
+from transfertwin.objects._proxy import Protrusion, ProxySpec, proxy_model
 from transfertwin.objects._stl import mesh_content_hash
 
 if TYPE_CHECKING:
@@ -33,6 +33,7 @@ if TYPE_CHECKING:
 __all__ = [
     "MANIFEST_NAME",
     "BuiltinDataError",
+    "builtin_features",
     "builtin_ids",
     "cores_data_dir",
     "features_version",
@@ -85,6 +86,19 @@ def load_builtin(object_id: str, *, features: bool = True) -> ObjectModel:
         BuiltinDataError: If the package data is missing or corrupt.
     """
     return load_builtin_from(cores_data_dir(), object_id, features=features)
+
+
+def builtin_features(object_id: str) -> tuple[Protrusion, ...]:
+    """The shipped resting features of built-in core ``object_id`` (empty if none listed)."""
+    try:
+        return _features_table().get(object_id, ())
+    except ValueError as exc:
+        raise BuiltinDataError(f"core data: {exc}") from exc
+
+
+@functools.cache
+def _features_table() -> dict[str, tuple[Protrusion, ...]]:
+    return read_features(cores_data_dir())
 
 
 @functools.cache

@@ -11,7 +11,7 @@ import pytest
 from transfertwin import InputError
 from transfertwin.cli import main
 from transfertwin.data import calibration_csv_path
-from transfertwin.objects import load_object, read_proxy
+from transfertwin.objects import builtin_features, load_builtin, load_object, read_proxy
 from transfertwin.sim import SceneConfig
 from transfertwin.store import read_results
 from transfertwin.study import load_profile
@@ -150,7 +150,10 @@ def test_best_trial_is_saved_as_a_profile_with_proxies_that_other_commands_accep
     assert best["object_map"] == f"o1={proxy}"
     depth = best["params"]["object.o1.front_depth_mm"]
     assert read_proxy(proxy).protrusions[0].depth_m == pytest.approx(depth / 1000)
-    assert len(load_object(str(proxy)).hulls) == len(load_object("o1").hulls) + (depth > 0)
+    back = [p.depth_m for p in builtin_features("o1") if p.face == "back"]  # kept: not tuned
+    assert [p.depth_m for p in read_proxy(proxy).protrusions[1:]] == back
+    assert len(load_object(str(proxy)).hulls) == len(load_builtin("o1", features=False).hulls) + (
+        depth > 0) + sum(d > 0 for d in back)  # fmt: skip
     assert not (out / "trials").exists()
     t = ["transfer", "--object", str(proxy), "--face", "front", "--conveyor", "both",
          "--theta", "0", "--profile", str(out / "profile.toml"), "--json"]  # fmt: skip

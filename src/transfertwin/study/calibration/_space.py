@@ -31,7 +31,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 
 from transfertwin._errors import InputError
-from transfertwin.objects import Protrusion, ProxySpec, builtin_ids
+from transfertwin.objects import Protrusion, ProxySpec, builtin_features, builtin_ids
 from transfertwin.sim import SceneConfig
 
 __all__ = [
@@ -263,7 +263,8 @@ def trial_proxies(
 ) -> dict[str, ProxySpec]:
     """Real object id → the proxy described by the ``object.*`` depths in `params`: the
     object's reference in `object_map` (a built-in id, or a file, stored as an absolute
-    path) with one protrusion per tuned face, faces in order front, back."""
+    path) with one protrusion per tuned face, faces in order front, back; a face that is not
+    tuned keeps a built-in core's shipped feature (`transfertwin.objects.builtin_features`)."""
     depths: dict[str, dict[str, float]] = {}
     for key, value in params.items():
         m = _OBJECT.match(key)
@@ -274,6 +275,11 @@ def trial_proxies(
     for oid, faces in sorted(depths.items()):
         ref = object_map.get(oid, oid)
         base = ref if ref in known else str(Path(ref).resolve())
-        prots = tuple(Protrusion(face, faces[face]) for face in ("front", "back") if face in faces)
+        shipped = {p.face: p for p in builtin_features(ref)} if ref in known else {}
+        prots = tuple(
+            Protrusion(face, faces[face]) if face in faces else shipped[face]
+            for face in ("front", "back")
+            if face in faces or face in shipped
+        )
         proxies[oid] = ProxySpec(oid, base, prots, note="tuned proxy (calibrate tune), not a scan")
     return proxies

@@ -27,6 +27,7 @@ LAYERS: tuple[str, ...] = (
     "study.docking",
     "study.experiment",
     "study.fullstate",
+    "study.adaptive",
     "study.calibration",
     "study.validation",
     "study",

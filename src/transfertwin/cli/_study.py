@@ -8,6 +8,7 @@ from pathlib import Path
 from rich.console import Console
 from rich.table import Table
 
+from transfertwin._errors import InputError
 from transfertwin.cli._common import parse_dock_error, positive_int, worker_count
 from transfertwin.cli._paths import out_dir, out_file
 from transfertwin.cli._progress import progress_bar
@@ -30,6 +31,7 @@ def _plan_from_args(args: argparse.Namespace):  # -> StudyPlan
     else:
         docking = docking_model(args.docking, args.docking_csv)
     return StudyPlan(
+        **_sampling_from_args(args),
         objects=objects,
         theta_step=args.theta_step if args.theta_step is not None else preset.theta_step,
         runs=args.runs if args.runs is not None else preset.runs,
@@ -39,6 +41,31 @@ def _plan_from_args(args: argparse.Namespace):  # -> StudyPlan
         units=args.units,
         **kwargs,
     )
+
+
+_ADAPTIVE_OPTIONS = {  # CLI option → AdaptivePolicy field
+    "adaptive_first_runs": "first_runs",
+    "adaptive_batch": "batch_runs",
+    "adaptive_interval": "interval",
+    "adaptive_confidence": "confidence",
+    "adaptive_epsilon": "epsilon",
+}
+
+
+def _sampling_from_args(args: argparse.Namespace) -> dict[str, object]:
+    """``sampling`` and ``sampling_options`` of the plan; adaptive settings are checked."""
+    given = {
+        f: getattr(args, o) for o, f in _ADAPTIVE_OPTIONS.items() if getattr(args, o) is not None
+    }
+    if args.sampling != "adaptive":
+        if given:
+            opts = ", ".join(f"--{o.replace('_', '-')}" for o in _ADAPTIVE_OPTIONS)
+            raise InputError(f"{opts} need --sampling adaptive")
+        return {}
+    from transfertwin.study.adaptive import AdaptivePolicy
+
+    policy = AdaptivePolicy(**given)  # validates
+    return {"sampling": "adaptive", "sampling_options": tuple(policy.describe().items())}
 
 
 def cmd_study_run(args: argparse.Namespace) -> int:
@@ -55,19 +82,33 @@ def cmd_study_run(args: argparse.Namespace) -> int:
     console = Console(stderr=True)
     with SQLiteResultStore(db) as store:
         store.init_plan(plan.plan_hash, plan.to_json())  # refuses another plan up front
+        adaptive = plan.sampling == "adaptive"
         console.print(
             f"plan {plan.plan_hash[:12]}: {len(plan.objects)} objects x "
-            f"{len(plan.states())} states x {plan.runs} runs = {plan.n_experiments} experiments, "
+            f"{len(plan.states())} states x {'at most ' if adaptive else ''}{plan.runs} runs = "
+            f"{plan.n_experiments} experiments, {plan.sampling} sampling, "
             f"profile {plan.profile_name}, {workers} workers"
         )
         with progress_bar("study", console) as on_progress:
-            outcome = run_study(plan, store, workers=workers, on_progress=on_progress,
-                                max_experiments=args.max_experiments)  # fmt: skip
+            if adaptive:
+                from transfertwin.study.adaptive import run_adaptive
+
+                outcome = run_adaptive(plan, store, workers=workers, on_progress=on_progress,
+                                       max_experiments=args.max_experiments)  # fmt: skip
+            else:
+                outcome = run_study(plan, store, workers=workers, on_progress=on_progress,
+                                    max_experiments=args.max_experiments)  # fmt: skip
         _print_summary(summarize(store.rows()), console)
         console.print(
             f"{outcome.ran} new results in {outcome.seconds:.1f} s ({outcome.rate:.2f} exp/s); "
             f"{store.count()}/{plan.n_experiments} done"
         )
+        if adaptive:
+            state = "finished" if outcome.finished else "not finished: rerun to continue"
+            console.print(
+                f"adaptive: {outcome.runs} runs = {outcome.fraction:.1%} of the exhaustive "
+                f"{plan.n_experiments}; {state}"
+            )
     if outcome.interrupted:
         console.print("interrupted: results so far are stored; rerun the same command to resume")
         return 130
@@ -97,7 +138,12 @@ def cmd_study_status(args: argparse.Namespace) -> int:
         planned = StudyPlan.from_json(stored.plan_json).n_experiments if stored else 0
         print(f"db: {args.db}")
         print(f"plan: {stored.plan_hash[:12] if stored else '-'}")
-        print(f"done: {store.count()}/{planned}")
+        plan = StudyPlan.from_json(stored.plan_json) if stored else None
+        print(f"sampling: {plan.sampling if plan else '-'}")
+        print(
+            f"done: {store.count()}/{planned}"
+            + (" (at most)" if plan and plan.sampling == "adaptive" else "")
+        )
         for status, n in sorted(store.count_by_status().items()):
             print(f"  {status}: {n}")
     return 0
@@ -155,6 +201,19 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--dock-error", help="X_MM,Y_MM,THETA_DEG: one fixed docking error for all "
                    "experiments instead of resampled measurements")  # fmt: skip
     p.add_argument("--max-experiments", type=int, help="stop after this many new results")
+    p.add_argument("--sampling", choices=("exhaustive", "adaptive"), default="exhaustive",
+                   help="exhaustive: --runs runs per state; adaptive: rounds of runs where "
+                   "they can change the best/worst state, at most --runs per state")  # fmt: skip
+    p.add_argument("--adaptive-first-runs", type=int, help="runs per state in the first "
+                   "round (default 5)")  # fmt: skip
+    p.add_argument("--adaptive-batch", type=int, help="runs added per chosen state and "
+                   "round (default 5)")  # fmt: skip
+    p.add_argument("--adaptive-interval", help="beta (Jeffreys posterior, default) or "
+                   "clopper-pearson (exact, Bonferroni over looks)")  # fmt: skip
+    p.add_argument("--adaptive-confidence", type=float, help="level of the per-state "
+                   "intervals (default 0.9)")  # fmt: skip
+    p.add_argument("--adaptive-epsilon", type=float, help="indifference zone in success "
+                   "share (default 0.1)")  # fmt: skip
     p.set_defaults(func=cmd_study_run)
     p = ssub.add_parser("status", help="done/planned and rows by status")
     p.add_argument("--db", required=True)

@@ -1,5 +1,6 @@
 """Adaptive sampling of a full-state study: runs where they can change the best/worst answer."""
 
+from transfertwin.study.adaptive._driver import AdaptiveOutcome, adaptive_policy, run_adaptive
 from transfertwin.study.adaptive._policy import INTERVAL_KINDS, AdaptivePolicy
 from transfertwin.study.adaptive._sampler import ObjectSampler, StateKey
 from transfertwin.study.adaptive._synthetic import (
@@ -12,11 +13,14 @@ from transfertwin.study.adaptive._synthetic import (
 
 __all__ = [
     "INTERVAL_KINDS",
+    "AdaptiveOutcome",
     "AdaptivePolicy",
     "ObjectSampler",
     "StateKey",
     "SyntheticRun",
+    "adaptive_policy",
     "agrees",
+    "run_adaptive",
     "selection_of_counts",
     "simulate_bernoulli",
     "smooth_landscape",

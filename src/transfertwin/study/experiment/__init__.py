@@ -12,6 +12,7 @@ from transfertwin.study.experiment._experiment import (
 )
 from transfertwin.study.experiment._plan import (
     PRESETS,
+    SAMPLING_MODES,
     Preset,
     StudyPlan,
     experiment_seeds,
@@ -37,6 +38,7 @@ from transfertwin.study.experiment._runner import (
 __all__ = [
     "PRESETS",
     "RESULT_COLUMNS",
+    "SAMPLING_MODES",
     "ExperimentResult",
     "ExperimentSpec",
     "Frame",

@@ -12,7 +12,7 @@ from __future__ import annotations
 import hashlib
 import json
 import zlib
-from collections.abc import Iterator
+from collections.abc import Container, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -26,7 +26,19 @@ from transfertwin.study.docking import DockingErrorModel, docking_model_from_dic
 from transfertwin.study.experiment._experiment import ExperimentSpec
 from transfertwin.study.experiment._profile import scene_to_dict
 
-__all__ = ["PRESETS", "Preset", "StudyPlan", "experiment_seeds", "parse_objects", "plan_parameters"]
+__all__ = [
+    "PRESETS",
+    "SAMPLING_MODES",
+    "Preset",
+    "StudyPlan",
+    "experiment_seeds",
+    "parse_objects",
+    "plan_parameters",
+]
+
+#: How a study chooses its runs: every planned run, or rounds chosen by
+#: `transfertwin.study.adaptive.run_adaptive` (at most the planned runs per state).
+SAMPLING_MODES = ("exhaustive", "adaptive")
 
 
 @dataclass(frozen=True)
@@ -73,7 +85,13 @@ def experiment_seeds(master: int, object_id: str, state_idx: int, run: int) -> t
 
 @dataclass(frozen=True)
 class StudyPlan:
-    """What a study runs. Experiments are ordered object by object, then state, then run."""
+    """What a study runs. Experiments are ordered object by object, then state, then run.
+
+    ``sampling`` is ``"exhaustive"`` (every run) or ``"adaptive"`` (``runs`` is then the most
+    runs a state gets; ``sampling_options`` holds the adaptive settings as sorted
+    ``(name, value)`` pairs). An exhaustive plan's description has no ``sampling`` entry, so
+    its hash is the one it had before adaptive sampling existed.
+    """
 
     objects: tuple[str, ...]
     theta_step: int
@@ -83,8 +101,16 @@ class StudyPlan:
     scene: SceneConfig = field(default_factory=SceneConfig)
     profile_name: str = "default"
     units: str = "m"
+    sampling: str = "exhaustive"
+    sampling_options: tuple[tuple[str, object], ...] = ()
 
     def __post_init__(self) -> None:
+        if self.sampling not in SAMPLING_MODES:
+            modes = ", ".join(SAMPLING_MODES)
+            raise InputError(f"--sampling must be one of {modes}, got {self.sampling!r}")
+        if self.sampling == "exhaustive" and self.sampling_options:
+            raise InputError("adaptive sampling options given for an exhaustive study")
+        object.__setattr__(self, "sampling_options", tuple(sorted(self.sampling_options)))
         if self.runs < 1:
             raise InputError(f"--runs must be >= 1, got {self.runs}")
         if not 1 <= self.theta_step <= 360:
@@ -115,7 +141,11 @@ class StudyPlan:
             "units": self.units,
             "scene": scene_to_dict(self.scene),
             "core_features": features_version() if any(map(is_builtin_id, self.objects)) else None,
-        }
+        } | (
+            {"sampling": {"mode": self.sampling, **dict(self.sampling_options)}}
+            if self.sampling != "exhaustive"
+            else {}
+        )
 
     def to_json(self) -> str:
         """Canonical JSON of `describe()`."""
@@ -132,6 +162,8 @@ class StudyPlan:
         from transfertwin.study.experiment._profile import scene_from_dict
 
         d = json.loads(text)
+        sampling = dict(d.get("sampling", {"mode": "exhaustive"}))
+        mode = str(sampling.pop("mode"))
         return cls(
             objects=tuple(d["objects"]),
             theta_step=int(d["theta_step"]),
@@ -141,6 +173,8 @@ class StudyPlan:
             scene=scene_from_dict(d["scene"]),
             profile_name=str(d.get("profile", "default")),
             units=str(d.get("units", "m")),
+            sampling=mode,
+            sampling_options=tuple(sampling.items()),
         )
 
     def keys(self, object_ids: dict[str, str]) -> Iterator[tuple[str, str, str, int, int]]:
@@ -151,7 +185,7 @@ class StudyPlan:
                     yield object_ids[ref], s.face, s.conveyor, s.theta_deg, run
 
     def specs(
-        self, object_ids: dict[str, str], skip: frozenset | set = frozenset()
+        self, object_ids: dict[str, str], skip: Container[tuple] = frozenset()
     ) -> Iterator[tuple[tuple, ExperimentSpec]]:
         """(store key, spec) of every experiment not in `skip`, in plan order.
 

@@ -15,7 +15,7 @@ import os
 import threading
 import time
 from collections import Counter, defaultdict
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Collection, Container, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass
 
@@ -110,10 +110,23 @@ def check_plan(plan: StudyPlan) -> dict[str, str]:
     return object_ids
 
 
-def _pending(plan: StudyPlan, done: set[tuple]) -> tuple[int, Iterator[ExperimentSpec]]:
+class _Skip:
+    """Keys done, or outside the requested ones."""
+
+    def __init__(self, done: set[tuple], only: frozenset[tuple]) -> None:
+        self.done, self.only = done, only
+
+    def __contains__(self, key: object) -> bool:
+        return key in self.done or key not in self.only
+
+
+def _pending(
+    plan: StudyPlan, done: set[tuple], only: Collection[tuple] | None = None
+) -> tuple[int, Iterator[ExperimentSpec]]:
     object_ids = check_plan(plan)
-    todo = sum(1 for key in plan.keys(object_ids) if key not in done)
-    return todo, (spec for _, spec in plan.specs(object_ids, done))
+    skip: Container[tuple] = done if only is None else _Skip(done, frozenset(only))
+    todo = sum(1 for key in plan.keys(object_ids) if key not in skip)
+    return todo, (spec for _, spec in plan.specs(object_ids, skip))
 
 
 def run_rows(specs: Iterable[ExperimentSpec], workers: int) -> Iterator[dict[str, object]]:
@@ -155,8 +168,9 @@ def run_study(
     max_experiments: int | None = None,
     on_result: Callable[[dict[str, object]], None] | None = None,
     on_progress: Callable[[int, int], None] | None = None,
+    keys: Collection[tuple] | None = None,
 ) -> StudyOutcome:
-    """Run every experiment of `plan` not yet in `store`.
+    """Run every experiment of `plan` not yet in `store` (or only those of `keys`).
 
     Args:
         plan: The study plan; stored on first use, and a different plan is refused.
@@ -166,6 +180,9 @@ def run_study(
         on_result: Called with each stored row.
         on_progress: Called with (done, total) of this call's experiments, once before the
             first result and after each one.
+        keys: Run only the experiments with these store keys (object_id, face, conveyor,
+            theta_deg, run) — a round of an adaptive study; keys outside the plan are
+            ignored. Required for an adaptive plan, which `run_adaptive` drives.
 
     Returns:
         Counts and timing; `interrupted` is True after Ctrl-C (results so far are kept).
@@ -174,9 +191,11 @@ def run_study(
         raise InputError(f"workers must be at least 1, got {workers}")
     if max_experiments is not None and max_experiments < 1:
         raise InputError(f"max_experiments must be at least 1, got {max_experiments}")
+    if plan.sampling != "exhaustive" and keys is None:
+        raise InputError(f"a {plan.sampling} plan runs in rounds: use run_adaptive")
     store.init_plan(plan.plan_hash, plan.to_json())
     done = store.done_keys()
-    todo, specs = _pending(plan, done)
+    todo, specs = _pending(plan, done, keys)
     if max_experiments is not None:
         todo = min(todo, max_experiments)
         specs = itertools.islice(specs, todo)

@@ -74,7 +74,7 @@ def synthetic(args: argparse.Namespace) -> None:
     n = args.landscapes
     print(f"synthetic: {n} smooth landscapes x {len(states)} states x {args.synthetic_runs} "
           f"runs; {policy}")  # fmt: skip
-    print(_line("synthetic", n, best, worst, both, runs, total))
+    print(_line("synthetic", n, best, worst, both, runs, total), flush=True)
     print(f"synthetic: truly within epsilon={policy.epsilon} of the true extreme: best "
           f"{true_best / n:.1%}, worst {true_worst / n:.1%}; "
           f"{time.perf_counter() - t0:.1f} s")  # fmt: skip

@@ -35,6 +35,13 @@ def _positive(owner: str, **values: float) -> None:
             raise InputError(f"{owner}.{name} must be a positive number, got {value!r}")
 
 
+def _bounded(name: str, value: object, limit: float) -> None:
+    """InputError unless `value` is a finite number with |value| <= limit."""
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if not (ok and math.isfinite(value) and abs(value) <= limit):
+        raise InputError(f"{name} must be a number within ±{limit:g}, got {value!r}")
+
+
 @dataclass(frozen=True)
 class PhysicsConfig:
     """MuJoCo solver settings (our analogue of the study's Tables A.3/A.4).
@@ -118,6 +125,14 @@ class LayoutConfig:
             the docking error rotates about (study: not given; 0.40 m chosen).
         barrier_height_m: Height of the light barriers' beams above the belt surface.
         barrier_inset_m: Distance of a barrier from its unit's end.
+        tu_height_offset_m: Height of the docked TU's belt surface above the TM's (a step
+            at the gap; candidate mechanism nobody measured; 0 nominal, within ±50 mm).
+        tu_pitch_deg: Tilt of the docked TU about the gap line (its near end's line, the
+            TU frame's y axis on the belt surface); positive raises the TU's far end, so its
+            belt climbs away from the gap. 0 nominal, within ±10°.
+        tu_roll_deg: Tilt of the docked TU about its centre line (the TU frame's x axis,
+            through the gap line's middle); positive raises the TU's left belt (y > 0).
+            0 nominal, within ±10°.
     """
 
     tm_length_m: float = 0.65
@@ -129,8 +144,14 @@ class LayoutConfig:
     tip_to_centre_m: float = 0.40
     barrier_height_m: float = 0.012
     barrier_inset_m: float = 0.015
+    tu_height_offset_m: float = 0.0
+    tu_pitch_deg: float = 0.0
+    tu_roll_deg: float = 0.0
 
     def __post_init__(self) -> None:
+        _bounded("LayoutConfig.tu_height_offset_m", self.tu_height_offset_m, 0.05)
+        _bounded("LayoutConfig.tu_pitch_deg", self.tu_pitch_deg, 10.0)
+        _bounded("LayoutConfig.tu_roll_deg", self.tu_roll_deg, 10.0)
         _positive(
             "LayoutConfig",
             tm_length_m=self.tm_length_m,
@@ -207,6 +228,15 @@ class SceneConfig:
             the timeout it would become, with t_end = the timeout time. None waits for
             t_max (the reference behaviour).
         stall_tol_m: Displacement below which the object counts as immobile.
+        feature_mu: Friction coefficient of an object's *features* — the protrusion hulls of
+            a calibrated proxy (`transfertwin.objects.ProxySpec`): the steel ears, bolt heads
+            and studs a real core rests on — against the belts and pulleys. None uses `mu`
+            (today's behaviour); no effect on an object without features. (A whole-object
+            override would be the same as changing `mu`: every contact that matters is
+            object-vs-belt.)
+        com_offset_m: Shift of the object's centre of mass along its own x axis (towards the
+            pinion for > 0), a non-uniform mass distribution; the inertia about the centre
+            of mass is kept. 0 nominal, within ±100 mm.
         physics, layout, placement: Sub-configurations.
     """
 
@@ -216,6 +246,8 @@ class SceneConfig:
     t_max_s: float = 30.0
     stall_time_s: float | None = 5.0
     stall_tol_m: float = 0.002
+    feature_mu: float | None = None
+    com_offset_m: float = 0.0
     physics: PhysicsConfig = field(default_factory=PhysicsConfig)
     layout: LayoutConfig = field(default_factory=LayoutConfig)
     placement: PlacementConfig = field(default_factory=PlacementConfig)
@@ -229,6 +261,13 @@ class SceneConfig:
         _positive("SceneConfig", stall_tol_m=self.stall_tol_m)
         if self.stall_time_s is not None:
             _positive("SceneConfig", stall_time_s=self.stall_time_s)
+        if self.feature_mu is not None and not (
+            isinstance(self.feature_mu, (int, float))
+            and math.isfinite(self.feature_mu)
+            and self.feature_mu >= 0
+        ):
+            raise InputError(f"SceneConfig.feature_mu must be >= 0 or none, got {self.feature_mu!r}")
+        _bounded("SceneConfig.com_offset_m", self.com_offset_m, 0.1)
 
     def steps_per_sample(self) -> int:
         """Physics steps between two camera samples (at least 1)."""

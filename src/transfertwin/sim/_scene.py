@@ -176,6 +176,8 @@ def add_object(
     com_m: np.ndarray,
     inertia_kg_m2: np.ndarray,
     physics: PhysicsConfig,
+    feature_hulls: int = 0,
+    feature_mu: float | None = None,
 ) -> None:
     """Add the free-floating object body ``object`` built from convex hulls.
 
@@ -186,7 +188,11 @@ def add_object(
         com_m: Centre of mass (3,) in F_O.
         inertia_kg_m2: Inertia tensor (3, 3) about the centre of mass, in F_O axes.
         physics: For the contact settings (condim, solref, solimp).
+        feature_hulls: How many of the last hulls are features (a proxy's protrusions).
+        feature_mu: Friction of the feature hulls; None leaves them to the belts' μ. Set,
+            the feature geoms get priority 2 (above the belts' 1), so theirs governs.
     """
+    first_feature = len(hulls) - max(0, min(feature_hulls, len(hulls)))
     body = spec.worldbody.add_body(name=OBJECT_BODY, pos=[0, 0, 0.5])
     body.add_freejoint(name=OBJECT_JOINT)
     body.explicitinertial = True
@@ -210,6 +216,9 @@ def add_object(
         geom.contype = 1
         geom.conaffinity = 1
         geom.mass = 0.0
+        if feature_mu is not None and k >= first_feature:
+            geom.priority = 2
+            geom.friction = [feature_mu, 0.005, 0.0001]
 
 
 def build_spec(
@@ -218,10 +227,12 @@ def build_spec(
     com_m: np.ndarray,
     inertia_kg_m2: np.ndarray,
     cfg: SceneConfig,
+    feature_hulls: int = 0,
 ) -> mujoco.MjSpec:
     """The full scene: physics options, TM, TU (mocap), object, a floor and lights.
 
-    The floor lies well below the belts; an object that reaches it has fallen.
+    The floor lies well below the belts; an object that reaches it has fallen. The last
+    `feature_hulls` hulls are the object's features (see `add_object`).
     """
     spec = mujoco.MjSpec()
     spec.modelname = "transfertwin_ots"
@@ -238,5 +249,6 @@ def build_spec(
     spec.worldbody.add_light(name="sun", pos=[0, 0, 2.0], dir=[0, 0, -1], castshadow=False)
     add_unit(spec, "tm", cfg.layout, cfg.mu)
     add_unit(spec, "tu", cfg.layout, cfg.mu)
-    add_object(spec, hulls, mass_kg, com_m, inertia_kg_m2, cfg.physics)
+    add_object(spec, hulls, mass_kg, com_m, inertia_kg_m2, cfg.physics,
+               feature_hulls=feature_hulls, feature_mu=cfg.feature_mu)  # fmt: skip
     return spec

@@ -27,6 +27,7 @@ __all__ = [
     "SimulationUnstable",
     "VirtualTransferSystem",
     "object_quat",
+    "tu_quat",
 ]
 
 
@@ -38,6 +39,22 @@ def _outer_vertices(verts: np.ndarray) -> np.ndarray:
         return np.ascontiguousarray(verts[ConvexHull(verts).vertices])
     except (QhullError, ValueError):
         return verts
+
+
+def tu_quat(yaw_rad: float, pitch_rad: float = 0.0, roll_rad: float = 0.0) -> np.ndarray:
+    """Orientation (w, x, y, z) of the docked TU frame in F_T: the docking yaw about z, then
+    the unmeasured tilt in the TU's own axes — pitch about its y axis (the gap line; positive
+    raises the far end) and roll about its x axis (positive raises the left belt)."""
+    yaw = np.array([math.cos(yaw_rad / 2), 0.0, 0.0, math.sin(yaw_rad / 2)])
+    if pitch_rad == 0.0 and roll_rad == 0.0:
+        return yaw
+    # A rotation by -pitch about +y lifts points at +x (the far end).
+    pitch = np.array([math.cos(-pitch_rad / 2), 0.0, math.sin(-pitch_rad / 2), 0.0])
+    roll = np.array([math.cos(roll_rad / 2), math.sin(roll_rad / 2), 0.0, 0.0])
+    tmp, out = np.empty(4), np.empty(4)
+    mujoco.mju_mulQuat(tmp, yaw, pitch)
+    mujoco.mju_mulQuat(out, tmp, roll)
+    return out
 
 
 class SimulationUnstable(RuntimeError):  # noqa: N818 - names a state, not an error kind
@@ -140,8 +157,11 @@ class VirtualTransferSystem:
 
     Args:
         hulls: Object convex hulls in F_O, each (k, 3) (m).
-        mass_kg, com_m, inertia_kg_m2: Object mass properties in F_O.
+        mass_kg, com_m, inertia_kg_m2: Object mass properties in F_O; the scene's
+            `com_offset_m` shifts the centre of mass along x.
         cfg: Scene configuration.
+        feature_hulls: How many of the last `hulls` are features (a proxy's protrusions),
+            whose friction is the scene's `feature_mu` when that is set.
     """
 
     def __init__(
@@ -151,9 +171,13 @@ class VirtualTransferSystem:
         com_m: np.ndarray,
         inertia_kg_m2: np.ndarray,
         cfg: SceneConfig,
+        feature_hulls: int = 0,
     ) -> None:
         self.cfg = cfg
-        self.model = build_spec(hulls, mass_kg, com_m, inertia_kg_m2, cfg).compile()
+        com_m = np.asarray(com_m, dtype=float) + np.array([cfg.com_offset_m, 0.0, 0.0])
+        self.model = build_spec(
+            hulls, mass_kg, com_m, inertia_kg_m2, cfg, feature_hulls=feature_hulls
+        ).compile()
         self.data = mujoco.MjData(self.model)
         self._body = self.model.body(OBJECT_BODY).id
         joint = self.model.joint(OBJECT_JOINT)
@@ -196,8 +220,11 @@ class VirtualTransferSystem:
             docking_error, self.cfg.gap_m, self.cfg.layout.tip_to_centre_m
         )
         self.tu_pose = (x, y, yaw)
-        self.data.mocap_pos[self._tu_mocap] = (x, y, 0.0)
-        self.data.mocap_quat[self._tu_mocap] = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+        layout = self.cfg.layout
+        self.data.mocap_pos[self._tu_mocap] = (x, y, layout.tu_height_offset_m)
+        self.data.mocap_quat[self._tu_mocap] = tu_quat(
+            yaw, math.radians(layout.tu_pitch_deg), math.radians(layout.tu_roll_deg)
+        )
         mujoco.mj_forward(self.model, self.data)
 
     def place(self, face: str, theta_rad: float, x_m: float, y_m: float) -> None:

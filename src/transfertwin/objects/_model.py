@@ -33,6 +33,8 @@ class ObjectModel:
         source: ``"builtin"`` or the path of the mesh file.
         content_hash: SHA-256 (hex) of the mesh's vertices and faces.
         spec: Procedural specification of a built-in core, None for user meshes.
+        feature_hulls: How many of the last `hulls` are features added by a calibrated
+            proxy (its protrusions); the scene's `feature_mu` applies to those.
     """
 
     object_id: str
@@ -42,6 +44,7 @@ class ObjectModel:
     source: str
     content_hash: str
     spec: CoreSpec | None = None
+    feature_hulls: int = 0
 
     @property
     def is_builtin(self) -> bool:

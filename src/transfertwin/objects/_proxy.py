@@ -102,6 +102,7 @@ def proxy_model(base: ObjectModel, spec: ProxySpec) -> ObjectModel:
     return dataclasses.replace(
         base, object_id=spec.object_id, hulls=tuple(base.hulls) + extra,
         source=f"proxy of {base.source}", spec=None,
+        feature_hulls=base.feature_hulls + len(extra),
     )  # fmt: skip
 
 

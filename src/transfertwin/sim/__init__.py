@@ -33,6 +33,7 @@ from transfertwin.sim._system import (
     SimulationUnstable,
     VirtualTransferSystem,
     object_quat,
+    tu_quat,
 )
 
 __all__ = [
@@ -62,4 +63,5 @@ __all__ = [
     "render_strip",
     "scene_profile",
     "tu_pose_in_tip_frame",
+    "tu_quat",
 ]

@@ -62,10 +62,17 @@ class PhysicsConfig:
         multiccd: Multiple contact points per convex pair (MuJoCo 4's default: on). Off
             makes steps ~20 % cheaper, but a single-hull object (a box) then rocks and
             sinks ~6 mm into the belt; kept on (SPEED.md).
-        condim: Contact dimensionality of object contacts (3: sliding friction; 4 adds
-            torsional, 6 adds rolling).
-        solref: Contact stiffness/damping time constants (s, -).
+        condim: Contact dimensionality of object–belt contacts (3: sliding friction; 4
+            adds torsional, 6 adds rolling).
+        solref: Contact stiffness/damping time constants (s, -) of object–belt contacts;
+            MuJoCo raises a time constant below 2 timesteps to 2 timesteps.
         solimp: Contact impedance (d0, dwidth, width, midpoint, power).
+
+    The contact settings are set on the belt geoms *and* the object's: the belts carry
+    contact priority 1, and MuJoCo takes every contact parameter from the geom of higher
+    priority. (Until this was found they were set on the object only and had no effect;
+    the defaults are the values that were in effect then — MuJoCo's geom defaults —
+    so outcomes did not change.)
     """
 
     timestep_s: float = 0.005
@@ -78,8 +85,8 @@ class PhysicsConfig:
     impratio: float = 1.0
     noslip_iterations: int = 0
     multiccd: bool = True
-    condim: int = 4
-    solref: tuple[float, float] = (0.004, 1.0)
+    condim: int = 3
+    solref: tuple[float, float] = (0.02, 1.0)
     solimp: tuple[float, float, float, float, float] = (0.9, 0.95, 0.001, 0.5, 2.0)
 
     def __post_init__(self) -> None:
@@ -266,7 +273,9 @@ class SceneConfig:
             and math.isfinite(self.feature_mu)
             and self.feature_mu >= 0
         ):
-            raise InputError(f"SceneConfig.feature_mu must be >= 0 or none, got {self.feature_mu!r}")
+            raise InputError(
+                f"SceneConfig.feature_mu must be >= 0 or none, got {self.feature_mu!r}"
+            )
         _bounded("SceneConfig.com_offset_m", self.com_offset_m, 0.1)
 
     def steps_per_sample(self) -> int:
@@ -332,7 +341,7 @@ class DockingError:
 
 def _reference() -> SceneConfig:
     return SceneConfig(
-        physics=PhysicsConfig(timestep_s=0.002, multiccd=True, condim=4),
+        physics=PhysicsConfig(timestep_s=0.002, multiccd=True, condim=3),
         placement=PlacementConfig(settle_time_s=0.6, rest_speed_m_s=None),
         camera_rate_hz=30.0,
         stall_time_s=None,

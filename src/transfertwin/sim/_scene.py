@@ -82,13 +82,18 @@ def add_belt(
     span: UnitGeometry,
     layout: LayoutConfig,
     mu: float,
+    physics: PhysicsConfig | None = None,
 ) -> None:
     """Add one belt (deck + two end pulleys) to `parent`, in the unit's frame.
 
     The top of the belt is at z = 0. Geom names: ``{unit}_{belt}_deck``,
     ``{unit}_{belt}_pulley_start``, ``{unit}_{belt}_pulley_end``. The belts carry
-    priority 1 so that their friction `mu` governs every contact with the object.
+    priority 1 so that their friction `mu` governs every contact with the object — and,
+    because MuJoCo takes *all* contact parameters from the higher-priority geom, also
+    `physics`' condim, solref and solimp, which are therefore set on the belt geoms here
+    (None: MuJoCo's defaults).
     """
+    physics = physics if physics is not None else PhysicsConfig()
     r = layout.pulley_radius_m
     half_w = 0.5 * layout.belt_width_m
     y = layout.belt_centre_y(belt)
@@ -105,6 +110,7 @@ def add_belt(
     deck.surfacevel = np.array([layout.belt_speed_m_s, 0, 0, 0, 0, 0], dtype=float)
     deck.priority = 1
     deck.friction = friction
+    _contact_settings(deck, physics)
     for end, x in (("start", x0), ("end", x1)):
         pulley = parent.add_geom(
             name=belt_geom(unit, belt, f"pulley_{end}"),
@@ -117,6 +123,14 @@ def add_belt(
         pulley.surfacevel = np.array([0, 0, 0, 0, 0, layout.belt_speed_m_s / r], dtype=float)
         pulley.priority = 1
         pulley.friction = friction
+        _contact_settings(pulley, physics)
+
+
+def _contact_settings(geom: mujoco.MjsGeom, physics: PhysicsConfig) -> None:
+    """condim, solref and solimp of `physics` on `geom`."""
+    geom.condim = physics.condim
+    geom.solref = np.asarray(physics.solref, dtype=float)
+    geom.solimp = np.asarray(physics.solimp, dtype=float)
 
 
 def add_light_barrier(
@@ -149,7 +163,13 @@ def add_light_barrier(
     sensor.intprm[0] = 1 << int(mujoco.mjtRayDataField.mjRAYDATA_DIST)
 
 
-def add_unit(spec: mujoco.MjSpec, unit: str, layout: LayoutConfig, mu: float) -> None:
+def add_unit(
+    spec: mujoco.MjSpec,
+    unit: str,
+    layout: LayoutConfig,
+    mu: float,
+    physics: PhysicsConfig | None = None,
+) -> None:
     """Add TM (static, in the world) or TU (mocap body ``tu``) with both belts and barriers.
 
     TM's belts span x in [-tm_length, 0] of F_T; the TU's span [0, tu_length] of the TU
@@ -164,7 +184,7 @@ def add_unit(spec: mujoco.MjSpec, unit: str, layout: LayoutConfig, mu: float) ->
         span = UnitGeometry(0.0, layout.tu_length_m)
         near, far = span.x_start + layout.barrier_inset_m, span.x_end - layout.barrier_inset_m
     for belt in BELTS:
-        add_belt(parent, unit, belt, span, layout, mu)
+        add_belt(parent, unit, belt, span, layout, mu, physics)
     add_light_barrier(parent, spec, unit, "near", near, layout)
     add_light_barrier(parent, spec, unit, "far", far, layout)
 
@@ -247,8 +267,8 @@ def build_spec(
         rgba=(0.8, 0.8, 0.78, 1),
     )
     spec.worldbody.add_light(name="sun", pos=[0, 0, 2.0], dir=[0, 0, -1], castshadow=False)
-    add_unit(spec, "tm", cfg.layout, cfg.mu)
-    add_unit(spec, "tu", cfg.layout, cfg.mu)
+    add_unit(spec, "tm", cfg.layout, cfg.mu, cfg.physics)
+    add_unit(spec, "tu", cfg.layout, cfg.mu, cfg.physics)
     add_object(spec, hulls, mass_kg, com_m, inertia_kg_m2, cfg.physics,
                feature_hulls=feature_hulls, feature_mu=cfg.feature_mu)  # fmt: skip
     return spec

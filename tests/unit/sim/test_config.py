@@ -56,3 +56,31 @@ def test_physics_config_reaches_the_compiled_model():
     assert m.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_MULTICCD)
     default = build_spec(box_hulls(), 1.0, np.zeros(3), box_inertia(1.0), SceneConfig()).compile()
     assert not default.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_MULTICCD)
+
+
+def test_unmeasured_mechanisms_default_to_none_and_accept_overrides():
+    base = SceneConfig()
+    assert (base.layout.tu_height_offset_m, base.layout.tu_pitch_deg) == (0.0, 0.0)
+    assert (base.layout.tu_roll_deg, base.feature_mu, base.com_offset_m) == (0.0, None, 0.0)
+    cfg = base.with_overrides(
+        feature_mu=0.3, com_offset_m=0.01,
+        **{"layout.tu_height_offset_m": -0.003, "layout.tu_pitch_deg": 2.0,
+           "layout.tu_roll_deg": -1.0},
+    )  # fmt: skip
+    assert (cfg.layout.tu_height_offset_m, cfg.layout.tu_pitch_deg) == (-0.003, 2.0)
+    assert (cfg.layout.tu_roll_deg, cfg.feature_mu, cfg.com_offset_m) == (-1.0, 0.3, 0.01)
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [
+        {"layout.tu_height_offset_m": 0.06},
+        {"layout.tu_pitch_deg": 11.0},
+        {"layout.tu_roll_deg": float("nan")},
+        {"feature_mu": -0.1},
+        {"com_offset_m": 0.2},
+    ],
+)
+def test_unmeasured_mechanisms_reject_out_of_range_values(bad):
+    with pytest.raises(InputError):
+        SceneConfig().with_overrides(**bad)

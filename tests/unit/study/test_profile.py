@@ -44,3 +44,16 @@ def test_bad_profiles_are_input_errors(tmp_path, text, needle):
 def test_missing_profile_file(tmp_path):
     with pytest.raises(InputError, match="cannot read"):
         load_profile(tmp_path / "none.toml")
+
+
+def test_profile_round_trips_the_unmeasured_mechanisms(tmp_path):
+    cfg = SceneConfig(feature_mu=0.9, com_offset_m=-0.02).with_overrides(
+        **{"layout.tu_height_offset_m": 0.004, "layout.tu_pitch_deg": -1.5,
+           "layout.tu_roll_deg": 2.0, "physics.solref": (0.03, 1.0), "physics.condim": 4}
+    )  # fmt: skip
+    path = save_profile(tmp_path / "p.toml", "mech", cfg)
+    text = path.read_text()
+    assert "tu_pitch_deg = -1.5" in text and "feature_mu = 0.9" in text
+    assert load_profile(path) == ("mech", cfg)
+    # Off (None) is written as "none" and read back as today's behaviour.
+    assert load_profile(save_profile(tmp_path / "d.toml", "d", SceneConfig()))[1] == SceneConfig()

@@ -196,7 +196,7 @@ SIM_PARAMETER_SETS: tuple[tuple[str, dict[str, object]], ...] = (
     ("S7", {"physics.impratio": 10.0}),
     ("S8", {"physics.noslip_iterations": 5}),
     ("S9", {"physics.multiccd": False}),
-    ("S10", {"physics.condim": 3}),
+    ("S10", {"physics.condim": 4}),
     ("S11", {"physics.condim": 6}),
     ("S12", {"physics.integrator": "RK4"}),
 )

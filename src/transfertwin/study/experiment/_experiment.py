@@ -141,8 +141,9 @@ def system_for(ref: str, units: str, scene: SceneConfig) -> VirtualTransferSyste
     """The compiled virtual system for an object and scene, cached per process."""
     obj = _object(ref, units)
     return VirtualTransferSystem(
-        obj.hulls, obj.mass.mass_kg, obj.mass.com_m, obj.mass.inertia_kg_m2, scene
-    )
+        obj.hulls, obj.mass.mass_kg, obj.mass.com_m, obj.mass.inertia_kg_m2, scene,
+        feature_hulls=obj.feature_hulls,
+    )  # fmt: skip
 
 
 def scene_controller(

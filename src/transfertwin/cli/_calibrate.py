@@ -1,4 +1,5 @@
-"""`transfertwin calibrate run|sweep|tune`: virtual calibration against real experiments."""
+"""`transfertwin calibrate run|sweep|tune|sensitivity|...`: virtual calibration against real
+experiments."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import csv
 import io
 import json
 import math
+import sys
 from pathlib import Path
 
 from rich.console import Console
@@ -394,6 +396,107 @@ def cmd_object(args: argparse.Namespace) -> int:
     return 0
 
 
+def _csv_text(rows: list[dict[str, object]]) -> str:
+    buf = io.StringIO()
+    keys = list(rows[0]) if rows else []
+    writer = csv.DictWriter(buf, fieldnames=keys, lineterminator="\n")
+    writer.writeheader()
+    for row in rows:
+        writer.writerow({k: "" if v is None or (isinstance(v, float) and math.isnan(v))
+                         else (f"{v:.6g}" if isinstance(v, float) else v)
+                         for k, v in row.items()})  # fmt: skip
+    return buf.getvalue()
+
+
+def _fmt(value: object, spec: str = ".2f") -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "-"
+    return format(value, spec)
+
+
+def _signature_line(label: str, sig: dict[str, dict[str, object]]) -> str:
+    parts = [" ".join(f"{k} {_fmt(v)}" for k, v in groups.items()) for groups in sig.values()]
+    return f"{label}: " + " | ".join(parts)
+
+
+def cmd_sensitivity(args: argparse.Namespace) -> int:
+    """One-at-a-time (or Morris) sensitivity of the replay to candidate gap mechanisms."""
+    from rich.table import Table
+
+    from transfertwin.report import (
+        figure_png,
+        morris_plot_data,
+        plot_morris,
+        plot_sensitivity,
+        sensitivity_plot_data,
+    )
+    from transfertwin.study.calibration import morris_screening, one_at_a_time, parse_factors
+
+    positive_int("--runs", args.runs)
+    if args.levels < 2:
+        raise InputError(f"--levels must be at least 2, got {args.levels}")
+    if args.method == "morris" and (args.levels % 2 or args.trajectories < 2):
+        raise InputError("--method morris needs an even --levels and --trajectories >= 2")
+    rows, scene, name, calib = _common(args)
+    factors = parse_factors(args.params, scene)
+    if args.method == "morris" and len(factors) < 2:
+        raise InputError("--method morris needs at least two --params")
+    out = out_dir(args.out)
+    console = Console(width=None if sys.stdout.isatty() else 160)
+    title = f"{args.method} sensitivity around '{name}' ({len(rows)} real rows, R {args.runs})"
+    with progress_bar("sensitivity", Console(stderr=True)) as on_progress:
+        if args.method == "morris":
+            result = morris_screening(rows, base=scene, factors=factors, levels=args.levels,
+                                      trajectories=args.trajectories, on_progress=on_progress,
+                                      **calib)  # fmt: skip
+        else:
+            result = one_at_a_time(rows, base=scene, factors=factors, levels=args.levels,
+                                   on_progress=on_progress, **calib)  # fmt: skip
+    payload = {"profile": name, "real_table": args.real, **result.to_dict()}
+    if args.method == "morris":
+        fig = plot_morris(morris_plot_data(result), title)
+    else:
+        fig = plot_sensitivity(sensitivity_plot_data(result), title)
+    write_atomic(out / "sensitivity.csv", _csv_text(result.csv_rows()))
+    write_atomic(out / "sensitivity.png", figure_png(fig))
+    write_atomic(out / "sensitivity.json", json.dumps(_json_safe(payload), indent=2) + "\n")
+    table = Table(title=title)
+    if args.method == "morris":
+        for col in ("factor", "range", "mu* share", "± conf", "sigma", "mu* stuck", "mu* F0.5"):
+            table.add_column(col, justify="left" if col == "factor" else "right")
+        idx = result.indices
+        for r in result.ranking("share"):
+            f = next(x for x in result.factors if x.name == r["factor"])
+            extra = [idx.get(k, {}).get(f.name, {}).get("mu_star") for k in ("stuck_rate", "f05")]
+            table.add_row(f.name, f"{f.low:g}..{f.high:g}", _fmt(r["mu_star"], ".3f"),
+                          _fmt(r["mu_star_conf"], ".3f"), _fmt(r["sigma"], ".3f"),
+                          *(_fmt(v, ".3f") for v in extra))  # fmt: skip
+    else:
+        for col in ("factor", "levels", "success share by level", "Δ share", "stuck/fail max",
+                    "F0.5 best", "Δ F0.5", "AUC best"):  # fmt: skip
+            table.add_column(col, justify="left" if col == "factor" else "right")
+        for e in result.effects():
+            lv = result.of(str(e["factor"]))
+            table.add_row(
+                str(e["factor"]), " ".join(f"{x.value:g}" for x in lv),
+                " ".join(f"{x.share:.2f}" for x in lv), _fmt(e["share_range"]),
+                _fmt(e["stuck_share_max"]), _fmt(e["f05_best"], ".3f"),
+                _fmt(e["f05_range"], ".3f"), _fmt(e["auc_best"]),
+            )  # fmt: skip
+    console.print(table)
+    real = result.real
+    print(f"real success share {real['share']:.2f} [{real['ci_low']:.2f}, {real['ci_high']:.2f}]"
+          f" (n {real['n']})")  # fmt: skip
+    print(_signature_line("real signature", real["signature"]))
+    if args.method != "morris":
+        b = result.base
+        print(f"base profile: share {b.share:.2f} [{b.ci_low:.2f}, {b.ci_high:.2f}], "
+              f"stuck/fail {_fmt(b.stuck_share)}, F0.5 {b.f05:.3f}, AUC {_fmt(b.auc)}")  # fmt: skip
+        print(_signature_line("base signature", b.signature))
+    print(out / "sensitivity.json")
+    return 0
+
+
 def _json_safe(value: object) -> object:
     """NaN and infinities become null (strict JSON)."""
     if isinstance(value, float):
@@ -454,6 +557,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--penalty", type=float, default=0.02,
                    help="Brier penalty at the deepest proxy candidate")  # fmt: skip
     p.set_defaults(func=cmd_evaluate)
+    p = csub.add_parser("sensitivity", help="which gap mechanism changes the outcomes (OAT/Morris)")
+    _shared(p)
+    p.add_argument("--params", help="NAME=LO:HI,... (default: every candidate mechanism; "
+                   "NAME a known factor or a float scene setting, e.g. t_max_s)")  # fmt: skip
+    p.add_argument("--levels", type=int, default=3, help="values per factor (Morris: grid levels)")
+    p.add_argument("--method", choices=("oat", "morris"), default="oat",
+                   help="one-at-a-time around --profile (default) or Morris (SALib)")  # fmt: skip
+    p.add_argument("--trajectories", type=int, default=4, help="Morris trajectories")
+    p.set_defaults(func=cmd_sensitivity, runs=1)
     p = csub.add_parser("tune", help="tune scene settings and proxy depths jointly (TPE, "
                         "resumable; or LHS rounds); save the best as a profile")  # fmt: skip
     _shared(p)

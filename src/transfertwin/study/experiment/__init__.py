@@ -32,6 +32,7 @@ from transfertwin.study.experiment._runner import (
     check_plan,
     run_rows,
     run_study,
+    run_tagged,
     summarize,
 )
 
@@ -57,6 +58,7 @@ __all__ = [
     "run_experiment",
     "run_rows",
     "run_study",
+    "run_tagged",
     "save_profile",
     "scene_controller",
     "scene_from_dict",

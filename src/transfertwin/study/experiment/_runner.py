@@ -18,6 +18,7 @@ from collections import Counter, defaultdict
 from collections.abc import Callable, Collection, Container, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass
+from typing import TypeVar
 
 from transfertwin._errors import InputError
 from transfertwin.objects import load_object
@@ -25,9 +26,19 @@ from transfertwin.store import ResultStore
 from transfertwin.study.experiment._experiment import ExperimentSpec, run_experiment
 from transfertwin.study.experiment._plan import StudyPlan
 
-__all__ = ["ObjectSummary", "StudyOutcome", "check_plan", "run_rows", "run_study", "summarize"]
+__all__ = [
+    "ObjectSummary",
+    "StudyOutcome",
+    "check_plan",
+    "run_rows",
+    "run_study",
+    "run_tagged",
+    "summarize",
+]
 
 log = logging.getLogger(__name__)
+
+T = TypeVar("T")
 
 
 def _exit_with_parent(parent_pid: int, period_s: float = 0.5) -> None:
@@ -137,24 +148,35 @@ def run_rows(specs: Iterable[ExperimentSpec], workers: int) -> Iterator[dict[str
     A worker that dies (e.g. a crash inside the engine) raises `BrokenProcessPool` here
     instead of hanging the study.
     """
+    for _, row in run_tagged(((None, s) for s in specs), workers):
+        yield row
+
+
+def run_tagged(
+    items: Iterable[tuple[T, ExperimentSpec]], workers: int
+) -> Iterator[tuple[T, dict[str, object]]]:
+    """`run_rows` for (tag, spec) pairs: yields (tag, result row) as they complete, so a
+    caller that runs the same experiment under several scenes in one pool can tell the
+    results apart (the tag stays in this process)."""
     if workers <= 1:
-        for spec in specs:
-            yield _run_row(spec)
+        for tag, spec in items:
+            yield tag, _run_row(spec)
         return
-    todo = iter(specs)
+    todo = iter(items)
     ctx = mp.get_context("spawn")
     with ProcessPoolExecutor(
         workers, mp_context=ctx, initializer=_exit_with_parent, initargs=(os.getpid(),)
     ) as pool:
-        pending = {pool.submit(_run_row, s) for s in itertools.islice(todo, 3 * workers)}
+        pending = {pool.submit(_run_row, s): tag for tag, s in itertools.islice(todo, 3 * workers)}
         try:
             while pending:
-                done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                done, _ = wait(pending, return_when=FIRST_COMPLETED)
                 for future in done:
-                    yield future.result()
+                    tag = pending.pop(future)
+                    yield tag, future.result()
                     nxt = next(todo, None)
                     if nxt is not None:
-                        pending.add(pool.submit(_run_row, nxt))
+                        pending[pool.submit(_run_row, nxt[1])] = nxt[0]
         except BaseException:
             pool.shutdown(wait=False, cancel_futures=True)
             raise

@@ -416,6 +416,8 @@ def _fmt(value: object, spec: str = ".2f") -> str:
 
 def _signature_line(label: str, sig: dict[str, dict[str, object]]) -> str:
     parts = [" ".join(f"{k} {_fmt(v)}" for k, v in groups.items()) for groups in sig.values()]
+    # object/face pairs are in the JSON; the line keeps face, conveyor and yaw
+    parts = parts[:3]
     return f"{label}: " + " | ".join(parts)
 
 

@@ -15,7 +15,7 @@ Per scene, the figures that tell a mechanism apart:
 - F0.5 against the real outcomes (mean over runs) and the AUC of the simulated failure
   share per row against real failure (0.5: the twin fails on the wrong rows);
 - the *signature*: success share by face, conveyor and yaw band (|θ| folded onto 0–90°:
-  0–30, 30–60, 60–90°), to compare with the real one.
+  0–30, 30–60, 60–90°), and per object and face, to compare with the real one.
 
 A factor is a named scene setting with a range (`FACTORS`), or any float setting of
 `SceneConfig` by its dotted name. Simulations run through `run_tagged` in one worker pool.
@@ -220,18 +220,20 @@ def _groups(rows: Sequence[Mapping[str, object]]) -> dict[str, dict[str, np.ndar
     faces = np.array([str(r["face"]) for r in rows])
     conveyors = np.array([str(r["conveyor"]) for r in rows])
     bands = np.array([yaw_band(float(r["theta_deg"])) for r in rows])  # type: ignore[arg-type]
+    pairs = np.array([f"{r['object_id']}/{r['face']}" for r in rows])
     return {
         "face": {f: faces == f for f in _FACES},
         "conveyor": {c: conveyors == c for c in _CONVEYORS},
         "yaw": {name: bands == name for name, _, _ in YAW_BANDS},
+        "object_face": {p: pairs == p for p in sorted(set(pairs.tolist()))},
     }
 
 
 def signature(
     rows: Sequence[Mapping[str, object]], success: np.ndarray
 ) -> dict[str, dict[str, float | None]]:
-    """Success share by face, conveyor and yaw band; `success` is (runs, rows) or (rows,).
-    A group without rows is None."""
+    """Success share by face, conveyor, yaw band and object/face pair ('o1/back');
+    `success` is (runs, rows) or (rows,). A group without rows is None."""
     s = np.atleast_2d(np.asarray(success, dtype=float))
     out: dict[str, dict[str, float | None]] = {}
     for kind, masks in _groups(rows).items():

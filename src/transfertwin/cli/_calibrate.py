@@ -435,6 +435,8 @@ def cmd_sensitivity(args: argparse.Namespace) -> int:
     from transfertwin.study.calibration import morris_screening, one_at_a_time, parse_factors
 
     positive_int("--runs", args.runs)
+    if args.levels is None:
+        args.levels = 4 if args.method == "morris" else 3
     if args.levels < 2:
         raise InputError(f"--levels must be at least 2, got {args.levels}")
     if args.method == "morris" and (args.levels % 2 or args.trajectories < 2):
@@ -563,7 +565,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     _shared(p)
     p.add_argument("--params", help="NAME=LO:HI,... (default: every candidate mechanism; "
                    "NAME a known factor or a float scene setting, e.g. t_max_s)")  # fmt: skip
-    p.add_argument("--levels", type=int, default=3, help="values per factor (Morris: grid levels)")
+    p.add_argument("--levels", type=int,
+                   help="values per factor (default 3; Morris: even, default 4)")  # fmt: skip
     p.add_argument("--method", choices=("oat", "morris"), default="oat",
                    help="one-at-a-time around --profile (default) or Morris (SALib)")  # fmt: skip
     p.add_argument("--trajectories", type=int, default=4, help="Morris trajectories")

@@ -16,11 +16,8 @@ HEADER = (
     "dock_err_x_mm,dock_err_y_mm,dock_err_theta_deg\n"
 )
 T = ["transfer", "--object", "o1", "--face", "front", "--conveyor", "both", "--theta", "0"]
-<<<<<<< HEAD
 TUNE = ["calibrate", "tune", "--out", "t", "--limit", "6"]
-=======
 SENS = ["calibrate", "sensitivity", "--limit", "2", "--out", "sens"]
->>>>>>> a2ccdd6 (Sensitivity: per object/face signature; tests (outcome classes, yaw bands, factor parsing, OAT and Morris on real replays, CLI outputs, bad-input rows); proxies of o1/o18/o23/o32 at r 25 mm and rescaled for r 12.5 mm under docs/fidelity; import graph)
 STUDY = ["study", "run", "--db", "s.sqlite", "--objects", "o1", "--theta-step", "180"]
 
 BAD: list[tuple[str, list[str]]] = [
@@ -89,7 +86,6 @@ BAD: list[tuple[str, list[str]]] = [
         ["calibrate", "object", "--object", "o1", "--family", "x", "--out", "o"],
     ),
     ("calibrate object unknown id", ["calibrate", "object", "--object", "o99", "--out", "o"]),
-<<<<<<< HEAD
     ("tune unknown space setting", [*TUNE, "--space", "friction=0:1"]),
     ("tune space low above high", [*TUNE, "--space", "mu=0.8:0.3"]),
     ("tune space not a range", [*TUNE, "--space", "mu=0.3"]),
@@ -110,7 +106,6 @@ BAD: list[tuple[str, list[str]]] = [
     ("tune lhs with storage", [*TUNE, "--method", "lhs", "--storage", "sqlite:///t.sqlite"]),
     ("tune profile not toml", [*TUNE, "--save-profile", "p.txt"]),
     ("transfer missing profile", [*T, "--profile", "missing.toml"]),
-=======
     ("sensitivity one level", [*SENS, "--levels", "1"]),
     ("sensitivity zero runs", [*SENS, "--runs", "0"]),
     ("sensitivity unknown factor", [*SENS, "--params", "wobble=0:1"]),
@@ -127,7 +122,6 @@ BAD: list[tuple[str, list[str]]] = [
     ),
     ("sensitivity missing proxy", [*SENS, "--object-map", "o1=missing.proxy.json"]),
     ("sensitivity into /sys", ["calibrate", "sensitivity", "--out", "/sys/sens"]),
->>>>>>> a2ccdd6 (Sensitivity: per object/face signature; tests (outcome classes, yaw bands, factor parsing, OAT and Morris on real replays, CLI outputs, bad-input rows); proxies of o1/o18/o23/o32 at r 25 mm and rescaled for r 12.5 mm under docs/fidelity; import graph)
     ("unknown command", ["frobnicate"]),
 ]
 

@@ -32,23 +32,6 @@ from transfertwin.study.calibration._replay import (
     parse_object_map,
     replay_specs,
 )
-from transfertwin.study.calibration._space import (
-    Dimension,
-    SearchSpace,
-    default_space,
-    parse_space,
-    scene_with,
-    trial_proxies,
-)
-from transfertwin.study.calibration._tpe import (
-    STARTUP_TRIALS,
-    TunedTrial,
-    TuneStudy,
-    open_storage,
-    study_name_for,
-    study_settings,
-    tune_tpe,
-    tuned_trial,
 from transfertwin.study.calibration._sensitivity import (
     FACTORS,
     FALL_DEPTH_M,
@@ -66,6 +49,24 @@ from transfertwin.study.calibration._sensitivity import (
     scene_at,
     signature,
     yaw_band,
+)
+from transfertwin.study.calibration._space import (
+    Dimension,
+    SearchSpace,
+    default_space,
+    parse_space,
+    scene_with,
+    trial_proxies,
+)
+from transfertwin.study.calibration._tpe import (
+    STARTUP_TRIALS,
+    TunedTrial,
+    TuneStudy,
+    open_storage,
+    study_name_for,
+    study_settings,
+    tune_tpe,
+    tuned_trial,
 )
 from transfertwin.study.calibration._tuning import (
     METRICS,
@@ -122,9 +123,9 @@ __all__ = [
     "load_candidates",
     "logistic_features",
     "logistic_probabilities",
-    "open_storage",
     "morris_screening",
     "one_at_a_time",
+    "open_storage",
     "outcome",
     "parse_factors",
     "parse_object_map",

@@ -24,21 +24,37 @@ log = logging.getLogger("transfertwin")
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand."""
     parser = Parser(prog="transfertwin", description=__doc__.splitlines()[0])
-    parser.add_argument("-v", "--verbose", action="store_true", help="debug logging")
+    parser.add_argument("-v", "--verbose", action="count", default=0,
+                        help="-v: progress messages (INFO), -vv: debug logging")  # fmt: skip
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
     for group in (_transfer, _study, _calibrate, _cps, _docking, _validate, _data):
         group.register(sub)
     return parser
 
 
+def _configure_logging(verbose: int) -> None:
+    """stderr: warnings only (-v: INFO, -vv: DEBUG). asyncua's warnings about the demo's
+    self-signed loopback certificates and revised session settings are expected, so
+    asyncua speaks up on errors only unless -v is given. Commands may add their own
+    handlers (e.g. `cps up` logs INFO to cps.log); the stderr handler keeps its level."""
+    level = (logging.WARNING, logging.INFO, logging.DEBUG)[min(verbose, 2)]
+    root = logging.getLogger()
+    for old in [h for h in root.handlers if h.get_name() == "transfertwin-cli"]:
+        root.removeHandler(old)  # main() called again in one process
+    handler = logging.StreamHandler()
+    handler.set_name("transfertwin-cli")
+    handler.setLevel(level)
+    handler.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
+    root.addHandler(handler)
+    root.setLevel(level)
+    logging.getLogger("asyncua").setLevel(logging.ERROR if verbose == 0 else level)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the exit code."""
     try:
         args = build_parser().parse_args(argv)
-        logging.basicConfig(
-            level=logging.DEBUG if args.verbose else logging.WARNING,
-            format="%(levelname)s %(name)s: %(message)s",
-        )
+        _configure_logging(args.verbose)
         return int(args.func(args))
     except InputError as exc:
         print(f"transfertwin: error: {exc}", file=sys.stderr)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
 import json
 import logging
 import signal
@@ -82,10 +83,7 @@ def cmd_up(args: argparse.Namespace) -> int:
 
 
 def cmd_status(args: argparse.Namespace) -> int:
-    """List the assets as the knowledge graph knows them."""
-    from rich.console import Console
-    from rich.table import Table
-
+    """List the assets as the knowledge graph knows them, with where each object is."""
     from transfertwin.cps.opcua import connect
 
     wd = _workdir(args.workdir, must_exist=True)
@@ -102,65 +100,118 @@ def cmd_status(args: argparse.Namespace) -> int:
             return json.loads(await kg.call("Query", _ASSETS_QUERY))  # fmt: skip
 
     rows = _run_client(wd, ask)
-    table = Table(title="assets in the knowledge graph")
-    for col in ("id", "class", "type", "status", "state", "endpoint"):
-        table.add_column(col)
-    for r in rows:
-        table.add_row(*(str(r.get(c, "") or "") for c in ("id", "class", "type", "status",
-                                                          "state", "endpoint")))  # fmt: skip
-    Console().print(table)
+    for r in rows:  # the graph's order of the classes is arbitrary
+        r["class"] = "/".join(sorted(str(r.get("class", "")).split("/")))
+    print("assets in the knowledge graph")
+    print(_table(rows, ("id", "class", "type", "status", "state", "location", "endpoint")))
     return 0
+
+
+def _table(rows: list[dict], cols: tuple[str, ...]) -> str:
+    """Plain columns, nothing truncated whatever the terminal width (the endpoint last)."""
+    cells = [[str(r.get(c, "") or "") for c in cols] for r in rows]
+    widths = [max([len(c), *(len(row[i]) for row in cells)]) for i, c in enumerate(cols)]
+    lines = [cols, *cells]
+    return "\n".join("  ".join(v.ljust(w) for v, w in zip(line, widths, strict=True)).rstrip()
+                     for line in lines)  # fmt: skip
 
 
 _ASSETS_QUERY = """
 PREFIX tt: <https://transfertwin.dev/ontology#>
 SELECT ?id (GROUP_CONCAT(DISTINCT ?cls; separator="/") AS ?class) (SAMPLE(?t) AS ?type)
-       (SAMPLE(?st) AS ?status) (SAMPLE(?os) AS ?state) (SAMPLE(?ep) AS ?endpoint) WHERE {
+       (SAMPLE(?st) AS ?status) (SAMPLE(?os) AS ?state) (SAMPLE(?loc) AS ?location)
+       (SAMPLE(?ep) AS ?endpoint) WHERE {
   ?a tt:assetId ?id .
   OPTIONAL { ?a a ?c . FILTER(STRSTARTS(STR(?c), STR(tt:))) BIND(STRAFTER(STR(?c), "#") AS ?cls) }
   OPTIONAL { ?a tt:assetType ?at . BIND(STRAFTER(STR(?at), "#") AS ?t) }
   OPTIONAL { ?a tt:status ?st }
   OPTIONAL { ?a tt:operationalState ?os }
+  OPTIONAL { ?a tt:locatedAt ?h . ?h tt:assetId ?loc }
   OPTIONAL { ?a tt:endpoint ?ep }
 } GROUP BY ?id ORDER BY ?id
 """
 
 
-def cmd_order(args: argparse.Namespace) -> int:
-    """Submit a transport operation to the TMS and follow it to its end."""
-    from transfertwin.cps.opcua import connect
+def _check_order(info: dict, source: str, target: str, obj: str) -> None:
+    """What the client can check from cps.json; the TMS checks the rest (where it is)."""
+    by_class: dict[str, list[str]] = {}
+    for a in info["assets"]:
+        by_class.setdefault(a["class"], []).append(a["id"])
+    units, objects = by_class.get("transfer_unit", []), by_class.get("object", [])
+    for flag, unit in (("--from", source), ("--to", target)):
+        if unit not in units:
+            raise InputError(f"{flag} {unit}: no such transfer unit; units: {', '.join(units)}")
+    if source == target:
+        raise InputError(f"--from and --to are both {source}: nothing to transport")
+    if obj not in objects:
+        raise InputError(f"--object {obj}: not an object of this CPS; objects: "
+                         f"{', '.join(objects)}")  # fmt: skip
 
+
+def cmd_order(args: argparse.Namespace) -> int:
+    """Submit a transport operation to the TMS and follow it to its end.
+
+    A refused order (checked here first, then by the TMS against where the objects are)
+    exits 2 with the reason at once. A transport that fails physically is an outcome, not
+    an error: it is printed and the exit code is 0.
+    """
+    from transfertwin.cps.opcua import OperationRefused, connect
+
+    if not 0 < args.timeout < float("inf"):
+        raise InputError(f"--timeout must be a positive number of seconds, got {args.timeout}")
     wd = _workdir(args.workdir, must_exist=True)
     info, creds = _load(wd)
+    _check_order(info, args.source, args.target, args.object)
 
-    async def order() -> str:
+    async def order() -> dict:
         async with connect(_endpoint(info, "TMS"), "TMS", credentials=creds,
                            cert_dir=Path(info["cert_dir"]), insecure=info["insecure"],
                            timeout_s=60) as tms:  # fmt: skip
-            before = await tms.read("OperationalData", "CompletedOperations")
-            done = asyncio.Event()
+            changed = asyncio.Event()
 
             class Watch:
                 def datachange_notification(self, node, val, data) -> None:
-                    if val > before:
-                        done.set()
+                    changed.set()
 
                 def status_change_notification(self, status) -> None:
-                    done.set()
+                    changed.set()
 
             await tms.subscribe(Watch(), ("OperationalData", "CompletedOperations"))
-            op = await tms.call("SubmitTransportOperation", args.source, args.target, args.object)
+            try:
+                op = await tms.call("SubmitTransportOperation", args.source, args.target,
+                                    args.object)  # fmt: skip
+            except OperationRefused as exc:
+                raise InputError(f"the TMS refused the order: {exc.reason}") from None
             print(f"submitted {op}: {args.object} {args.source} -> {args.target}", flush=True)
-            await asyncio.wait_for(done.wait(), timeout=args.timeout)
-            return op
+            loop = asyncio.get_running_loop()
+            deadline = loop.time() + args.timeout
+            while True:
+                status = json.loads(await tms.call("OperationStatus", op))
+                if status["state"] == "finished":
+                    return status
+                changed.clear()
+                left = deadline - loop.time()
+                if left <= 0:
+                    raise InputError(
+                        f"{op} did not finish within --timeout {args.timeout:g} s "
+                        f"(it is {status['state']}); it goes on in the CPS"
+                    )
+                # a poll every 5 s also covers a missed notification
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(changed.wait(), timeout=min(left, 5.0))
 
-    op = _run_client(wd, order)
+    status = _run_client(wd, order)
+    op = status["operation"]
     log = (wd / "cps.log").read_text().splitlines() if (wd / "cps.log").exists() else []
-    start = min((i for i, line in enumerate(log) if f"TMS: {op} " in line), default=0)
+    start = min((i for i, line in enumerate(log) if f"TMS: {op} " in line), default=len(log))
     for line in log[start:]:
         print(line)
         if f"TMS: {op} finished" in line:
             break
+    result = status["result"]["status"]
+    print(f"{op} finished: {result}; {args.object} is at {status['location']}")
+    if result.startswith("error"):
+        raise RuntimeError(f"{op}: {result}")
     return 0
 
 
@@ -196,7 +247,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="simulated seconds per wall second (0: as fast as possible)")  # fmt: skip
     p.add_argument("--seed", type=int, default=0)
     p.set_defaults(func=cmd_up)
-    p = csub.add_parser("status", help="list the assets from the knowledge graph")
+    p = csub.add_parser("status", help="list the assets and where the objects are")
     p.add_argument("--workdir", required=True)
     p.set_defaults(func=cmd_status)
     p = csub.add_parser("order", help="run a transport operation end to end over OPC UA")
@@ -204,7 +255,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--from", dest="source", required=True)
     p.add_argument("--to", dest="target", required=True)
     p.add_argument("--object", required=True)
-    p.add_argument("--timeout", type=float, default=600.0)
+    p.add_argument("--timeout", type=float, default=600.0,
+                   help="seconds to follow the operation (default 600)")  # fmt: skip
     p.set_defaults(func=cmd_order)
     p = csub.add_parser("export", help="write the demo assets' AAS as JSON, XML or AASX")
     p.add_argument("--out", required=True, help="FILE.json, FILE.xml or FILE.aasx")

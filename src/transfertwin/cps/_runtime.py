@@ -16,18 +16,19 @@ import asyncio
 import itertools
 import json
 import logging
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from transfertwin._atomic import write_atomic
 from transfertwin.cps.aas import (
+    DEMO_PLACEMENT,
     AssetDescriptor,
     build_representation,
     demo_descriptors,
     externally_synced,
 )
-from transfertwin.cps.apps import AssetApplications, Environment, PoseGraph
+from transfertwin.cps.apps import AssetApplications, Environment, ObjectLedger, PoseGraph
 from transfertwin.cps.kg import KnowledgeGraph
 from transfertwin.cps.opcua import (
     AssetServer,
@@ -60,6 +61,7 @@ class CpsConfig:
         seed: Seed of the docking errors drawn for transport operations.
         gossip_period_s: Discovery gossip period of every asset.
         scene: Virtual system configuration.
+        placement: Object id -> transfer unit it lies on when the CPS starts.
     """
 
     workdir: Path
@@ -69,6 +71,7 @@ class CpsConfig:
     seed: int = 0
     gossip_period_s: float = 1.0
     scene: SceneConfig = field(default_factory=SceneConfig)
+    placement: Mapping[str, str] = field(default_factory=lambda: dict(DEMO_PLACEMENT))
 
 
 @dataclass
@@ -92,6 +95,11 @@ class Cps(AssetApplications):
         self._ops = itertools.count(1)
         self._tasks: set[asyncio.Task] = set()
         self._loop: asyncio.AbstractEventLoop | None = None
+        self._tm_free = asyncio.Condition()
+        self._claimed: set[str] = set()  # transport modules allocated to an operation
+        units = [d.asset_id for d in demo_descriptors() if d.asset_class == "transfer_unit"]
+        self.ledger = ObjectLedger(config.placement, units)
+        self.operations: dict[str, dict[str, object]] = {}
         self.completed: list[dict[str, object]] = []
 
     # -- life cycle -----------------------------------------------------------------------
@@ -102,6 +110,8 @@ class Cps(AssetApplications):
         self.env.on_step(self._sync_barriers)
         for desc in demo_descriptors():
             await self._start(desc)
+        for obj, holder in self.ledger.locations().items():
+            await self._publish_location(obj, holder)
         write_credentials(wd / "credentials.json", self.credentials)
         write_atomic(wd / "cps.json", json.dumps(self.describe(), indent=2) + "\n")
         log.info("CPS up: %d assets", len(self.assets))

@@ -11,7 +11,7 @@ from transfertwin.cps.aas._demo import demo_descriptors
 from transfertwin.cps.aas._representation import build_representation, externally_synced
 from transfertwin.cps.opcua._client import connect
 from transfertwin.cps.opcua._security import new_credentials
-from transfertwin.cps.opcua._server import AssetServer, ServerConfig
+from transfertwin.cps.opcua._server import AssetServer, OperationRefused, ServerConfig
 
 
 def _tu():
@@ -110,15 +110,39 @@ def test_handler_errors_become_bad_status_not_crashes(tmp_path):
     creds = new_credentials()
 
     async def refuse(belt, speed):
-        raise ValueError("no such belt")
+        if belt == "middle":
+            raise ValueError("no such belt")
+        if speed > 1:
+            raise OperationRefused(f"{speed} m/s is too fast", argument="speed",
+                                   status="BadOutOfRange")  # fmt: skip
+        raise RuntimeError("a bug")
 
     async def scenario():
         async with (
             await _serve(tmp_path, creds, SetBeltSpeed=refuse) as server,
             connect(server.endpoint, "TU_A", credentials=creds, cert_dir=tmp_path / "certs") as op,
         ):
-            with pytest.raises(ua.UaStatusCodeError, match="BadInvalidArgument"):
+            with pytest.raises(ua.UaStatusCodeError, match="BadInvalidArgument") as exc:
                 await op.call("SetBeltSpeed", "middle", 0.1)
+            assert isinstance(exc.value, OperationRefused)
+            assert exc.value.reason == "no such belt"  # the reason travels with the status
+            assert (exc.value.asset, exc.value.operation) == ("TU_A", "SetBeltSpeed")
+            with pytest.raises(OperationRefused, match="BadOutOfRange") as exc:
+                await op.call("SetBeltSpeed", "left", 2.0)
+            assert exc.value.reason == "2.0 m/s is too fast"
+            with pytest.raises(OperationRefused, match="BadInternalError") as exc:
+                await op.call("SetBeltSpeed", "left", 0.1)
+            assert exc.value.reason == "internal error: RuntimeError: a bug"
+            # the same refusal, raw: Bad status, the offending argument marked Bad with
+            # the reason in its diagnostic info
+            request = ua.CallMethodRequest()
+            request.ObjectId = (await op._node("ControlInterface")).nodeid
+            request.MethodId = (await op._node("ControlInterface", "SetBeltSpeed")).nodeid
+            request.InputArguments = [ua.Variant("left"), ua.Variant(2.0)]
+            (raw,) = await op.client.uaclient.call([request])
+            assert raw.StatusCode.name == "BadOutOfRange"
+            assert [r.is_good() for r in raw.InputArgumentResults] == [True, False]
+            assert raw.InputArgumentDiagnosticInfos[1].AdditionalInfo == "2.0 m/s is too fast"
             assert await op.read("Identification", "AssetId") == "TU_A"
 
     _run(scenario())

@@ -66,7 +66,7 @@ EXPECTED_ELEMENTS = {
         "Identification": ["AssetId", "AssetClass", "AssetKind", "Provenance"],
         "Capabilities": ["Allocate"],
         "OperationalData": ["State", "QueuedOperations", "CompletedOperations"],
-        "ControlInterface": ["SubmitTransportOperation"],
+        "ControlInterface": ["SubmitTransportOperation", "OperationStatus"],
     },
     "EM": {
         "Identification": ["AssetId", "AssetClass", "AssetKind", "Provenance"],
@@ -100,6 +100,7 @@ EXPECTED_OPERATIONS = [
     ("TM_1", "StartTransfer", [("direction", _S), ("face", _S), ("conveyor", _S)], [("y", _I)]),
     ("TMS", "SubmitTransportOperation", [("source", _S), ("target", _S), ("object", _S)],
      [("operation_id", _S)]),
+    ("TMS", "OperationStatus", [("operation_id", _S)], [("status_json", _S)]),
     ("EM", "RunExperiment",
      [("unit", _S), ("object", _S), ("face", _S), ("conveyor", _S), ("theta_deg", _I),
       ("seed", _I)],

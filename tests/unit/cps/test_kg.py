@@ -218,6 +218,40 @@ def test_possession(kg: KnowledgeGraph) -> None:
         kg.set_possesses("TU_C", ["o 5"])
 
 
+def test_object_location_is_one_shacl_valid_triple(kg: KnowledgeGraph) -> None:
+    from transfertwin.cps.kg._validate import first_violation
+
+    kg.set_location("o5", "TU_A")
+    kg.set_location("o5", "TM_1")  # a transfer moved it: the location is replaced
+    assert kg.locations() == {"o5": "TM_1"}
+    rows = kg.query("SELECT ?h WHERE { ?o tt:assetId 'o5' ; tt:locatedAt/tt:assetId ?h }")
+    assert rows == [{"h": "TM_1"}]
+    whole = Graph().parse(data=kg.to_turtle(), format="turtle")
+    assert first_violation(whole) is None
+    with pytest.raises(InputError, match="not an object"):
+        kg.set_location("TM_2", "TU_A")
+    with pytest.raises(InputError, match="unknown asset"):
+        kg.set_location("o9", "TU_A")
+    kg.leave("TU_D")
+    with pytest.raises(InputError, match="offline"):
+        kg.set_location("o5", "TU_D")
+    kg.leave("TM_1")  # the holder leaves: the object has not moved
+    assert kg.locations() == {"o5": "TM_1"}
+    kg.leave("o5")
+    assert kg.locations() == {}
+
+
+def test_shape_kg8_refuses_two_locations() -> None:
+    from transfertwin.cps.kg._describe import TT, asset_iri
+    from transfertwin.cps.kg._validate import first_violation
+
+    data = KnowledgeGraph.describe(AssetDescriptor("o5", P, "object", PhysicalType.B))
+    data.add((asset_iri("o5"), TT.locatedAt, asset_iri("TU_A")))
+    assert first_violation(data) is None
+    data.add((asset_iri("o5"), TT.locatedAt, asset_iri("TU_B")))
+    assert "KG-8" in first_violation(data)
+
+
 def test_state_must_be_a_token(kg: KnowledgeGraph) -> None:
     with pytest.raises(InputError):
         kg.set_state("TM_2", "Idle!")

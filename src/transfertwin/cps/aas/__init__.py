@@ -8,7 +8,13 @@ from transfertwin.cps.aas._assets import (
     Layer,
     PhysicalType,
 )
-from transfertwin.cps.aas._demo import DEMO_OBJECTS, DEMO_STATIONS, demo_descriptors, physical_twin
+from transfertwin.cps.aas._demo import (
+    DEMO_OBJECTS,
+    DEMO_PLACEMENT,
+    DEMO_STATIONS,
+    demo_descriptors,
+    physical_twin,
+)
 from transfertwin.cps.aas._elements import (
     ID_BASE,
     ONTOLOGY,
@@ -45,6 +51,7 @@ from transfertwin.cps.aas._spec import (
 __all__ = [
     "CONTROL_INTERFACE",
     "DEMO_OBJECTS",
+    "DEMO_PLACEMENT",
     "DEMO_STATIONS",
     "EXPORT_SUFFIXES",
     "ID_BASE",

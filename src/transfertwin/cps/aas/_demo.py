@@ -13,10 +13,14 @@ from dataclasses import replace
 from transfertwin._errors import InputError
 from transfertwin.cps.aas._assets import AssetDescriptor, AssetKind, Capability, PhysicalType
 
-__all__ = ["DEMO_OBJECTS", "DEMO_STATIONS", "demo_descriptors", "physical_twin"]
+__all__ = ["DEMO_OBJECTS", "DEMO_PLACEMENT", "DEMO_STATIONS", "demo_descriptors", "physical_twin"]
 
 DEMO_STATIONS = ("A", "B", "C", "D")
 DEMO_OBJECTS = ("o1", "o2", "o3", "o4", "o5")
+# Where the objects lie when the demo starts: in turn on TU_A, TU_B, TU_C, TU_D, TU_A.
+DEMO_PLACEMENT = {
+    o: f"TU_{DEMO_STATIONS[i % len(DEMO_STATIONS)]}" for i, o in enumerate(DEMO_OBJECTS)
+}
 PHYSICAL_SUFFIX = "_P"
 
 _TU_CAPS = (Capability.TRANSFER, Capability.SENSE)

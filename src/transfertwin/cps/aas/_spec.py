@@ -192,7 +192,14 @@ CONTROL_INTERFACE: Mapping[str, tuple[OperationSpec, ...]] = MappingProxyType(
                 "SubmitTransportOperation",
                 _TRANSFER_ARGS,
                 (Arg("operation_id", _S),),
-                "Place a transport operation for allocation.",
+                "Place a transport operation for allocation; refused with the reason if "
+                "impossible.",
+            ),
+            OperationSpec(
+                "OperationStatus",
+                (Arg("operation_id", _S),),
+                (Arg("status_json", _S),),
+                "State (queued|running|finished) and result of a transport operation.",
             ),
         ),
         "experiment_manager": (

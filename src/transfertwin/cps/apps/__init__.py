@@ -2,6 +2,7 @@
 
 from transfertwin.cps.apps._applications import AssetApplications
 from transfertwin.cps.apps._environment import Environment, ScaledClock
+from transfertwin.cps.apps._ledger import ObjectLedger
 from transfertwin.cps.apps._props import (
     Pose2D,
     PoseGraph,
@@ -14,6 +15,7 @@ from transfertwin.cps.apps._props import (
 __all__ = [
     "AssetApplications",
     "Environment",
+    "ObjectLedger",
     "Pose2D",
     "PoseGraph",
     "PoseGraphSolution",

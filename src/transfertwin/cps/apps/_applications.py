@@ -5,8 +5,17 @@ What each asset's OPC UA operations do: the transfer units' belt drives and poss
 drive a docked unit only through its OPC UA interface), and the logical assets: the
 Transport Module System, the Experiment Manager, PropS and the knowledge graph.
 
+The Transport Module System keeps the `ObjectLedger` (where every object is, which
+operation holds it): an order is checked and its object reserved when it is submitted, so
+a refusal reaches the caller at once with its reason; accepted operations wait for an idle
+transport module. Each completed transfer moves the object in the ledger, in the objects'
+AAS (``PossessedBy``), in the transfer units' ``PossessedObjects`` and in the knowledge
+graph (``tt:locatedAt``, ``tt:possesses``). After a failed pick-up the object stays at
+the source; after a failed delivery it stays on the transport module (an operator has to
+take it off: no order can name a transport module as source).
+
 `AssetApplications` is a mixin of `Cps`; it uses the runtime's `assets`, `env`, `kg`,
-`poses`, `config`, `completed`, `client()` and `_spawn()`.
+`poses`, `config`, `ledger`, `completed`, `operations`, `client()` and `_spawn()`.
 """
 
 from __future__ import annotations
@@ -19,7 +28,7 @@ from collections.abc import Awaitable, Callable
 from transfertwin._errors import InputError
 from transfertwin.cps.aas import AssetDescriptor
 from transfertwin.cps.apps._props import PoseObservation
-from transfertwin.cps.opcua import AssetServer, OpcUaUnitHAL
+from transfertwin.cps.opcua import AssetServer, OpcUaUnitHAL, OperationRefused
 from transfertwin.ots import TransferDirection
 from transfertwin.study.experiment import (
     ExperimentSpec,
@@ -48,7 +57,8 @@ class AssetApplications:
                     "Dock": lambda unit: self._dock(aid, unit),
                     "Undock": lambda: self._undock(aid)}  # fmt: skip
         if cls == "transport_module_system":
-            return {"SubmitTransportOperation": self._submit}
+            return {"SubmitTransportOperation": self._submit,
+                    "OperationStatus": self._operation_status}  # fmt: skip
         if cls == "experiment_manager":
             return {"RunExperiment": self._run_experiment}
         if cls == "props":
@@ -114,36 +124,78 @@ class AssetApplications:
 
     # -- transport operations -----------------------------------------------------------------
     async def _submit(self, source: str, target: str, obj: str) -> str:
-        """TMS: allocate the operation to an idle transport module (from the graph)."""
-        for unit in (source, target):
-            if unit not in self.assets or self.assets[unit].desc.asset_class != "transfer_unit":
-                raise ValueError(f"no transfer unit {unit!r}")
-        idle = self.kg.idle_transport_modules()
-        if not idle:
-            raise ValueError("no idle transport module")
+        """TMS: check the order against the ledger, reserve the object, queue the operation.
+
+        Check and reservation happen without an await in between, so concurrent orders
+        for one object cannot both be accepted.
+        """
+        online = [a for a in self.kg.assets(online_only=True) if a["class"] == "transport_module"]
+        if not online:
+            raise OperationRefused("no transport module is online", status="BadResourceUnavailable")
         op_id = f"op{next(self._ops)}"
+        self.ledger.reserve(op_id, source, target, obj)
+        self.operations[op_id] = {"operation": op_id, "state": "queued", "source": source,
+                                  "target": target, "object": obj}  # fmt: skip
         tms = self.assets["TMS"].server
         await tms.set("OperationalData", "QueuedOperations",
                       await tms.get("OperationalData", "QueuedOperations") + 1)  # fmt: skip
-        log.info("TMS: %s %s -> %s (%s) allocated to %s", op_id, source, target, obj, idle[0])
-        self._spawn(self._execute(op_id, idle[0], source, target, obj))
+        log.info("TMS: %s %s -> %s (%s) accepted", op_id, source, target, obj)
+        self._spawn(self._execute(op_id, source, target, obj))
         return op_id
 
-    async def _execute(self, op_id: str, tm: str, source: str, target: str, obj: str) -> None:
+    async def _operation_status(self, op_id: str) -> str:
+        """TMS: an operation's state ('queued', 'running', 'finished') and result."""
+        if op_id not in self.operations:
+            raise OperationRefused(f"no operation {op_id!r}", argument="operation_id")
+        return json.dumps(self.operations[op_id])
+
+    async def _allocate(self) -> str:
+        """Wait for an idle transport module (from the graph) and claim it."""
+        async with self._tm_free:
+            while True:
+                idle = [t for t in self.kg.idle_transport_modules() if t not in self._claimed]
+                if idle:
+                    self._claimed.add(idle[0])
+                    return idle[0]
+                await self._tm_free.wait()
+
+    async def _execute(self, op_id: str, source: str, target: str, obj: str) -> None:
+        """Run one accepted operation to its end; never raises (the caller is a task)."""
         tms = self.assets["TMS"].server
-        async with self.client(tm) as session:
-            result = await session.call("QueueTransportTask", source, target, obj)
-        record = {"operation": op_id, "tm": tm, "source": source, "target": target,
-                  "object": obj, "result": json.loads(result)}  # fmt: skip
+        record = self.operations[op_id]
+        try:
+            tm = await self._allocate()
+            record.update(state="running", tm=tm)
+            log.info("TMS: %s allocated to %s", op_id, tm)
+            try:
+                async with self.client(tm) as session:
+                    result = json.loads(await session.call("QueueTransportTask", source,
+                                                           target, obj))  # fmt: skip
+            finally:
+                self._claimed.discard(tm)
+                async with self._tm_free:
+                    self._tm_free.notify_all()
+        except asyncio.CancelledError:
+            raise
+        except Exception as exc:  # reported as the operation's result, logged in full
+            log.exception("TMS: %s failed", op_id)
+            result = {"status": f"error: {type(exc).__name__}: {exc}"}
+        finally:
+            self.ledger.release(op_id, obj)
+        record.update(state="finished", result=result, location=self.ledger.location(obj))
         self.completed.append(record)
         await tms.set("OperationalData", "QueuedOperations",
                       await tms.get("OperationalData", "QueuedOperations") - 1)  # fmt: skip
         await tms.set("OperationalData", "CompletedOperations", len(self.completed))
-        log.info("TMS: %s finished: %s", op_id, record["result"]["status"])
+        log.info("TMS: %s finished: %s; %s is at %s", op_id, result["status"], obj,
+                 record["location"])  # fmt: skip
 
     async def _queue_task(self, tm: str, source: str, target: str, obj: str) -> str:
         """TM_1 application layer: fetch `obj` at `source`, deliver it to `target`."""
         server = self.assets[tm].server
+        if (state := await server.get("OperationalData", "State")) != "idle":
+            raise OperationRefused(f"{tm} is {state}", status="BadInvalidState")
+        self.ledger.check(source, target, obj)
         await server.set("OperationalData", "State", "busy")
         await server.set("OperationalData", "CurrentTask", f"{obj}: {source} -> {target}")
         self.kg.set_state(tm, "busy")
@@ -154,6 +206,25 @@ class AssetApplications:
             await server.set("OperationalData", "CurrentTask", "")
             self.kg.set_state(tm, "idle")
         return json.dumps(result)
+
+    async def _moved(self, obj: str, holder: str) -> None:
+        """A transfer put `obj` onto `holder`: update the ledger, both holders' possessions
+        (transfer units through their OPC UA interface: external sync), the object's AAS
+        and the knowledge graph."""
+        previous = self.ledger.move(obj, holder)
+        await self._publish_location(obj, previous, holder)
+
+    async def _publish_location(self, obj: str, *holders: str) -> None:
+        for holder in dict.fromkeys(holders):
+            objects = ",".join(self.ledger.objects_at(holder))
+            if self.assets[holder].desc.asset_class == "transfer_unit":
+                await self._call(holder, "SetPossessedObjects", objects)
+            else:
+                await self._set_possessed(holder, objects)
+        location = self.ledger.location(obj)
+        if obj in self.assets:
+            await self.assets[obj].server.set("OperationalData", "PossessedBy", location)
+            self.kg.set_location(obj, location)
 
     def _error(self, source: str, target: str, obj: str, leg: int):
         seed, _ = experiment_seeds(self.config.seed, f"{obj}:{source}:{target}", leg, 0)
@@ -168,10 +239,12 @@ class AssetApplications:
                  tuple(round(v, 2) for v in err1.as_mm_deg()))  # fmt: skip
         y1 = await self._transfer(tm, source, TransferDirection.TU_TO_TM)
         log.info("%s: took %s from %s: y = %d", tm, obj, source, y1)
-        if y1 != 1:
+        if y1 != 1:  # the object stays at the source; the TM leaves
+            await self._undock(tm)
+            with env.lock:
+                env.undock()
             return {"status": "failed at pick-up", "y_pickup": y1}
-        await self._call(source, "SetPossessedObjects", "")
-        await self._set_possessed(tm, obj)
+        await self._moved(obj, tm)
         await self._undock(tm)
         err2 = self._error(source, target, obj, 1)
         await asyncio.to_thread(self._locked, env.dock, target, err2)
@@ -181,8 +254,7 @@ class AssetApplications:
         y2 = await self._transfer(tm, target, TransferDirection.TM_TO_TU)
         log.info("%s: handed %s to %s: y = %d", tm, obj, target, y2)
         if y2 == 1:
-            await self._set_possessed(tm, "")
-            await self._call(target, "SetPossessedObjects", obj)
+            await self._moved(obj, target)
         await self._undock(tm)
         with env.lock:
             env.undock()

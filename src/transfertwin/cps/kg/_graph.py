@@ -1,16 +1,17 @@
 """The knowledge graph: the descriptive layer as a logical asset (Sec. 3.3).
 
 Assets join with an RDF description (built by `describe` from an `AssetDescriptor`, or
-sent by the asset itself), which must pass the SHACL shapes KG-1 … KG-7 before any of
+sent by the asset itself), which must pass the SHACL shapes KG-1 … KG-8 before any of
 it enters the graph. The graph holds the ontology (TBox) and the asset descriptions
 (ABox) together, so queries may follow ``rdfs:subClassOf``.
 
 Leave semantics: `KnowledgeGraph.leave` keeps the asset's static description (classes,
 type, capabilities, station, interface, virtual-model link) so it can be looked up and
 rejoin, marks it ``tt:status "offline"`` and drops its dynamic relations in both
-directions (``tt:dockedAt``, ``tt:possesses``) and its ``tt:operationalState``. Every
-named query counts online assets only. A later `join` replaces the asset's own triples
-with the new description.
+directions (``tt:dockedAt``, ``tt:possesses``), its ``tt:operationalState`` and, for an
+object, its ``tt:locatedAt``; objects lying on an asset that leaves stay located there
+(they have not moved). Every named query counts online assets only. A later `join`
+replaces the asset's own triples with the new description.
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ from transfertwin.cps.kg._describe import (
 )
 from transfertwin.cps.kg._queries import (
     IDLE_TRANSPORT_MODULES,
+    OBJECT_LOCATIONS,
     RECEIVERS_AT,
     VIRTUAL_MODELS_OF,
     prepared,
@@ -100,7 +102,7 @@ class KnowledgeGraph:
         security_policy: str | None = None,
         state: str | None = "idle",
     ) -> None:
-        """Validate an asset's description (KG-1 … KG-7) and add it; see `describe`.
+        """Validate an asset's description (KG-1 … KG-8) and add it; see `describe`.
 
         A joining asset is 'idle' unless ``state`` says otherwise (None: unknown).
         """
@@ -142,6 +144,7 @@ class KnowledgeGraph:
             for prop in (TT.dockedAt, TT.possesses):
                 self._graph.remove((node, prop, None))
                 self._graph.remove((None, prop, node))
+            self._graph.remove((node, TT.locatedAt, None))
         self._notify("leave", asset_id)
 
     # --- dynamic state ------------------------------------------------------------------
@@ -174,6 +177,27 @@ class KnowledgeGraph:
             for obj in objects:
                 self._graph.add((node, TT.possesses, obj))
         self._notify("update", asset_id)
+
+    def set_location(self, object_id: str, holder_id: str) -> None:
+        """Record that object ``object_id`` lies on asset ``holder_id`` (``tt:locatedAt``,
+        at most one per object: the new location replaces the old one).
+
+        Raises:
+            InputError: The object is unknown or not a ``tt:Object``, or the holder is
+                unknown or offline.
+        """
+        with self._lock:
+            obj = self._known(object_id)
+            if (obj, RDF.type, TT.Object) not in self._graph:
+                raise InputError(f"{object_id} is an asset but not an object")
+            holder = self._online(holder_id)
+            self._graph.set((obj, TT.locatedAt, holder))
+        self._notify("update", object_id)
+
+    def locations(self) -> dict[str, str]:
+        """Object id -> id of the asset it is located at, for every located object."""
+        rows = self._select(prepared(OBJECT_LOCATIONS), {})
+        return {row["object"]: row["holder"] for row in rows}
 
     def set_state(self, asset_id: str, state: str) -> None:
         """Set the operational state of an online asset, e.g. 'idle', 'busy'."""

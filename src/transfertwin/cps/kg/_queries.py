@@ -21,6 +21,7 @@ from transfertwin.cps.kg._describe import TT
 
 __all__ = [
     "IDLE_TRANSPORT_MODULES",
+    "OBJECT_LOCATIONS",
     "PREFIXES",
     "RECEIVERS_AT",
     "VIRTUAL_MODELS_OF",
@@ -54,6 +55,21 @@ SELECT DISTINCT ?id WHERE {
          tt:assetId ?id .
 }
 ORDER BY ?id
+"""
+)
+
+# "Where is every object?": the asset each online object is located at (tt:locatedAt).
+OBJECT_LOCATIONS = (
+    PREFIXES
+    + """\
+SELECT ?object ?holder WHERE {
+  ?o a tt:Object ;
+     tt:status "online" ;
+     tt:assetId ?object ;
+     tt:locatedAt ?h .
+  ?h tt:assetId ?holder .
+}
+ORDER BY ?object
 """
 )
 

@@ -14,7 +14,14 @@ from transfertwin.cps.opcua._security import (
     new_credentials,
     write_credentials,
 )
-from transfertwin.cps.opcua._server import NAMESPACE, AssetServer, Handler, ServerConfig, node_id
+from transfertwin.cps.opcua._server import (
+    NAMESPACE,
+    AssetServer,
+    Handler,
+    OperationRefused,
+    ServerConfig,
+    node_id,
+)
 
 __all__ = [
     "NAMESPACE",
@@ -25,6 +32,7 @@ __all__ = [
     "Discovery",
     "Handler",
     "OpcUaUnitHAL",
+    "OperationRefused",
     "Peer",
     "RoleRuleset",
     "RoleUserManager",

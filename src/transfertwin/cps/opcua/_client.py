@@ -11,7 +11,7 @@ from asyncua import Client, ua
 from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
 
 from transfertwin.cps.opcua._security import Credentials, ensure_certificate
-from transfertwin.cps.opcua._server import NAMESPACE, node_id
+from transfertwin.cps.opcua._server import NAMESPACE, OperationRefused, node_id
 
 __all__ = ["AssetClient", "connect"]
 
@@ -40,10 +40,31 @@ class AssetClient:
         await node.write_value(ua.DataValue(ua.Variant(value, vtype)))
 
     async def call(self, operation: str, *args: Any, submodel: str = "ControlInterface") -> Any:
-        """Call an operation; returns its single output or a list of outputs."""
+        """Call an operation; returns its single output or a list of outputs.
+
+        Raises:
+            OperationRefused: The asset answered with a Bad status; the reason is the
+                diagnostic info the asset attached (or the status code's description).
+        """
         parent = await self._node(submodel)
         method = await self._node(submodel, operation)
-        return await parent.call_method(method, *args)
+        request = ua.CallMethodRequest()
+        request.ObjectId = parent.nodeid
+        request.MethodId = method.nodeid
+        request.InputArguments = [a if isinstance(a, ua.Variant) else ua.Variant(a) for a in args]
+        (result,) = await self.client.uaclient.call([request])
+        if not result.StatusCode.is_good():
+            infos = result.InputArgumentDiagnosticInfos or []
+            reason = next((d.AdditionalInfo for d in infos if d and d.AdditionalInfo), None)
+            name = result.StatusCode.name
+            raise OperationRefused(
+                reason or ua.status_codes.get_name_and_doc(result.StatusCode.value)[1].rstrip("."),
+                status=name, asset=self.asset_id, operation=operation,
+            )  # fmt: skip
+        outputs = [v.Value for v in result.OutputArguments or []]
+        if not outputs:
+            return None
+        return outputs[0] if len(outputs) == 1 else outputs
 
     async def subscribe(self, handler: object, *props: tuple[str, str], period_ms: int = 50):
         """Subscribe `handler.datachange_notification` to (submodel, property) pairs."""

@@ -34,7 +34,7 @@ from transfertwin.cps.opcua._security import (
     free_port,
 )
 
-__all__ = ["NAMESPACE", "AssetServer", "Handler", "ServerConfig", "node_id"]
+__all__ = ["NAMESPACE", "AssetServer", "Handler", "OperationRefused", "ServerConfig", "node_id"]
 
 log = logging.getLogger(__name__)
 
@@ -50,6 +50,64 @@ _VARIANT = {
     str: ua.VariantType.String,
 }
 _DEFAULTS = {bool: False, float: 0.0, int: 0, str: ""}
+
+
+class OperationRefused(ua.UaStatusCodeError):
+    """An asset refused an operation call, with the reason.
+
+    Handlers raise it (a `ValueError` counts as a refusal with status BadInvalidArgument);
+    the server answers the call with the Bad status `status`, marks the offending input
+    argument Bad and puts `reason` into that argument's diagnostic info
+    (``AdditionalInfo``); `AssetClient.call` raises it again on the client side. It is a
+    `ua.UaStatusCodeError`, so `code` is the numeric status code.
+
+    Args:
+        reason: One line saying why.
+        status: Name of an OPC UA status code, e.g. 'BadInvalidArgument' (a name or value
+            that is wrong) or 'BadInvalidState' (a request that conflicts with the state).
+        argument: Name of the offending input argument (None: the first argument).
+        asset: The refusing asset (set by the client).
+        operation: The refused operation (set by the client).
+    """
+
+    def __new__(cls, *args: object, **kwargs: object) -> OperationRefused:
+        return Exception.__new__(cls)  # not UaStatusCodeError's lookup by code
+
+    def __init__(
+        self,
+        reason: str,
+        *,
+        status: str = "BadInvalidArgument",
+        argument: str | None = None,
+        asset: str = "",
+        operation: str = "",
+    ) -> None:
+        Exception.__init__(self, getattr(ua.StatusCodes, status))
+        self.reason = reason
+        self.status = status
+        self.argument = argument
+        self.asset = asset
+        self.operation = operation
+
+    def __str__(self) -> str:
+        where = f"{self.asset}.{self.operation}" if self.asset else self.operation
+        return f"{self.status}: {where + ' refused: ' if where else ''}{self.reason}"
+
+
+def _refusal(exc: OperationRefused, names: list[str]) -> ua.CallMethodResult:
+    """The CallMethodResult of a refused call: Bad status, reason on the bad argument."""
+    res = ua.CallMethodResult()
+    res.StatusCode = ua.StatusCode(exc.code)
+    bad = names.index(exc.argument) if exc.argument in names else 0
+    res.InputArgumentResults = [
+        ua.StatusCode(ua.StatusCodes.BadInvalidArgument if i == bad else ua.StatusCodes.Good)
+        for i in range(len(names))
+    ]
+    res.InputArgumentDiagnosticInfos = [
+        ua.DiagnosticInfo(AdditionalInfo=exc.reason if i == bad else None)
+        for i in range(len(names))
+    ]
+    return res
 
 
 def _python_type(value_type: type) -> type:
@@ -185,8 +243,9 @@ class AssetServer:
         outs = [(v.id_short, _python_type(v.value_type)) for v in op.output_variable]
         handler = self.handlers.get(op.id_short)
 
-        async def call(_parent: ua.NodeId, *args: ua.Variant) -> list[ua.Variant] | ua.StatusCode:
-            # A bad request becomes a status code for the caller, never a server failure.
+        async def call(_parent: ua.NodeId, *args: ua.Variant) -> Any:
+            # A bad request becomes a status code (and the reason) for the caller, never a
+            # server failure.
             if handler is None:
                 return ua.StatusCode(ua.StatusCodes.BadNotImplemented)
             if len(args) != len(ins):
@@ -194,11 +253,20 @@ class AssetServer:
             values = [a.Value for a in args]
             try:
                 result = await handler(*values)
+            except OperationRefused as exc:
+                refused = exc
             except (ValueError, KeyError, TypeError) as exc:
-                log.info("%s.%s refused: %s", self.asset_id, op.id_short, exc)
-                return ua.StatusCode(ua.StatusCodes.BadInvalidArgument)
-            result = result if isinstance(result, tuple) else (result,)
-            return [ua.Variant(t(v), _VARIANT[t]) for (_, t), v in zip(outs, result, strict=True)]
+                refused = OperationRefused(str(exc).strip("'\""))
+            except Exception as exc:  # a bug in the asset: say so, keep serving
+                log.exception("%s.%s failed", self.asset_id, op.id_short)
+                refused = OperationRefused(f"internal error: {type(exc).__name__}: {exc}",
+                                           status="BadInternalError")  # fmt: skip
+            else:
+                result = result if isinstance(result, tuple) else (result,)
+                return [ua.Variant(t(v), _VARIANT[t])
+                        for (_, t), v in zip(outs, result, strict=True)]  # fmt: skip
+            log.info("%s.%s refused: %s", self.asset_id, op.id_short, refused.reason)
+            return _refusal(refused, [n for n, _ in ins])
 
         in_args = [_argument(n, t) for n, t in ins]
         out_args = [_argument(n, t) for n, t in outs]

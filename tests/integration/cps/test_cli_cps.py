@@ -1,51 +1,193 @@
-"""`transfertwin cps up/status/order` as a user runs them, and a clean SIGTERM shutdown."""
+"""`transfertwin cps up/status/order` as a user runs them, against one CPS per module
+(started once: its servers and certificates are shared), and a clean SIGTERM shutdown.
+
+Item by item (issue 15): refusals reach the client at once with the reason; the TMS knows
+where every object is and refuses impossible or concurrent orders; stderr stays quiet
+without -v; the status table shows whole endpoints at 80 columns.
+"""
 
 from __future__ import annotations
 
+import asyncio
 import json
+import os
 import signal
 import subprocess
 import sys
 import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
 
 
-def _tt(*args: str, timeout: float = 300) -> subprocess.CompletedProcess:
+def _tt(*args: str, timeout: float = 300, env: dict | None = None) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "transfertwin", *args], capture_output=True,
-                          text=True, timeout=timeout)  # fmt: skip
+                          text=True, timeout=timeout, env=env)  # fmt: skip
 
 
-def test_cps_up_order_status_and_sigterm(tmp_path):
-    wd = tmp_path / "cps"
-    up = subprocess.Popen(
-        [sys.executable, "-m", "transfertwin", "cps", "up", "--workdir", str(wd),
-         "--time-scale", "0"], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
-    )  # fmt: skip
-    try:
-        line = up.stdout.readline()  # blocks until the CPS reports it is up
-        assert line.startswith("CPS up: 14 assets"), line
-        info = json.loads((wd / "cps.json").read_text())
-        assert len(info["assets"]) == 14
-        creds = json.loads((wd / "credentials.json").read_text())
-        assert set(creds) == {"operator", "observer"}
+class RunningCps:
+    """A `cps up` subprocess; stderr goes to a file the tests read."""
 
-        order = _tt("cps", "order", "--workdir", str(wd), "--from", "TU_B", "--to", "TU_D",
-                    "--object", "o3")  # fmt: skip
-        assert order.returncode == 0, order.stderr
-        assert "submitted op1" in order.stdout
-        assert "TM_1: docked at TU_B" in order.stdout
-        assert "TMS: op1 finished" in order.stdout
+    def __init__(self, wd: Path) -> None:
+        self.wd = wd
+        self.stderr_path = wd.parent / "up.stderr"
+        self._err = self.stderr_path.open("w")
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "transfertwin", "cps", "up", "--workdir", str(wd),
+             "--time-scale", "0"], stdout=subprocess.PIPE, stderr=self._err, text=True,
+        )  # fmt: skip
+        self.first_line = self.proc.stdout.readline()  # blocks until the CPS reports it is up
 
-        status = _tt("cps", "status", "--workdir", str(wd))
-        assert status.returncode == 0, status.stderr
-        for asset in ("TU_A", "TM_1", "TMS", "KG"):
-            assert asset in status.stdout
-    finally:
-        up.send_signal(signal.SIGTERM)
+    def order(self, source: str, target: str, obj: str, *extra: str):
+        return _tt("cps", "order", "--workdir", str(self.wd), "--from", source, "--to", target,
+                   "--object", obj, *extra)  # fmt: skip
+
+    def stop(self) -> tuple[int, str, float]:
+        self.proc.send_signal(signal.SIGTERM)
         t0 = time.monotonic()
-        out, _ = up.communicate(timeout=60)
-    assert up.returncode == 0
-    assert "CPS down" in out
-    assert time.monotonic() - t0 < 60
+        out, _ = self.proc.communicate(timeout=120)
+        self._err.close()
+        return self.proc.returncode, out, time.monotonic() - t0
+
+
+@pytest.fixture(scope="module")
+def cps(tmp_path_factory):
+    running = RunningCps(tmp_path_factory.mktemp("cps") / "wd")
+    yield running
+    if running.proc.poll() is None:
+        running.stop()
+
+
+def test_cps_is_up_and_quiet_without_verbose(cps):
+    assert cps.first_line.startswith("CPS up: 14 assets"), cps.first_line
+    info = json.loads((cps.wd / "cps.json").read_text())
+    assert len(info["assets"]) == 14
+    creds = json.loads((cps.wd / "credentials.json").read_text())
+    assert set(creds) == {"operator", "observer"}
+    # The log goes to cps.log; stderr has no INFO lines and no asyncua certificate warnings.
+    assert "TU_A joined" in (cps.wd / "cps.log").read_text()
+    assert cps.stderr_path.read_text() == ""
+
+
+@pytest.mark.parametrize(
+    ("source", "target", "obj", "reason"),
+    [
+        ("TU_A", "TU_Z", "o5", "--to TU_Z: no such transfer unit"),
+        ("TU_A", "TU_C", "o99", "--object o99: not an object of this CPS"),
+        ("TU_B", "TU_B", "o2", "--from and --to are both TU_B"),
+        ("TU_B", "TU_C", "o4", "the TMS refused the order: o4 is at TU_D, not at TU_B"),
+    ],
+)
+def test_impossible_orders_are_refused_at_once_with_the_reason(cps, source, target, obj,
+                                                                reason):  # fmt: skip
+    t0 = time.monotonic()
+    res = cps.order(source, target, obj)
+    took = time.monotonic() - t0
+    assert res.returncode == 2, res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"transfertwin: error: {reason}"), res.stderr
+    assert "submitted" not in res.stdout
+    assert took < 45  # no wait for a timeout (it was 60 s); includes interpreter start
+
+
+def test_the_tms_refuses_itself_what_a_client_does_not_check(cps):
+    """A client that skips the checks (any OPC UA client) gets a Bad status and the reason."""
+    from transfertwin.cps.opcua import OperationRefused, connect, load_credentials
+
+    info = json.loads((cps.wd / "cps.json").read_text())
+    tms_url = next(a["endpoint"] for a in info["assets"] if a["id"] == "TMS")
+
+    async def call(*args):
+        async with connect(tms_url, "TMS", credentials=load_credentials(
+                cps.wd / "credentials.json"), cert_dir=cps.wd / "certs") as tms:  # fmt: skip
+            with pytest.raises(OperationRefused) as refused:
+                await tms.call("SubmitTransportOperation", *args)
+            return refused.value
+
+    for args, status, reason in [
+        (("TU_A", "TU_Z", "o5"), "BadInvalidArgument", "no transfer unit 'TU_Z'"),
+        (("TU_A", "TU_C", "o9"), "BadInvalidArgument", "'o9' is not an object of this CPS"),
+        (("TU_B", "TU_B", "o2"), "BadInvalidArgument", "source and target are both TU_B"),
+        (("TU_A", "TU_C", "o4"), "BadInvalidState", "o4 is at TU_D, not at TU_A"),
+    ]:
+        refused = asyncio.run(call(*args))
+        assert refused.status == status and reason in refused.reason, refused
+
+
+def test_order_moves_the_object_and_concurrent_orders_cannot_both_win(cps):
+    # Two orders for o2 (on TU_B) at the same time: exactly one is accepted.
+    with ThreadPoolExecutor(2) as pool:
+        first, second = pool.map(lambda t: cps.order("TU_B", t, "o2"), ("TU_D", "TU_C"))
+    accepted = [r for r in (first, second) if r.returncode == 0]
+    refused = [r for r in (first, second) if r.returncode != 0]
+    assert len(accepted) == 1 and len(refused) == 1, (first.stderr, second.stderr)
+    assert refused[0].returncode == 2
+    # refused while the other moves o2, or (if that one was already done) because o2 left
+    assert ("o2 is being moved by op" in refused[0].stderr
+            or "o2 is at " in refused[0].stderr), refused[0].stderr  # fmt: skip
+    out = accepted[0].stdout
+    target = "TU_D" if accepted[0] is first else "TU_C"
+    assert "submitted op" in out and "TM_1: docked at TU_B" in out
+    last = out.strip().splitlines()[-1]
+    where = {"delivered": target, "failed at pick-up": "TU_B", "failed at delivery": "TM_1"}
+    status = next(s for s in where if f"finished: {s};" in last)
+    assert last.endswith(f"o2 is at {where[status]}"), last
+
+    # The location is state of the system: the knowledge graph (status) and the object's AAS.
+    st = _tt("cps", "status", "--workdir", str(cps.wd))
+    assert st.returncode == 0 and st.stderr == "", st.stderr
+    row = next(line.split() for line in st.stdout.splitlines() if line.startswith("o2 "))
+    assert where[status] in row
+    assert _read(cps.wd, "o2", "PossessedBy") == where[status]
+    if where[status] != "TU_B":  # o2 has left TU_B: the old route is refused now
+        again = cps.order("TU_B", target, "o2")
+        assert again.returncode == 2
+        assert f"o2 is at {where[status]}, not at TU_B" in again.stderr
+
+
+def _read(wd: Path, asset: str, prop: str):
+    from transfertwin.cps.opcua import connect, load_credentials
+
+    info = json.loads((wd / "cps.json").read_text())
+    url = next(a["endpoint"] for a in info["assets"] if a["id"] == asset)
+
+    async def read():
+        async with connect(url, asset, credentials=load_credentials(wd / "credentials.json"),
+                           role="observer", cert_dir=wd / "certs") as client:  # fmt: skip
+            return await client.read("OperationalData", prop)
+
+    return asyncio.run(read())
+
+
+def test_status_shows_locations_and_whole_endpoints_at_80_columns(cps):
+    env = {**os.environ, "COLUMNS": "80"}
+    res = _tt("cps", "status", "--workdir", str(cps.wd), env=env)
+    assert res.returncode == 0 and res.stderr == "", res.stderr
+    info = json.loads((cps.wd / "cps.json").read_text())
+    for asset in info["assets"]:
+        assert asset["endpoint"] in res.stdout, asset["id"]
+    header = res.stdout.splitlines()[1].split()
+    assert header == ["id", "class", "type", "status", "state", "location", "endpoint"]
+    rows = {line.split()[0]: line for line in res.stdout.splitlines()[2:]}
+    assert set(rows) == {a["id"] for a in info["assets"]}
+    assert "TU_D" in rows["o4"].split()  # objects show where they lie
+    assert rows["TU_A"].split()[1] == "TransferUnit/VirtualModel"  # a stable class order
+
+
+def test_verbose_restores_info_on_stderr(cps):
+    res = _tt("-v", "cps", "status", "--workdir", str(cps.wd))
+    assert res.returncode == 0
+    assert "INFO" in res.stderr
+
+
+def test_sigterm_shuts_down_cleanly_and_status_then_says_not_running(cps):
+    code, out, took = cps.stop()
+    assert code == 0 and "CPS down" in out and took < 60
+    assert not (cps.wd / "cps.json").exists()
+    res = _tt("cps", "status", "--workdir", str(cps.wd))
+    assert res.returncode == 2
+    assert "not running" in res.stderr and len(res.stderr.strip().splitlines()) == 1
 
 
 def test_cps_commands_need_a_running_cps(tmp_path):

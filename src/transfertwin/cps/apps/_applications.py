@@ -132,6 +132,7 @@ class AssetApplications:
         online = [a for a in self.kg.assets(online_only=True) if a["class"] == "transport_module"]
         if not online:
             raise OperationRefused("no transport module is online", status="BadResourceUnavailable")
+        self.ledger.check(source, target, obj)  # refused orders take no operation id
         op_id = f"op{next(self._ops)}"
         self.ledger.reserve(op_id, source, target, obj)
         self.operations[op_id] = {"operation": op_id, "state": "queued", "source": source,

@@ -79,6 +79,23 @@ BAD: list[tuple[str, list[str]]] = [
             "o5",
         ],
     ),
+    (
+        "cps order zero timeout",
+        [
+            "cps",
+            "order",
+            "--workdir",
+            "w",
+            "--from",
+            "TU_A",
+            "--to",
+            "TU_C",
+            "--object",
+            "o5",
+            "--timeout",
+            "0",
+        ],
+    ),
     ("demo into /sys", ["demo", "--out", "/sys/demo"]),
     ("data export not csv", ["data", "calibration", "--out", "real.txt"]),
     (

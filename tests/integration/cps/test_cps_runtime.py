@@ -39,10 +39,19 @@ def test_demo_cps_end_to_end(tmp_path):
             record = cps.completed[0]
             assert record["operation"] == op and record["tm"] == "TM_1"
             assert record["result"]["y_pickup"] in (0, 1)
-            if record["result"]["status"] == "delivered":
-                async with cps.client("TU_C", role="observer") as tu:
-                    assert await tu.read("OperationalData", "PossessedObjects") == "o5"
+            # The object's location follows the outcome, everywhere it is kept.
+            where = {"delivered": "TU_C", "failed at pick-up": "TU_A",
+                     "failed at delivery": "TM_1"}[record["result"]["status"]]  # fmt: skip
+            assert record["location"] == where == cps.ledger.location("o5")
+            assert kg.locations()["o5"] == where
+            async with cps.client("o5", role="observer") as o5:
+                assert await o5.read("OperationalData", "PossessedBy") == where
+            if where != "TM_1":
+                async with cps.client(where, role="observer") as tu:
+                    held = await tu.read("OperationalData", "PossessedObjects")
+                    assert "o5" in held.split(",")
             assert kg.idle_transport_modules() == ["TM_1"]
+            assert cps.ledger.moving() == {}
 
             # The experiment manager reaches the unit only through its OPC UA interface and
             # must reproduce the in-process record with the same seed.

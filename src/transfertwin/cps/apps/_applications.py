@@ -196,7 +196,12 @@ class AssetApplications:
         server = self.assets[tm].server
         if (state := await server.get("OperationalData", "State")) != "idle":
             raise OperationRefused(f"{tm} is {state}", status="BadInvalidState")
-        self.ledger.check(source, target, obj)
+        at = self.ledger.locations().get(obj)  # the TMS reserved it; the TM checks the place
+        if at is None:
+            raise OperationRefused(f"{obj!r} is not an object of this CPS", argument="object")
+        if at != source:
+            raise OperationRefused(f"{obj} is at {at}, not at {source}", status="BadInvalidState",
+                                   argument="source")  # fmt: skip
         await server.set("OperationalData", "State", "busy")
         await server.set("OperationalData", "CurrentTask", f"{obj}: {source} -> {target}")
         self.kg.set_state(tm, "busy")

@@ -31,6 +31,8 @@ LAYERS: tuple[str, ...] = (
     "study.calibration",
     "study.validation",
     "study",
+    "plant",
+    "rehearsal",
     "cps.aas",
     "cps.opcua",
     "cps.kg",

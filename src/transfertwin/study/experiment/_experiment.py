@@ -200,7 +200,12 @@ def settle(system: VirtualTransferSystem, scene: SceneConfig) -> None:
         done += n
 
 
-def run_experiment(spec: ExperimentSpec, *, tu_hal: UnitHAL | None = None) -> ExperimentResult:
+def run_experiment(
+    spec: ExperimentSpec,
+    *,
+    tu_hal: UnitHAL | None = None,
+    system: VirtualTransferSystem | None = None,
+) -> ExperimentResult:
     """Run E^V (Eq. 6.18): settle, check P_pre, transfer TM → TU, and back if y1 = 1.
 
     Never raises for a simulation problem: the result's status says what happened
@@ -211,6 +216,9 @@ def run_experiment(spec: ExperimentSpec, *, tu_hal: UnitHAL | None = None) -> Ex
         tu_hal: The transfer unit's HAL; None uses the simulated unit directly. The CPS
             passes an OPC UA HAL here that reaches the same simulated unit through its
             server, which must give the same record.
+        system: A compiled system to run in instead of the one `spec.object_ref` and
+            `spec.scene` describe (an emulated plant's hidden object and scene); the
+            result's object id is then `spec.object_ref`.
     """
     base = {
         "face": spec.face,
@@ -220,8 +228,11 @@ def run_experiment(spec: ExperimentSpec, *, tu_hal: UnitHAL | None = None) -> Ex
         "seed": spec.seed,
     }
     base.update(zip(DOCKING_ERROR_COLUMNS, spec.docking_error.as_mm_deg(), strict=True))
-    system = system_for(spec.object_ref, spec.units, spec.scene)
-    object_id = _object(spec.object_ref, spec.units).object_id
+    if system is None:
+        system = system_for(spec.object_ref, spec.units, spec.scene)
+        object_id = _object(spec.object_ref, spec.units).object_id
+    else:
+        object_id = spec.object_ref
     frames: list[Frame] = []
     phase = ["settle"]
 

@@ -1,0 +1,11 @@
+"""An emulated physical plant with hidden ground truth (issue 12).
+
+`EmulatedPlant(seed)` stands in for the real transfer system: it runs experiments E^P in a
+simulation whose parameters the twin never sees and returns rows like the real calibration
+table (`PLANT_COLUMNS`). The package sits above `transfertwin.study` in the layering, so no
+calibration, study or validation code can import it; `transfertwin.rehearsal` drives both.
+"""
+
+from transfertwin.plant._plant import PLANT_COLUMNS, EmulatedPlant, PlantRequest
+
+__all__ = ["PLANT_COLUMNS", "EmulatedPlant", "PlantRequest"]

@@ -1,0 +1,281 @@
+"""`EmulatedPlant`: a "physical" transfer system with hidden ground truth (issue 12).
+
+A plant is drawn from a seed (`transfertwin.plant._truth`): per object hidden resting
+features (a protrusion per face from a wider prior than the twin's), a centre-of-mass
+offset and a mass factor; friction μ, gap, a belt-speed error, a height step and pitch of
+the docked TU, placement noise; per-station docking errors from the real data's copula with
+perturbed location and scale; and a small probability that a recorded outcome is flipped.
+
+Its experiments E^P are simulations in its own hidden scene. The twin sees only what a real
+plant's log shows: one row per experiment with the columns of the real calibration table
+(`PLANT_COLUMNS`). The hidden parameters live in name-mangled slots; nothing public returns
+them (`fingerprint` is a hash, for reproducibility checks). Same seed and same requests →
+same rows, bit for bit, with any number of workers.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import multiprocessing as mp
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass
+
+import mujoco
+import numpy as np
+
+from transfertwin._errors import InputError
+from transfertwin.objects import ProxySpec, builtin_ids, load_builtin, proxy_model
+from transfertwin.ots import check_theta_deg, parse_conveyor, parse_face
+from transfertwin.plant._truth import (
+    PLANT_TAG,
+    DockingTruth,
+    ObjectTruth,
+    SceneTruth,
+    draw_docking,
+    draw_object,
+    draw_scene,
+    real_copula,
+)
+from transfertwin.sim import (
+    DockingError,
+    GapAreaLayout,
+    MujocoUnitHAL,
+    SceneConfig,
+    VirtualTransferSystem,
+    gap_area_m2,
+)
+from transfertwin.study.experiment import ExperimentSpec, run_experiment
+
+__all__ = ["PLANT_COLUMNS", "EmulatedPlant", "PlantRequest"]
+
+#: Columns of a plant row: those of the real calibration table.
+PLANT_COLUMNS = (
+    "experiment_id", "transfer_unit", "object_id", "theta_deg", "face", "conveyor", "success",
+    "dock_err_x_mm", "dock_err_y_mm", "dock_err_theta_deg", "gap_area_cm2",
+)  # fmt: skip
+
+#: Attempts per experiment when the plant's simulation does not give a valid outcome
+#: (an invalid settled state or a diverged run): a real operator would place again.
+_ATTEMPTS = 3
+
+
+@dataclass(frozen=True)
+class PlantRequest:
+    """One experiment asked of the plant: an object and a pre-transfer state."""
+
+    object_id: str
+    face: str
+    conveyor: str
+    theta_deg: int
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "face", parse_face(self.face))
+        object.__setattr__(self, "conveyor", parse_conveyor(self.conveyor))
+        object.__setattr__(self, "theta_deg", check_theta_deg(self.theta_deg))
+
+
+class _SlippingHAL(MujocoUnitHAL):
+    """A unit whose belts run `scale` times the commanded speed (reports the command)."""
+
+    def __init__(self, system: VirtualTransferSystem, unit: str, scale: float) -> None:
+        super().__init__(system, unit)
+        self._scale = scale
+        self._commanded: dict[str, float] = {}
+
+    def set_belt_speed(self, belt: str, speed_m_s: float) -> None:
+        super().set_belt_speed(belt, speed_m_s * self._scale)
+        self._commanded[belt] = float(speed_m_s)
+
+    def belt_speed(self, belt: str) -> float:
+        return self._commanded.get(belt, 0.0)
+
+
+class _PlantSystem(VirtualTransferSystem):
+    """The plant's compiled system: the TU docks with a height step and a pitch."""
+
+    def __init__(self, obj: ObjectTruth, scene: SceneTruth, cfg: SceneConfig) -> None:
+        base = load_builtin(obj.object_id, features=False)
+        model = proxy_model(base, ProxySpec(obj.object_id, obj.object_id, obj.protrusions))
+        mass = model.mass
+        com = np.asarray(mass.com_m) + np.asarray(obj.com_offset_m)
+        inertia = np.asarray(mass.inertia_kg_m2) * obj.mass_scale
+        super().__init__(model.hulls, mass.mass_kg * obj.mass_scale, com, inertia, cfg)
+        self.tm = _SlippingHAL(self, "tm", scene.belt_speed_scale)
+        self.tu = _SlippingHAL(self, "tu", scene.belt_speed_scale)
+        self._step_z = scene.step_z_m
+        self._pitch = scene.pitch_rad
+
+    def dock(self, docking_error: DockingError) -> None:
+        super().dock(docking_error)
+        mocap = self._tu_mocap
+        self.data.mocap_pos[mocap][2] = self._step_z
+        pitch = np.array([math.cos(self._pitch / 2), 0.0, math.sin(self._pitch / 2), 0.0])
+        quat = np.empty(4)
+        mujoco.mju_mulQuat(quat, np.array(self.data.mocap_quat[mocap]), pitch)
+        self.data.mocap_quat[mocap] = quat
+        mujoco.mj_forward(self.model, self.data)
+
+
+def _scene_config(scene: SceneTruth) -> SceneConfig:
+    return SceneConfig().with_overrides(**{
+        "mu": scene.mu,
+        "gap_m": scene.gap_m,
+        "placement.sigma_xy_m": scene.sigma_xy_m,
+        "placement.sigma_theta_deg": scene.sigma_theta_deg,
+    })  # fmt: skip
+
+
+@dataclass(frozen=True)
+class _Job:
+    """Everything one plant experiment needs (sent to a worker process)."""
+
+    experiment_id: int
+    request: PlantRequest
+    obj: ObjectTruth
+    scene: SceneTruth
+    station: str
+    error_mm_deg: tuple[float, float, float]
+    seeds: tuple[int, ...]
+    flip_u: float
+
+
+_SYSTEMS: dict[tuple[ObjectTruth, SceneTruth], _PlantSystem] = {}
+
+
+def _system(obj: ObjectTruth, scene: SceneTruth) -> _PlantSystem:
+    key = (obj, scene)
+    if key not in _SYSTEMS:
+        if len(_SYSTEMS) >= 4:
+            _SYSTEMS.clear()
+        _SYSTEMS[key] = _PlantSystem(obj, scene, _scene_config(scene))
+    return _SYSTEMS[key]
+
+
+def _run_job(job: _Job) -> dict[str, object]:
+    """One E^P: simulate in the hidden scene (placing again if needed), record, maybe flip."""
+    req, cfg = job.request, _scene_config(job.scene)
+    error = DockingError.from_mm_deg(*job.error_mm_deg)
+    system = _system(job.obj, job.scene)
+    success = 0
+    for seed in job.seeds:
+        spec = ExperimentSpec(req.object_id, req.face, req.conveyor, req.theta_deg,
+                              docking_error=error, scene=cfg, seed=seed)  # fmt: skip
+        result = run_experiment(spec, system=system)
+        if result.status == "ok":
+            success = int(result.success or 0)
+            break
+    if job.flip_u < job.scene.flip_p:
+        success = 1 - success
+    gap = gap_area_m2(GapAreaLayout.fitted(), error, req.conveyor) * 1e4
+    x, y, t = job.error_mm_deg
+    return {
+        "experiment_id": job.experiment_id, "transfer_unit": job.station,
+        "object_id": req.object_id, "theta_deg": req.theta_deg, "face": req.face,
+        "conveyor": req.conveyor, "success": success, "dock_err_x_mm": x, "dock_err_y_mm": y,
+        "dock_err_theta_deg": t, "gap_area_cm2": round(gap, 2),
+    }  # fmt: skip
+
+
+class EmulatedPlant:
+    """A transfer system with hidden ground truth, drawn from `seed`.
+
+    Only `seed`, `stations`, `experiments_run`, `fingerprint` and `run` are public; the
+    hidden parameters cannot be read through them.
+
+    Args:
+        seed: Plant seed (non-negative integer): draws every hidden parameter.
+    """
+
+    __slots__ = ("__docking", "__next_id", "__scene", "__seed")
+
+    def __init__(self, seed: int) -> None:
+        if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+            raise InputError(f"--plant-seed must be a non-negative integer, got {seed!r}")
+        self.__seed = seed
+        self.__scene: SceneTruth = draw_scene(seed)
+        self.__docking: DockingTruth = draw_docking(seed)
+        self.__next_id = 0
+
+    def __repr__(self) -> str:
+        return f"EmulatedPlant(seed={self.__seed})"
+
+    def __reduce__(self) -> None:  # type: ignore[override]
+        raise TypeError("an EmulatedPlant cannot be pickled (its parameters are hidden)")
+
+    @property
+    def seed(self) -> int:
+        """The plant seed."""
+        return self.__seed
+
+    @property
+    def stations(self) -> tuple[str, ...]:
+        """Names of the plant's transfer units (as a real plant's log shows them)."""
+        return self.__docking.stations
+
+    @property
+    def experiments_run(self) -> int:
+        """Experiments run so far (the next experiment id)."""
+        return self.__next_id
+
+    def fingerprint(self, object_ids: Sequence[str] = ()) -> str:
+        """SHA-256 of the hidden parameters (scene, docking, and the given objects): equal
+        for equal plants, and reveals nothing of them."""
+        parts = [asdict(self.__scene), asdict(self.__docking)]
+        parts += [asdict(draw_object(self.__seed, o)) for o in object_ids]
+        return hashlib.sha256(repr(parts).encode()).hexdigest()
+
+    def _jobs(self, requests: Sequence[PlantRequest]) -> list[_Job]:
+        known = set(builtin_ids())
+        bad = sorted({r.object_id for r in requests} - known)
+        if bad:
+            raise InputError(f"the plant has no object {', '.join(bad)} (it holds o1..o37)")
+        copula, dock = real_copula(), self.__docking
+        jobs = []
+        for req in requests:
+            eid = self.__next_id
+            self.__next_id += 1
+            ss = np.random.SeedSequence([PLANT_TAG, self.__seed, 4, eid])
+            words = [int(w) for w in ss.generate_state(2 + _ATTEMPTS)]
+            raw, units = copula.sample_with_units(1, words[0])
+            k = dock.stations.index(units[0])
+            err = np.asarray(dock.shift[k]) + np.asarray(dock.scale[k]) * raw[0]
+            err = np.clip(err, [-150.0, -150.0, -25.0], [150.0, 150.0, 25.0])
+            flip_u = float(np.random.default_rng(words[1]).random())
+            jobs.append(_Job(
+                eid, req, draw_object(self.__seed, req.object_id), self.__scene, units[0],
+                tuple(round(float(v), 2) for v in err), tuple(words[2:]), flip_u,
+            ))  # fmt: skip
+        return jobs
+
+    def run(
+        self,
+        requests: Sequence[PlantRequest],
+        *,
+        workers: int = 1,
+        on_progress: Callable[[int, int], None] | None = None,
+    ) -> list[dict[str, object]]:
+        """Run experiments E^P; one row per request, in request order (`PLANT_COLUMNS`).
+
+        Experiment ids continue from earlier calls, and each experiment's random draws
+        (station, docking error, placement, outcome noise) follow from the plant seed and
+        its id, so the same sequence of calls gives the same rows.
+        """
+        if workers < 1:
+            raise InputError(f"workers must be at least 1, got {workers}")
+        jobs = self._jobs(list(requests))
+        report = on_progress or (lambda done, total: None)
+        report(0, len(jobs))
+        rows: list[dict[str, object]] = []
+        if workers == 1 or len(jobs) <= 1:
+            for job in jobs:
+                rows.append(_run_job(job))
+                report(len(rows), len(jobs))
+            return rows
+        ctx = mp.get_context("spawn")
+        with ProcessPoolExecutor(min(workers, len(jobs)), mp_context=ctx) as pool:
+            for row in pool.map(_run_job, jobs):
+                rows.append(row)
+                report(len(rows), len(jobs))
+        return rows

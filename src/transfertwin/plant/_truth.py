@@ -1,0 +1,122 @@
+"""The hidden ground truth of an emulated plant, drawn from its seed.
+
+Everything here is private to `transfertwin.plant`: the twin sees a plant only through
+`EmulatedPlant.run` (requests in, outcome rows out). The priors are deliberately wider than
+the twin's: the built-in cores' shipped features are depths 0, 6, 24 and 26 mm under the
+face's centre; a plant object's feature may lie anywhere under the face, with any depth in
+0..32 mm, and its mass is not uniform.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import zlib
+from dataclasses import dataclass
+
+import numpy as np
+
+from transfertwin.objects import Protrusion
+from transfertwin.study.docking import PerStationCopula, read_docking_errors
+
+__all__: list[str] = []
+
+#: Tag mixed into every seed of the plant, so its streams never meet the twin's.
+PLANT_TAG = 0x504C4E54  # "PLNT"
+
+
+@dataclass(frozen=True)
+class ObjectTruth:
+    """One plant object: resting features, centre-of-mass offset (F_O, m), mass factor."""
+
+    object_id: str
+    protrusions: tuple[Protrusion, ...]
+    com_offset_m: tuple[float, float, float]
+    mass_scale: float
+
+
+@dataclass(frozen=True)
+class SceneTruth:
+    """The plant's scene: friction, gap, belt-speed error, TU height step and pitch,
+    placement noise, outcome flip probability."""
+
+    mu: float
+    gap_m: float
+    belt_speed_scale: float
+    step_z_m: float
+    pitch_rad: float
+    sigma_xy_m: float
+    sigma_theta_deg: float
+    flip_p: float
+
+
+@dataclass(frozen=True)
+class DockingTruth:
+    """Per-station perturbation of the real docking-error copula: value = shift + scale * x
+    per component (mm, mm, deg), station order of the fitted copula."""
+
+    stations: tuple[str, ...]
+    shift: tuple[tuple[float, float, float], ...]
+    scale: tuple[tuple[float, float, float], ...]
+
+
+def _rng(seed: int, *key: int) -> np.random.Generator:
+    return np.random.default_rng([PLANT_TAG, seed, *key])
+
+
+def draw_object(seed: int, object_id: str) -> ObjectTruth:
+    """The hidden object `object_id` of plant `seed` (independent of the other objects)."""
+    rng = _rng(seed, 1, zlib.crc32(object_id.encode()))
+    prots = []
+    for face in ("front", "back"):
+        depth = 0.0 if rng.random() < 0.3 else float(rng.uniform(0.004, 0.032))
+        prots.append(
+            Protrusion(
+                face,
+                round(depth, 4),
+                x_frac=round(float(rng.uniform(0.25, 0.75)), 3),
+                y_frac=round(float(rng.uniform(0.35, 0.65)), 3),
+                size_x_m=round(float(rng.uniform(0.004, 0.012)), 4),
+                size_y_m=round(float(rng.uniform(0.02, 0.05)), 4),
+            )
+        )
+    com = (
+        float(np.clip(rng.normal(0.0, 0.004), -0.01, 0.01)),
+        float(np.clip(rng.normal(0.0, 0.002), -0.005, 0.005)),
+        float(np.clip(rng.normal(0.0, 0.002), -0.005, 0.005)),
+    )
+    return ObjectTruth(object_id, tuple(prots), com, float(rng.uniform(0.9, 1.1)))
+
+
+def draw_scene(seed: int) -> SceneTruth:
+    """The hidden scene of plant `seed`."""
+    rng = _rng(seed, 2)
+    return SceneTruth(
+        mu=float(rng.uniform(0.38, 0.62)),
+        gap_m=float(rng.uniform(0.009, 0.016)),
+        belt_speed_scale=float(1.0 + rng.uniform(-0.05, 0.05)),
+        step_z_m=float(rng.uniform(-0.003, 0.003)),
+        pitch_rad=math.radians(float(rng.uniform(-1.0, 1.0))),
+        sigma_xy_m=float(rng.uniform(0.002, 0.004)),
+        sigma_theta_deg=float(rng.uniform(1.0, 3.0)),
+        flip_p=float(rng.uniform(0.01, 0.04)),
+    )
+
+
+@functools.lru_cache(maxsize=1)
+def real_copula() -> PerStationCopula:
+    """The per-station copula of the shipped real docking errors (fitted once per process)."""
+    errors, units = read_docking_errors(None, need_units=True)
+    return PerStationCopula.fit(errors, units)
+
+
+def draw_docking(seed: int) -> DockingTruth:
+    """The hidden docking-error perturbation of plant `seed`."""
+    rng = _rng(seed, 3)
+    stations = real_copula().units
+    shift = tuple(
+        (float(rng.normal(0, 2.0)), float(rng.normal(0, 2.0)), float(rng.normal(0, 0.3)))
+        for _ in stations
+    )
+    scale = tuple(tuple(float(v) for v in rng.lognormal(0.0, 0.15, size=3)) for _ in stations)
+    return DockingTruth(stations, shift, scale)  # type: ignore[arg-type]

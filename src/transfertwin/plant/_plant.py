@@ -27,7 +27,7 @@ import numpy as np
 
 from transfertwin._errors import InputError
 from transfertwin.objects import ProxySpec, builtin_ids, load_builtin, proxy_model
-from transfertwin.ots import check_theta_deg, parse_conveyor, parse_face
+from transfertwin.ots import state_index
 from transfertwin.plant._truth import (
     PLANT_TAG,
     DockingTruth,
@@ -71,9 +71,10 @@ class PlantRequest:
     theta_deg: int
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "face", parse_face(self.face))
-        object.__setattr__(self, "conveyor", parse_conveyor(self.conveyor))
-        object.__setattr__(self, "theta_deg", check_theta_deg(self.theta_deg))
+        state_index(self.face, self.conveyor, self.theta_deg)  # an experiment state (Eq. 6.7)
+        object.__setattr__(self, "face", self.face.strip().lower())
+        object.__setattr__(self, "conveyor", self.conveyor.strip().lower())
+        object.__setattr__(self, "theta_deg", int(self.theta_deg))
 
 
 class _SlippingHAL(MujocoUnitHAL):

@@ -1,0 +1,412 @@
+"""`rehearse`: the study's whole procedure against an emulated plant (issue 12).
+
+1. K calibration experiments E^P on the plant at random states (the study's design: random
+   face, conveyor and θ, objects in turn), split into training rows and held-out rows
+   (stratified by object).
+2. The twin before calibration (default scene, built-in cores with their shipped features)
+   replays the held-out rows: ``f05_before``.
+3. Virtual calibration on the training rows only: object calibration (`fit_proxy`, one
+   protrusion depth per face) and, with ``tune_trials`` > 0, a TPE search over μ and the gap
+   (`tune_tpe`) with the calibrated objects.
+4. The calibrated twin replays the held-out rows: ``f05_after``.
+5. Full-state prediction of every object on a θ grid, docking errors from a copula fitted
+   to the plant's logged errors; best/worst state per object (Alg. 1–4).
+6. Validation: V experiments on the plant and V virtual runs at each best/worst state;
+   Newcombe hybrid score intervals of p_V − p_P (Sec. 6.7).
+
+The twin's only inputs from the plant are the rows `EmulatedPlant.run` returns
+(`PLANT_COLUMNS`, like the real calibration table). F0.5 is the mean over the R replay
+runs of each run's F0.5 (the study's Table 6.4 definition, Appendix A.2).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import logging
+import math
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from transfertwin._atomic import write_atomic
+from transfertwin._errors import InputError
+from transfertwin.objects import PROXY_SUFFIX, builtin_ids, write_proxy
+from transfertwin.ots import FACES, THETA_SINGLE, experiment_states, filter_theta_step
+from transfertwin.plant import PLANT_COLUMNS, EmulatedPlant, PlantRequest
+from transfertwin.sim import DockingError, SceneConfig
+from transfertwin.store import DOCKING_ERROR_COLUMNS
+from transfertwin.study.calibration import (
+    CalibrationResult,
+    best_trial,
+    calibrate,
+    fit_proxy,
+    scene_with,
+    tune_tpe,
+)
+from transfertwin.study.docking import MIN_ROWS, GaussianCopula, ResampledDockingErrors
+from transfertwin.study.experiment import ExperimentSpec, experiment_seeds, run_rows
+from transfertwin.study.fullstate import analyze
+from transfertwin.study.validation import compare
+
+__all__ = [
+    "REHEARSAL_KEYS",
+    "RehearsalConfig",
+    "calibration_design",
+    "holdout_split",
+    "parse_object_list",
+    "rehearse",
+]
+
+log = logging.getLogger(__name__)
+
+#: Keys every ``rehearsal.json`` has.
+REHEARSAL_KEYS = (
+    "f05_before", "f05_after", "significant_best", "significant_worst", "objects",
+    "plant_experiments", "virtual_experiments",
+)  # fmt: skip
+
+Stage = Callable[[str], None]
+Progress = Callable[[int, int], None]
+
+
+def parse_object_list(text: str) -> tuple[str, ...]:
+    """``'o3,o7'`` → ('o3', 'o7'); built-in cores only (the plant holds o1..o37)."""
+    ids = tuple(p.strip() for p in text.split(",") if p.strip())
+    if not ids:
+        raise InputError("--objects: name at least one object, e.g. o3,o7")
+    known = set(builtin_ids())
+    bad = [o for o in ids if o not in known]
+    if bad:
+        raise InputError(f"--objects: unknown object(s) {', '.join(bad)} (built-in o1..o37)")
+    if len(set(ids)) != len(ids):
+        raise InputError("--objects: an object is named twice")
+    return ids
+
+
+@dataclass(frozen=True)
+class RehearsalConfig:
+    """One rehearsal.
+
+    Attributes:
+        plant_seed: Seed of the emulated plant (draws its hidden parameters).
+        objects: Built-in core ids.
+        calibration_experiments: K plant experiments for calibration (and held-out scoring).
+        runs: Replay repetitions R per row and candidate, and runs per state in the
+            full-state prediction.
+        validation_runs: Plant experiments (and virtual runs) per best/worst state.
+        theta_step: θ grid of the full-state prediction (degrees, divides 360).
+        holdout: Share of the K experiments held out for f05_before/f05_after.
+        depths_mm: Candidate protrusion depths of the object calibration (0 is added).
+        tune_trials: TPE trials over μ and the gap (0: object calibration only).
+        seed: Master seed of the twin's side (design, split, simulations).
+        workers: Worker processes.
+    """
+
+    plant_seed: int
+    objects: tuple[str, ...]
+    calibration_experiments: int
+    runs: int = 2
+    validation_runs: int = 10
+    theta_step: int = 90
+    holdout: float = 0.3
+    depths_mm: tuple[float, ...] = (8.0, 16.0, 24.0, 32.0)
+    tune_trials: int = 0
+    seed: int = 0
+    workers: int = 1
+    scene: SceneConfig = field(default_factory=SceneConfig)
+
+    def __post_init__(self) -> None:
+        for name in ("plant_seed", "seed"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+                raise InputError(f"--{name.replace('_', '-')} must be a non-negative integer")
+        for name in ("calibration_experiments", "runs", "validation_runs", "workers"):
+            if getattr(self, name) < 1:
+                raise InputError(f"--{name.replace('_', '-')} must be at least 1")
+        if self.tune_trials < 0:
+            raise InputError("--tune-trials must be >= 0")
+        if not (0 < self.holdout < 1):
+            raise InputError(f"--holdout must be in (0, 1), got {self.holdout}")
+        n_test = round(self.calibration_experiments * self.holdout)
+        if n_test < 1 or self.calibration_experiments - n_test < 2:
+            raise InputError(
+                "--calibration-experiments too small for the hold-out split "
+                f"({self.calibration_experiments} x {self.holdout})"
+            )
+        if not (1 <= self.theta_step <= 360 and 360 % self.theta_step == 0):
+            raise InputError(f"--theta-step must divide 360, got {self.theta_step}")
+        if not self.objects:
+            raise InputError("--objects: name at least one object")
+        if any(not (0 < d <= 100) for d in self.depths_mm):
+            raise InputError("--depths-mm must be in (0, 100]")
+
+
+def calibration_design(objects: Sequence[str], k: int, seed: int) -> list[PlantRequest]:
+    """K random pre-transfer states, objects in turn (the study's calibration design): face
+    and θ uniform, the conveyor 'both' where θ allows it (Eq. 6.5), else left or right."""
+    rng = np.random.default_rng([seed, 0x44455349])
+    single = set(THETA_SINGLE)
+    out = []
+    for i in range(k):
+        face = FACES[int(rng.integers(len(FACES)))]
+        theta = int(rng.integers(-179, 181))
+        conveyor = ("left", "right")[int(rng.integers(2))] if theta in single else "both"
+        out.append(PlantRequest(objects[i % len(objects)], face, conveyor, theta))
+    return out
+
+
+def holdout_split(
+    rows: Sequence[Mapping[str, object]], fraction: float, seed: int
+) -> tuple[list[Mapping[str, object]], list[Mapping[str, object]]]:
+    """(training rows, held-out rows): per object, a `fraction` of its rows held out."""
+    rng = np.random.default_rng([seed, 0x484F4C44])
+    test_idx: set[int] = set()
+    by_object: dict[str, list[int]] = {}
+    for i, r in enumerate(rows):
+        by_object.setdefault(str(r["object_id"]), []).append(i)
+    n_test = round(len(rows) * fraction)
+    quota = {o: len(ix) / len(rows) * n_test for o, ix in by_object.items()}
+    for o, ix in by_object.items():
+        take = min(len(ix) - 1, max(1, round(quota[o]))) if len(ix) > 1 else 0
+        test_idx.update(int(j) for j in rng.choice(ix, size=take, replace=False))
+    train = [r for i, r in enumerate(rows) if i not in test_idx]
+    test = [r for i, r in enumerate(rows) if i in test_idx]
+    return train, test
+
+
+def _scores(result: CalibrationResult) -> dict[str, float]:
+    p, y = result.probabilities(), np.asarray(result.actual)
+    out = {m: result.metric(m) for m in ("f05", "precision", "recall", "accuracy")}
+    out["brier"] = float(np.mean((p - y) ** 2))
+    return out
+
+
+def _base_rate_f05(y: Sequence[int]) -> float:
+    """F0.5 of the predictor that always says 'success' (precision = base rate, recall 1)."""
+    p = sum(y) / len(y)
+    return 0.0 if p == 0 else 1.25 * p / (0.25 * p + 1)
+
+
+def _csv_text(rows: Sequence[Mapping[str, object]], columns: Sequence[str]) -> str:
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, columns, lineterminator="\n", extrasaction="ignore")
+    writer.writeheader()
+    writer.writerows(rows)
+    return buf.getvalue()
+
+
+def _docking_model(rows: Sequence[Mapping[str, object]]):
+    """The twin's docking-error model: a copula fitted to the plant's logged errors, or
+    those errors resampled when there are fewer than `MIN_ROWS`."""
+    errors = np.array([[float(r[c]) for c in DOCKING_ERROR_COLUMNS] for r in rows])
+    if len(errors) >= MIN_ROWS:
+        try:
+            return GaussianCopula.fit(errors)
+        except InputError:
+            log.warning("copula fit failed on %d plant errors; resampling them", len(errors))
+    return ResampledDockingErrors(tuple(tuple(map(float, e)) for e in errors), "plant")
+
+
+def _state_grid(step: int) -> list[tuple[str, str, int]]:
+    return [s.key for s in filter_theta_step(experiment_states(), step)]
+
+
+def _virtual_specs(
+    object_map: Mapping[str, str], states: Sequence[tuple[str, str, str, int]], runs: int,
+    docking, scene: SceneConfig, seed: int,
+) -> list[ExperimentSpec]:  # fmt: skip
+    specs = []
+    for i, (oid, face, conveyor, theta) in enumerate(states):
+        for run in range(runs):
+            exp_seed, dock_seed = experiment_seeds(seed, oid, i, run)
+            specs.append(ExperimentSpec(
+                object_map[oid], face, conveyor, theta, docking_error=docking.sample(dock_seed),
+                scene=scene, run=run, seed=exp_seed,
+            ))  # fmt: skip
+    return specs
+
+
+def rehearse(
+    config: RehearsalConfig,
+    out: Path,
+    *,
+    on_stage: Stage | None = None,
+    on_progress: Progress | None = None,
+) -> dict[str, object]:
+    """Run one rehearsal and write its outputs into `out` (created if needed).
+
+    Writes ``rehearsal.json``, ``plant_calibration.csv``, ``plant_validation.csv``,
+    ``virtual_validation.csv``, ``fullstate.csv`` and ``objects/<id>.proxy.json``.
+
+    Returns:
+        The ``rehearsal.json`` document (keys `REHEARSAL_KEYS` and more).
+    """
+    stage = on_stage or (lambda name: None)
+    progress = on_progress or (lambda done, total: None)
+    cfg, t0 = config, time.perf_counter()
+    plant = EmulatedPlant(cfg.plant_seed)
+    out.mkdir(parents=True, exist_ok=True)
+    calib = {"runs": cfg.runs, "seed": cfg.seed, "workers": cfg.workers}
+    virtual = 0
+
+    stage(f"plant: {cfg.calibration_experiments} calibration experiments")
+    design = calibration_design(cfg.objects, cfg.calibration_experiments, cfg.seed)
+    plant_rows = plant.run(design, workers=cfg.workers, on_progress=progress)
+    train, test = holdout_split(plant_rows, cfg.holdout, cfg.seed)
+    y_test = [int(r["success"]) for r in test]
+
+    def replay(rows, scene, object_map=None):
+        nonlocal virtual
+        total, done = len(rows) * cfg.runs, [0]
+
+        def tick() -> None:
+            done[0] += 1
+            progress(done[0], total)
+
+        virtual += total
+        return calibrate(rows, scene=scene, object_map=object_map, on_result=tick, **calib)
+
+    stage("twin before calibration: replay of the held-out experiments")
+    before = _scores(replay(test, cfg.scene))
+
+    obj_dir = out / "objects"
+    object_map: dict[str, str] = {}
+    fits: dict[str, dict[str, object]] = {}
+    for oid in cfg.objects:
+        if not any(r["object_id"] == oid for r in train):
+            object_map[oid] = oid
+            fits[oid] = {"calibrated": False, "reason": "no training rows"}
+            continue
+        stage(f"object calibration of {oid}")
+        fit = fit_proxy(
+            train, oid, depths_m=[d / 1000 for d in cfg.depths_mm],
+            work_dir=obj_dir / "candidates", scene=cfg.scene, on_progress=progress, **calib,
+        )  # fmt: skip
+        virtual += sum(f.probabilities.size for f in fit.faces) * cfg.runs
+        path = write_proxy(fit.spec, obj_dir / f"{oid}{PROXY_SUFFIX}")
+        object_map[oid] = str(path)
+        fits[oid] = {
+            "calibrated": True,
+            "proxy": str(path.relative_to(out)),
+            "depth_mm": {p.face: round(p.depth_m * 1000, 3) for p in fit.spec.protrusions},
+        }
+
+    scene, tuned = cfg.scene, None
+    if cfg.tune_trials:
+        stage(f"scene tuning: {cfg.tune_trials} TPE trials over mu and gap")
+        trials = tune_tpe(
+            train, {"mu": (0.3, 0.7), "gap_mm": (8.0, 18.0)}, base=cfg.scene,
+            n_trials=cfg.tune_trials, object_map=object_map, **calib,
+        )  # fmt: skip
+        virtual += cfg.tune_trials * len(train) * cfg.runs
+        best = best_trial(trials)
+        scene, tuned = scene_with(cfg.scene, best.params), {**best.params, "f05": best.score}
+
+    stage("calibrated twin: replay of the held-out experiments")
+    after = _scores(replay(test, scene, object_map))
+
+    stage("full-state prediction")
+    docking = _docking_model(plant_rows)
+    grid = [(o, *s) for o in cfg.objects for s in _state_grid(cfg.theta_step)]
+    specs = _virtual_specs(object_map, grid, cfg.runs, docking, scene, cfg.seed)
+    full_rows = _collect(run_rows(specs, cfg.workers), len(specs), progress)
+    virtual += len(specs)
+    analysis = analyze(full_rows)
+
+    stage(f"validation: {cfg.validation_runs} plant and virtual runs per best/worst state")
+    chosen: list[tuple[str, str, str, int]] = []
+    picks: dict[str, dict[str, tuple[str, str, str, int]]] = {}
+    for sel in analysis.selections:
+        picks[sel.object_id] = {}
+        for kind, st in (("best", sel.best), ("worst", sel.worst)):
+            key = (sel.object_id, st.face, st.conveyor, st.theta_deg)
+            picks[sel.object_id][kind] = key
+            if key not in chosen:
+                chosen.append(key)
+    val_requests = [PlantRequest(*k) for k in chosen for _ in range(cfg.validation_runs)]
+    plant_val = plant.run(val_requests, workers=cfg.workers, on_progress=progress)
+    vspecs = _virtual_specs(object_map, chosen, cfg.validation_runs, docking, scene, cfg.seed + 1)
+    virtual_val = _collect(run_rows(vspecs, cfg.workers), len(vspecs), progress)
+    virtual += len(vspecs)
+    by_state = {c.key: c for c in compare(virtual_val, plant_val)}
+
+    objects: dict[str, object] = {}
+    significant = {"best": [], "worst": []}
+    for oid in cfg.objects:
+        entry: dict[str, object] = {"calibration": fits[oid]}
+        for kind, key in picks.get(oid, {}).items():
+            c = by_state.get(key)
+            if c is None:
+                continue
+            entry[kind] = {
+                "face": key[1], "conveyor": key[2], "theta_deg": key[3],
+                "n_v": c.n_v, "k_v": c.k_v, "p_v": c.p_v, "n_p": c.n_p, "k_p": c.k_p,
+                "p_p": c.p_p, "diff_low": c.diff_low, "diff_high": c.diff_high,
+                "significant": c.significant,
+            }  # fmt: skip
+            if c.significant:
+                significant[kind].append(oid)
+        n_obj = sum(r["object_id"] == oid for r in plant_rows)
+        k_obj = sum(int(r["success"]) for r in plant_rows if r["object_id"] == oid)
+        entry["plant_calibration_share"] = k_obj / n_obj if n_obj else math.nan
+        objects[oid] = entry
+
+    doc: dict[str, object] = {
+        "f05_before": before["f05"],
+        "f05_after": after["f05"],
+        "significant_best": len(significant["best"]),
+        "significant_worst": len(significant["worst"]),
+        "significant_best_objects": significant["best"],
+        "significant_worst_objects": significant["worst"],
+        "objects": objects,
+        "plant_experiments": len(plant_rows) + len(plant_val),
+        "virtual_experiments": virtual,
+        "scores_before": before,
+        "scores_after": after,
+        "f05_base_rate": _base_rate_f05(y_test),
+        "held_out": len(test),
+        "training": len(train),
+        "tuned_scene": tuned,
+        "config": {k: v for k, v in asdict(cfg).items() if k != "scene"},
+        "seconds": round(time.perf_counter() - t0, 1),
+        "note": (
+            "f05_* are mean per-run F0.5 of the twin's replay of held-out plant experiments "
+            "(never used in calibration); significant_* count objects whose best/worst state "
+            "differs between twin and plant (Newcombe hybrid score interval of p_V - p_P "
+            "excludes 0, alpha 0.05)."
+        ),
+    }
+    columns = list(PLANT_COLUMNS)
+    write_atomic(out / "plant_calibration.csv", _csv_text(plant_rows, columns))
+    write_atomic(out / "plant_validation.csv", _csv_text(plant_val, columns))
+    vcols = ["object_id", "face", "conveyor", "theta_deg", "run", "seed", "status", "success",
+             *DOCKING_ERROR_COLUMNS]  # fmt: skip
+    write_atomic(out / "virtual_validation.csv", _csv_text(virtual_val, vcols))
+    write_atomic(out / "fullstate.csv", _csv_text(full_rows, vcols))
+    write_atomic(out / "rehearsal.json", json.dumps(doc, indent=2, default=_json) + "\n")
+    return doc
+
+
+def _json(value: object) -> object:
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, DockingError):
+        return value.as_mm_deg()
+    raise TypeError(f"not JSON serialisable: {type(value).__name__}")
+
+
+def _collect(rows, total: int, progress: Progress) -> list[dict[str, object]]:
+    out = []
+    progress(0, total)
+    for row in rows:
+        out.append(row)
+        progress(len(out), total)
+    order = {"front": 0, "back": 1, "left": 0, "both": 1, "right": 2}
+    return sorted(out, key=lambda r: (str(r["object_id"]), order[str(r["face"])],
+                                      order[str(r["conveyor"])], int(r["theta_deg"]),
+                                      int(r["run"])))  # fmt: skip

@@ -13,7 +13,16 @@ import sys
 from collections.abc import Sequence
 
 from transfertwin._errors import InputError
-from transfertwin.cli import _calibrate, _cps, _data, _docking, _study, _transfer, _validate
+from transfertwin.cli import (
+    _calibrate,
+    _cps,
+    _data,
+    _docking,
+    _rehearse,
+    _study,
+    _transfer,
+    _validate,
+)
 from transfertwin.cli._common import Parser
 
 __all__ = ["build_parser", "main"]
@@ -27,7 +36,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-v", "--verbose", action="count", default=0,
                         help="-v: progress messages (INFO), -vv: debug logging")  # fmt: skip
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for group in (_transfer, _study, _calibrate, _cps, _docking, _validate, _data):
+    for group in (_transfer, _study, _calibrate, _cps, _docking, _validate, _rehearse, _data):
         group.register(sub)
     return parser
 

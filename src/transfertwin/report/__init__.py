@@ -44,6 +44,7 @@ from transfertwin.report._polar_full_state import (
     plot_polar_full_state,
     polar_full_state_data,
 )
+from transfertwin.report._rehearsal_html import REHEARSAL_REPORT_NAME, write_rehearsal_report
 from transfertwin.report._sensitivity_plots import (
     MorrisBar,
     SensitivityPanel,
@@ -60,6 +61,7 @@ from transfertwin.report._validation_plots import (
 )
 
 __all__ = [
+    "REHEARSAL_REPORT_NAME",
     "REPORT_NAME",
     "RING_RADIUS",
     "BinaryPoint",
@@ -101,5 +103,6 @@ __all__ = [
     "sensitivity_plot_data",
     "validate_and_report",
     "validation_plot_data",
+    "write_rehearsal_report",
     "write_report",
 ]

@@ -1,0 +1,145 @@
+"""`transfertwin rehearse`: the whole calibrate → predict → validate loop on an emulated plant.
+
+Writes ``rehearsal.json``, ``report.html`` and the plant's and twin's rows into ``--out``.
+With several ``--calibration-experiments`` (``25,50,100``) each K gets ``--out/K<k>/`` and
+``--out/curve.json`` collects F0.5 and the significant differences against K.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from rich.console import Console
+
+from transfertwin._atomic import write_atomic
+from transfertwin._errors import InputError
+from transfertwin.cli._common import worker_count
+from transfertwin.cli._paths import out_dir
+from transfertwin.cli._progress import progress_bar
+
+__all__ = ["cmd_rehearse", "register"]
+
+
+def _counts(text: str) -> tuple[int, ...]:
+    try:
+        ks = tuple(int(p) for p in text.split(",") if p.strip())
+    except ValueError:
+        ks = ()
+    if not ks or any(k < 1 for k in ks) or len(set(ks)) != len(ks):
+        raise InputError(
+            f"--calibration-experiments expects K or distinct K1,K2,... >= 1, got {text!r}"
+        )
+    return ks
+
+
+def _depths(text: str) -> tuple[float, ...]:
+    try:
+        return tuple(float(p) for p in text.split(",") if p.strip())
+    except ValueError:
+        raise InputError(f"--depths-mm expects D1,D2,... in mm, got {text!r}") from None
+
+
+def cmd_rehearse(args: argparse.Namespace) -> int:
+    """Rehearse the study's procedure against an emulated plant."""
+    from transfertwin.rehearsal import RehearsalConfig, parse_object_list, rehearse
+    from transfertwin.report import write_rehearsal_report
+    from transfertwin.sim import SceneConfig
+    from transfertwin.study.experiment import load_profile
+
+    ks = _counts(args.calibration_experiments)
+    scene = load_profile(args.profile)[1] if args.profile else SceneConfig()
+    configs = [
+        RehearsalConfig(
+            plant_seed=args.plant_seed, objects=parse_object_list(args.objects),
+            calibration_experiments=k, runs=args.runs, validation_runs=args.validation_runs,
+            theta_step=args.theta_step, holdout=args.holdout, depths_mm=_depths(args.depths_mm),
+            tune_trials=args.tune_trials, seed=args.seed, workers=worker_count(args.workers),
+            scene=scene,
+        )
+        for k in ks
+    ]  # fmt: skip
+    out = out_dir(args.out)
+    console = Console(stderr=True)
+    curve = []
+    for cfg in configs:
+        where = out if len(configs) == 1 else out / f"K{cfg.calibration_experiments}"
+        with progress_bar("rehearse", console) as update:
+
+            def stage(name: str) -> None:
+                console.print(f"[bold]{name}")
+
+            doc = rehearse(cfg, where, on_stage=stage, on_progress=update)
+        write_rehearsal_report(doc, where)
+        curve.append({
+            "calibration_experiments": cfg.calibration_experiments,
+            **{k: doc[k] for k in ("f05_before", "f05_after", "f05_base_rate",
+                                   "significant_best", "significant_worst")},
+        })  # fmt: skip
+        print(
+            f"K={cfg.calibration_experiments}: F0.5 held-out before {doc['f05_before']:.3f}, "
+            f"after {doc['f05_after']:.3f} (always-success {doc['f05_base_rate']:.3f}); "
+            f"significant best {doc['significant_best']}/{len(cfg.objects)}, worst "
+            f"{doc['significant_worst']}/{len(cfg.objects)}; {doc['plant_experiments']} plant "
+            f"and {doc['virtual_experiments']} virtual experiments in {doc['seconds']} s "
+            f"-> {where / 'rehearsal.json'}"
+        )
+    if len(configs) > 1:
+        write_atomic(out / "curve.json", json.dumps(curve, indent=2) + "\n")
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add `rehearse` to the CLI."""
+    p = sub.add_parser("rehearse", help="calibrate, predict and validate against an emulated plant")
+    p.add_argument(
+        "--plant-seed",
+        type=int,
+        required=True,
+        metavar="N",
+        help="seed of the emulated plant (draws its hidden parameters)",
+    )
+    p.add_argument("--objects", required=True, metavar="IDS", help="built-in cores, e.g. o3,o7")
+    p.add_argument(
+        "--calibration-experiments",
+        required=True,
+        metavar="K[,K2,...]",
+        help="plant experiments for calibration; several give a curve",
+    )
+    p.add_argument("--out", required=True, metavar="DIR", help="output directory")
+    p.add_argument(
+        "--runs", type=int, default=2, help="replay repetitions and runs per state (default 2)"
+    )
+    p.add_argument(
+        "--validation-runs",
+        type=int,
+        default=10,
+        help="plant and virtual runs per best/worst state (default 10)",
+    )
+    p.add_argument(
+        "--theta-step",
+        type=int,
+        default=90,
+        help="θ grid of the full-state prediction, degrees (default 90)",
+    )
+    p.add_argument(
+        "--holdout",
+        type=float,
+        default=0.3,
+        help="share of the K experiments held out for F0.5 (default 0.3)",
+    )
+    p.add_argument(
+        "--depths-mm",
+        default="8,16,24,32",
+        help="candidate protrusion depths of the object calibration (mm)",
+    )
+    p.add_argument(
+        "--tune-trials",
+        type=int,
+        default=0,
+        help="TPE trials over mu and gap after the object calibration (default 0)",
+    )
+    p.add_argument("--profile", metavar="TOML", help="the twin's starting profile")
+    p.add_argument("--seed", type=int, default=0, help="master seed of the twin's side")
+    p.add_argument("--workers", type=int, default=None, help="worker processes (default: CPUs)")
+    p.set_defaults(func=cmd_rehearse)  # fmt: skip

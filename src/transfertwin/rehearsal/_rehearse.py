@@ -48,7 +48,12 @@ from transfertwin.study.calibration import (
     scene_with,
     tune_tpe,
 )
-from transfertwin.study.docking import MIN_ROWS, GaussianCopula, ResampledDockingErrors
+from transfertwin.study.docking import (
+    MIN_ROWS,
+    GaussianCopula,
+    ResampledDockingErrors,
+    marginal_family,
+)
 from transfertwin.study.experiment import ExperimentSpec, experiment_seeds, run_rows
 from transfertwin.study.fullstate import analyze
 from transfertwin.study.validation import compare
@@ -69,6 +74,9 @@ REHEARSAL_KEYS = (
     "f05_before", "f05_after", "significant_best", "significant_worst", "objects",
     "plant_experiments", "virtual_experiments",
 )  # fmt: skip
+
+#: Marginal families of the twin's docking model (fast; see `transfertwin.plant`).
+_FAMILIES = ("normal", "truncnorm", "kde")
 
 Stage = Callable[[str], None]
 Progress = Callable[[int, int], None]
@@ -206,7 +214,7 @@ def _docking_model(rows: Sequence[Mapping[str, object]]):
     errors = np.array([[float(r[c]) for c in DOCKING_ERROR_COLUMNS] for r in rows])
     if len(errors) >= MIN_ROWS:
         try:
-            return GaussianCopula.fit(errors)
+            return GaussianCopula.fit(errors, families=[marginal_family(f) for f in _FAMILIES])
         except InputError:
             log.warning("copula fit failed on %d plant errors; resampling them", len(errors))
     return ResampledDockingErrors(tuple(tuple(map(float, e)) for e in errors), "plant")

@@ -18,6 +18,8 @@ HEADER = (
 T = ["transfer", "--object", "o1", "--face", "front", "--conveyor", "both", "--theta", "0"]
 TUNE = ["calibrate", "tune", "--out", "t", "--limit", "6"]
 SENS = ["calibrate", "sensitivity", "--limit", "2", "--out", "sens"]
+REH = ["rehearse", "--plant-seed", "1", "--objects", "o3", "--calibration-experiments", "20",
+       "--out", "reh"]  # fmt: skip
 STUDY = ["study", "run", "--db", "s.sqlite", "--objects", "o1", "--theta-step", "180"]
 
 BAD: list[tuple[str, list[str]]] = [
@@ -139,6 +141,15 @@ BAD: list[tuple[str, list[str]]] = [
     ),
     ("sensitivity missing proxy", [*SENS, "--object-map", "o1=missing.proxy.json"]),
     ("sensitivity into /sys", ["calibrate", "sensitivity", "--out", "/sys/sens"]),
+    ("rehearse unknown object", [*REH[:3], "o99", *REH[4:]]),
+    ("rehearse negative plant seed", ["rehearse", "--plant-seed", "-1", *REH[3:]]),
+    ("rehearse zero experiments", [*REH[:5], "0", *REH[6:]]),
+    ("rehearse bad experiment list", [*REH[:5], "25,x", *REH[6:]]),
+    ("rehearse too few to hold out", [*REH[:5], "2", *REH[6:]]),
+    ("rehearse zero validation runs", [*REH, "--validation-runs", "0"]),
+    ("rehearse theta step not dividing 360", [*REH, "--theta-step", "7"]),
+    ("rehearse holdout of 1", [*REH, "--holdout", "1"]),
+    ("rehearse into /sys", [*REH[:-1], "/sys/reh"]),
     ("unknown command", ["frobnicate"]),
 ]
 

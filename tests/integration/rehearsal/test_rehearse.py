@@ -1,0 +1,69 @@
+"""`rehearse` end to end on a tiny configuration; the twin's inputs are only plant rows."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import pytest
+
+from transfertwin.plant import PLANT_COLUMNS, EmulatedPlant
+from transfertwin.rehearsal import REHEARSAL_KEYS, RehearsalConfig, rehearse
+from transfertwin.rehearsal import _rehearse as module
+
+TINY = RehearsalConfig(
+    plant_seed=2, objects=("o3",), calibration_experiments=4, runs=1, validation_runs=1,
+    theta_step=180, depths_mm=(16.0,),
+)  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict, list]:
+    out = tmp_path_factory.mktemp("rehearsal")
+    seen: list[tuple[str, object]] = []
+    mp = pytest.MonkeyPatch()
+    for name in ("calibrate", "fit_proxy", "tune_tpe", "_docking_model"):
+        original = getattr(module, name)
+
+        def spy(*args, _name=name, _original=original, **kwargs):
+            seen.append((_name, (args, kwargs)))
+            return _original(*args, **kwargs)
+
+        mp.setattr(module, name, spy)
+    try:
+        doc = rehearse(TINY, out)
+    finally:
+        mp.undo()
+    return out, doc, seen
+
+
+@pytest.mark.slow
+def test_tiny_rehearsal_writes_every_key(tiny) -> None:
+    out, doc, _ = tiny
+    on_disk = json.loads((out / "rehearsal.json").read_text())
+    assert set(REHEARSAL_KEYS) <= set(on_disk)
+    with (out / "plant_validation.csv").open() as fh:
+        validation = list(csv.DictReader(fh))
+    assert on_disk["plant_experiments"] == 4 + len(validation) > 4
+    assert 0.0 <= on_disk["f05_before"] <= 1.0 and 0.0 <= on_disk["f05_after"] <= 1.0
+    assert set(on_disk["objects"]) == {"o3"}
+    assert (out / "objects" / "o3.proxy.json").is_file()
+    assert doc["virtual_experiments"] > 0
+
+
+@pytest.mark.slow
+def test_the_twin_sees_only_plant_rows(tiny) -> None:
+    out, _, seen = tiny
+    with (out / "plant_calibration.csv").open() as fh:
+        logged = [tuple(r.values()) for r in csv.DictReader(fh)]
+    names = {name for name, _ in seen}
+    assert {"calibrate", "fit_proxy", "_docking_model"} <= names
+    for name, (args, kwargs) in seen:
+        rows = args[0]
+        assert rows, name
+        for r in rows:
+            assert tuple(r) == PLANT_COLUMNS, name  # exactly the real table's columns
+            assert tuple(str(v) for v in r.values()) in logged, name
+        for value in (*args, *kwargs.values()):
+            assert not isinstance(value, EmulatedPlant), name

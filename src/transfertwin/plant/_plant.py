@@ -22,7 +22,6 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
 
-import mujoco
 import numpy as np
 
 from transfertwin._errors import InputError
@@ -94,7 +93,8 @@ class _SlippingHAL(MujocoUnitHAL):
 
 
 class _PlantSystem(VirtualTransferSystem):
-    """The plant's compiled system: the TU docks with a height step and a pitch."""
+    """The plant's compiled system: hidden object, mass and belt-speed error (the TU's
+    height step and pitch are scene settings, see `_scene_config`)."""
 
     def __init__(self, obj: ObjectTruth, scene: SceneTruth, cfg: SceneConfig) -> None:
         base = load_builtin(obj.object_id, features=False)
@@ -105,24 +105,14 @@ class _PlantSystem(VirtualTransferSystem):
         super().__init__(model.hulls, mass.mass_kg * obj.mass_scale, com, inertia, cfg)
         self.tm = _SlippingHAL(self, "tm", scene.belt_speed_scale)
         self.tu = _SlippingHAL(self, "tu", scene.belt_speed_scale)
-        self._step_z = scene.step_z_m
-        self._pitch = scene.pitch_rad
-
-    def dock(self, docking_error: DockingError) -> None:
-        super().dock(docking_error)
-        mocap = self._tu_mocap
-        self.data.mocap_pos[mocap][2] = self._step_z
-        pitch = np.array([math.cos(self._pitch / 2), 0.0, math.sin(self._pitch / 2), 0.0])
-        quat = np.empty(4)
-        mujoco.mju_mulQuat(quat, np.array(self.data.mocap_quat[mocap]), pitch)
-        self.data.mocap_quat[mocap] = quat
-        mujoco.mj_forward(self.model, self.data)
 
 
 def _scene_config(scene: SceneTruth) -> SceneConfig:
     return SceneConfig().with_overrides(**{
         "mu": scene.mu,
         "gap_m": scene.gap_m,
+        "layout.tu_height_offset_m": scene.step_z_m,
+        "layout.tu_pitch_deg": math.degrees(scene.pitch_rad),
         "placement.sigma_xy_m": scene.sigma_xy_m,
         "placement.sigma_theta_deg": scene.sigma_theta_deg,
     })  # fmt: skip

@@ -40,8 +40,9 @@ def test_calibration_csv_end_to_end(calibration_rows: list[dict[str, str]], tmp_
         reader = csv.DictReader(fh)
         assert tuple(reader.fieldnames or ()) == STATES_COLUMNS
         states = list(reader)
-    # Each state once (a 'both' state appears in a left and a right series).
+    # Each state once, also a 'both' state (which lies in a left and a right series).
     unique = {(r["object_id"], r["face"], r["conveyor"], r["theta_deg"]): r for r in states}
+    assert len(unique) == len(states)
     expected_n = Counter(
         (r["object_id"], r["face"], r["conveyor"], r["theta_deg"]) for r in calibration_rows
     )
@@ -53,8 +54,8 @@ def test_calibration_csv_end_to_end(calibration_rows: list[dict[str, str]], tmp_
     assert {key: int(r["n"]) for key, r in unique.items()} == dict(expected_n)
     assert {key: int(r["k"]) for key, r in unique.items() if int(r["k"])} == dict(expected_k)
     assert sum(int(r["k"]) for r in unique.values()) == 128
-    both = sum(1 for key in unique if key[2] == "both")
-    assert len(states) == len(unique) + both
+    both = [r for r in states if r["conveyor"] == "both"]
+    assert both and all(r["y_ma_left"] and r["y_ma_right"] for r in both)
 
     selection = json.loads((tmp_path / "selection.json").read_text())
     assert tuple(selection) == OBJECTS

@@ -166,15 +166,21 @@ def test_analyze_writes_states_csv_and_selection_json(tmp_path: Path) -> None:
         lines = list(csv.reader(fh))
     assert (
         ",".join(lines[0])
-        == "object_id,face,series,conveyor,theta_deg,n,k,y_mean,y_ma,ci_low,ci_high"
+        == "object_id,face,conveyor,theta_deg,n,k,y_mean,y_ma_left,y_ma_right,ci_low,ci_high"
     )
     assert tuple(lines[0]) == STATES_COLUMNS
     body = [dict(zip(lines[0], r, strict=True)) for r in lines[1:]]
-    # o1: 41 front 'both' (2 series each) + 21 back 'left' + 21 back 'both' (x2); o2: 1 'both' (x2).
-    assert len(body) == 41 * 2 + 21 + 21 * 2 + 2
+    # One row per state: o1 41 front 'both' + 21 back 'left' + 21 back 'both'; o2 1 'both'.
+    assert len(body) == 41 + 21 + 21 + 1
+    keys = [(r["object_id"], r["face"], r["conveyor"], r["theta_deg"]) for r in body]
+    assert len(set(keys)) == len(keys)
     r120 = [r for r in body if r["object_id"] == "o1" and r["theta_deg"] == "120"]
-    assert {r["series"] for r in r120} == {"front-left", "front-right"}
-    assert all(float(r["y_ma"]) == 1.0 and r["n"] == "2" and r["k"] == "2" for r in r120)
+    assert len(r120) == 1
+    assert float(r120[0]["y_ma_left"]) == float(r120[0]["y_ma_right"]) == 1.0
+    assert r120[0]["n"] == "2" and r120[0]["k"] == "2"
+    # A 'left' state is in the left series only.
+    back_left = [r for r in body if r["face"] == "back" and r["conveyor"] == "left"]
+    assert back_left and all(r["y_ma_left"] != "" and r["y_ma_right"] == "" for r in back_left)
     selection = json.loads((out / "selection.json").read_text())
     assert list(selection) == ["o1", "o2"]
     assert selection["o1"]["best"] == {
@@ -197,8 +203,11 @@ def test_analyze_writes_empty_fields_for_states_without_ok_rows(tmp_path: Path) 
     with (tmp_path / "states.csv").open(newline="") as fh:
         body = list(csv.DictReader(fh))
     r101 = [r for r in body if r["theta_deg"] == "101"]
-    assert len(r101) == 2
-    assert all(r["n"] == "0" and r["y_mean"] == r["y_ma"] == r["ci_low"] == "" for r in r101)
+    assert len(r101) == 1
+    assert all(
+        r["n"] == "0" and r["y_mean"] == r["y_ma_left"] == r["y_ma_right"] == r["ci_low"] == ""
+        for r in r101
+    )
 
 
 def test_analyze_bad_input_writes_nothing(tmp_path: Path) -> None:

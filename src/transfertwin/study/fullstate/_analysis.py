@@ -251,12 +251,14 @@ def _fmt(value: float | Fraction | None) -> str:
 
 
 def states_csv_text(result: AnalysisResult) -> str:
-    """``states.csv``: one row per state per series it belongs to (`STATES_COLUMNS`).
+    """``states.csv``: one row per state (`STATES_COLUMNS`), in `state_table` order.
 
-    States with n = 0 are written with empty y_mean, y_ma and interval.
+    A 'both' state lies in the left and the right series of its face; its ȳ^MA in each
+    goes to ``y_ma_left`` and ``y_ma_right``. The column of a series the state is not in
+    is empty, and so are y_mean, y_ma and the interval of a state with n = 0.
     """
     y_ma = {
-        (s.object_id, s.name, st.conveyor, st.theta_deg): v
+        (s.object_id, s.face, s.side, st.conveyor, st.theta_deg): v
         for s in result.series
         for st, v in zip(s.states, s.y_ma, strict=True)
     }
@@ -264,15 +266,14 @@ def states_csv_text(result: AnalysisResult) -> str:
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(STATES_COLUMNS)
     for st in result.states:
-        for side in ("left", "right"):
-            if st.conveyor not in ("both", side):
-                continue
-            name = f"{st.face}-{side}"
-            ma = y_ma.get((st.object_id, name, st.conveyor, st.theta_deg))
-            writer.writerow([
-                st.object_id, st.face, name, st.conveyor, st.theta_deg, st.n, st.k,
-                _fmt(st.y_mean), _fmt(ma), _fmt(st.ci_low), _fmt(st.ci_high),
-            ])  # fmt: skip
+        key = (st.object_id, st.face)
+        ma_left, ma_right = (
+            y_ma.get((*key, side, st.conveyor, st.theta_deg)) for side in ("left", "right")
+        )
+        writer.writerow([
+            st.object_id, st.face, st.conveyor, st.theta_deg, st.n, st.k,
+            _fmt(st.y_mean), _fmt(ma_left), _fmt(ma_right), _fmt(st.ci_low), _fmt(st.ci_high),
+        ])  # fmt: skip
     return buf.getvalue()
 
 

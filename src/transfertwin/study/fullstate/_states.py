@@ -39,10 +39,12 @@ __all__ = [
 ]
 
 STATUSES = ("ok", "invalid", "unstable", "error")
-#: Header of ``states.csv`` written by `analyze`.
+#: Header of ``states.csv`` written by `analyze`: one row per state. A state belongs to
+#: the left series (conveyor left or both), the right series (right or both) or both;
+#: ``y_ma_left``/``y_ma_right`` hold its smoothed value ȳ^MA (Eq. 6.27) in each.
 STATES_COLUMNS = (
-    "object_id", "face", "series", "conveyor", "theta_deg",
-    "n", "k", "y_mean", "y_ma", "ci_low", "ci_high",
+    "object_id", "face", "conveyor", "theta_deg",
+    "n", "k", "y_mean", "y_ma_left", "y_ma_right", "ci_low", "ci_high",
 )  # fmt: skip
 
 

@@ -33,14 +33,16 @@ from transfertwin.report._fidelity_plots import (
     plot_fidelity,
 )
 from transfertwin.report._figure import figure_png
-from transfertwin.report._html import REPORT_NAME, write_report
+from transfertwin.report._html import REPORT_NAME, format_value, write_report
 from transfertwin.report._interval_plot import IntervalPlot, interval_plot_data, plot_intervals
 from transfertwin.report._pipeline import analyze_and_report
 from transfertwin.report._polar_full_state import (
+    SMOOTH_GRID_DEG,
     PolarCurve,
     PolarFace,
     PolarFullState,
     PolarMarker,
+    circular_smooth,
     plot_polar_full_state,
     polar_full_state_data,
 )
@@ -64,6 +66,7 @@ __all__ = [
     "REHEARSAL_REPORT_NAME",
     "REPORT_NAME",
     "RING_RADIUS",
+    "SMOOTH_GRID_DEG",
     "BinaryPoint",
     "BinaryPolar",
     "Curve",
@@ -82,10 +85,12 @@ __all__ = [
     "ValidationPlot",
     "analyze_and_report",
     "binary_polar_data",
+    "circular_smooth",
     "docking_correlation_data",
     "docking_hist_data",
     "fidelity_plot_data",
     "figure_png",
+    "format_value",
     "interval_plot_data",
     "morris_plot_data",
     "plot_binary_polar",

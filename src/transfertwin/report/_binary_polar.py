@@ -6,7 +6,7 @@ For θ ∈ Θ_single the conveyor splits the ring: ``'left'`` on the outer ring,
 ``'right'`` on the inner ring; ``'both'`` states (θ ∈ Θ_both) sit between.
 Marker shape also encodes the conveyor. Rows with another status are counted,
 not drawn. θ = 0 is at the top and grows counter-clockwise, as in the
-full-state plot.
+full-state plot. The rings are labelled with their conveyor on the plot and in the legend.
 """
 
 from __future__ import annotations
@@ -26,8 +26,12 @@ from transfertwin.study.fullstate import ResultRecord, parse_row
 __all__ = ["RING_RADIUS", "BinaryPoint", "BinaryPolar", "binary_polar_data", "plot_binary_polar"]
 
 #: Radius of each conveyor's ring (outer 'left', inner 'right').
-RING_RADIUS = {"left": 1.0, "both": 0.85, "right": 0.7}
+RING_RADIUS = {"left": 1.0, "both": 0.75, "right": 0.5}
 _SHAPE = {"left": "^", "both": "o", "right": "v"}
+#: Where each ring's label sits (θ, degrees): an angle whose states use another conveyor
+#: (Eq. 6.7–6.10: left/right only for |θ| ≤ 25 or ≥ 155, both in between), so no marker
+#: of that ring is ever hidden under its label.
+RING_LABEL_DEG = {"left": 67, "both": 0, "right": -67}
 
 
 @dataclass(frozen=True)
@@ -106,7 +110,10 @@ def _legend_handles() -> list[Line2D]:
         handle("o", SUCCESS_COLOR, "success (y=1)"),
         handle("o", FAILURE_COLOR, "failure (y=0)"),
     ]
-    handles += [handle(_SHAPE[c], "grey", f"c = '{c}'") for c in ("left", "both", "right")]
+    ring = {"left": "outer ring", "both": "middle ring", "right": "inner ring"}
+    handles += [
+        handle(_SHAPE[c], "grey", f"{ring[c]}: conveyor c = {c}") for c in ("left", "both", "right")
+    ]
     return handles
 
 
@@ -126,7 +133,13 @@ def plot_binary_polar(data: BinaryPolar, fig: Figure | None = None) -> Figure:
         setup_yaw_axes(ax)
         ax.set_rlim(0.0, 1.1)
         ax.set_yticks([RING_RADIUS[c] for c in ("right", "both", "left")], labels=[])
-        ax.set_title(f"f = '{face}'")
+        for conveyor, theta in RING_LABEL_DEG.items():
+            ax.text(
+                math.radians(theta), RING_RADIUS[conveyor], f"c = {conveyor}",
+                ha="center", va="center", fontsize="small", zorder=6,
+                bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "#999999"},
+            )  # fmt: skip
+        ax.set_title(f"face '{face}'", pad=14)
         pts = data.face_points(face)
         for success in (1, 0):
             color = SUCCESS_COLOR if success else FAILURE_COLOR
@@ -135,7 +148,7 @@ def plot_binary_polar(data: BinaryPolar, fig: Figure | None = None) -> Figure:
                 if sel:
                     th = [math.radians(p.theta_deg) for p in sel]
                     ax.scatter(th, [p.radius for p in sel], s=28, c=color, marker=marker)
-    fig.legend(handles=_legend_handles(), loc="outside lower center", ncol=5, fontsize="small")
+    fig.legend(handles=_legend_handles(), loc="outside lower center", ncol=3, fontsize="small")
     n = len(data.points)
     title = f"{data.object_id}: {n} experiments, {data.n_success} successful"
     if data.n_excluded:

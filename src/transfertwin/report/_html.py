@@ -1,11 +1,21 @@
-"""Self-contained HTML report of an analysis (Sec. 6.3, 6.6, 6.7).
+"""Self-contained HTML report of an analysis (Sec. 6.3, 6.6, 6.7), written for an engineer.
 
-One page: a parameters table (whatever the caller passes), a summary of the
-results table, the best/worst selection per object (Alg. 1–4) with 95 %
-Clopper–Pearson intervals, Fig. 6.22/6.23 and per object the full-state plot
-(Fig. 6.20/6.21) and the binary plot of single experiments (Fig. 6.6/6.7).
-Figures are embedded as base64 PNG data URIs, so the page loads no external
-resource; the same PNGs are also written to ``out_dir/figures/``.
+One page, in this order:
+
+1. **Summary**: what was analysed, one row per object (its best and worst pre-transfer
+   state of Alg. 1–4, each with k/n and the 95 % Clopper–Pearson interval) and a
+   "what to do" list: how to put each object on the belt, what to avoid, and whether
+   the data can tell the two apart yet.
+2. **Figures**: Fig. 6.22/6.23 (best/worst state per object with intervals), then per
+   object the full-state plot (Fig. 6.20/6.21) and the binary plot of single experiments
+   (Fig. 6.6/6.7), each with a caption that says how to read it.
+3. **Details**, folded away (``<details>``): the counts by status, the selection table
+   and the parameters as tables grouped by section. Numbers use a general format
+   (``1e-08``, ``0.01188``); a nested mapping such as the docking-error model is
+   summarised in one line, its full JSON folded once more below it.
+
+Figures are embedded as base64 PNG data URIs, so the page loads no external resource;
+the same PNGs are also written to ``out_dir/figures/``.
 """
 
 from __future__ import annotations
@@ -13,10 +23,11 @@ from __future__ import annotations
 import base64
 import html
 import json
+import math
 import os
 import re
 from collections import Counter
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from transfertwin.report._binary_polar import binary_polar_data, plot_binary_polar
@@ -27,46 +38,299 @@ from transfertwin.study.fullstate import (
     AnalysisResult,
     ResultRecord,
     SelectedState,
+    Selection,
     object_sort_key,
 )
 
-__all__ = ["REPORT_NAME", "write_report"]
+__all__ = ["REPORT_NAME", "format_value", "write_report"]
 
 REPORT_NAME = "report.html"
 _STYLE = (
-    "body{font-family:sans-serif;margin:2em;max-width:1100px}"
-    "table{border-collapse:collapse;margin:1em 0}"
-    "td,th{border:1px solid #bbb;padding:3px 8px;text-align:right}"
-    "th{background:#eee}td:first-child,th:first-child{text-align:left}"
-    "img{max-width:100%;display:block;margin:0.5em 0}"
+    "body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1100px;padding:0 1em;"
+    "color:#222;line-height:1.45}"
+    "h1{margin-bottom:0.1em}.lead{color:#555;margin-top:0.2em}"
+    "table{border-collapse:collapse;margin:0.6em 0 1.2em}"
+    "td,th{border:1px solid #ccc;padding:4px 8px;text-align:left;vertical-align:top}"
+    "th{background:#f0f0f0}td.num{text-align:right;font-variant-numeric:tabular-nums}"
+    ".todo li{margin:0.5em 0}.warn{color:#8a4b00}.ok{color:#1d6b1d}"
+    "details{margin:0.8em 0;border:1px solid #ddd;border-radius:4px;padding:0.4em 0.8em}"
+    "details details{border:none;padding:0;margin:0.2em 0}"
+    "summary{cursor:pointer;font-weight:600}"
+    "figure{margin:1.2em 0 2em}figcaption{color:#444;font-size:0.93em;max-width:60em}"
+    "img{max-width:100%;display:block}"
+    "code,pre{background:#f5f5f5;border-radius:3px;padding:1px 4px;font-size:0.92em}"
+    "pre{white-space:pre-wrap;max-height:25em;overflow:auto;padding:0.5em}"
 )
-_SELECTION_HEAD = (
-    "object", "state", "series", "face", "conveyor", "θ [°]", "ȳ<sup>MA</sup>",
-    "p̂", "n", "95 % CI", "half window [°]",
-)  # fmt: skip
+_YMA = "ȳ<sup>MA</sup>"
+_CONVEYOR_TEXT = {
+    "left": "on the <b>left</b> belt",
+    "right": "on the <b>right</b> belt",
+    "both": "centred across <b>both</b> belts",
+}
+#: Parameter groups in page order; keys without a known ``group.`` prefix go under "source".
+_GROUPS = (
+    ("source", "Source"),
+    ("plan", "Study plan"),
+    ("scene", "Scene"),
+    ("physics", "Physics (MuJoCo)"),
+    ("layout", "Layout"),
+    ("placement", "Placement and settling"),
+)
 
 
-def _cell(value: object) -> str:
+# -- value formatting --------------------------------------------------------------------
+def _num(value: float) -> str:
+    """A float in a general format: ``1e-08``, ``0.01188``, ``30``; NaN as an en dash."""
+    if math.isnan(value):
+        return "–"
+    return f"{value:.6g}"
+
+
+def format_value(value: object) -> str:
+    """One parameter value as HTML: numbers in a general format, sequences inline,
+    mappings summarised (`_summarize_mapping`), everything else escaped text."""
+    if value is None:
+        return "–"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
     if isinstance(value, float):
-        return f"{value:.3f}"
-    if isinstance(value, (dict, list, tuple)):
-        return html.escape(json.dumps(value, default=str))
+        return _num(value)
+    if isinstance(value, Mapping):
+        return _summarize_mapping(value)
+    if isinstance(value, (list, tuple)):
+        if len(value) > 12 or any(isinstance(v, (Mapping, list, tuple)) for v in value):
+            return _folded_json(f"{len(value)} entries", value)
+        return ", ".join(format_value(v) for v in value)
     return html.escape(str(value))
 
 
-def _table(head: tuple[str, ...], rows: list[list[str]]) -> str:
+def _folded_json(summary: str, value: object) -> str:
+    text = html.escape(json.dumps(value, indent=1, default=str))
+    return f"<details><summary>{html.escape(summary)}</summary><pre>{text}</pre></details>"
+
+
+_DOCK_COLUMN = {"dock_err_x_mm": "x [mm]", "dock_err_y_mm": "y [mm]", "dock_err_theta_deg": "θ [°]"}
+
+
+def _marginal_text(m: Mapping[str, object]) -> str:
+    col = str(m.get("column", "?"))
+    params = m.get("params", {})
+    args = ""
+    if isinstance(params, Mapping):
+        args = ", ".join(f"{k} {_num(float(v))}" for k, v in params.items())  # type: ignore[arg-type]
+    bounds = m.get("bounds")
+    within = ""
+    if isinstance(bounds, (list, tuple)) and len(bounds) == 2:
+        within = f" in [{_num(float(bounds[0]))}, {_num(float(bounds[1]))}]"
+    name = _DOCK_COLUMN.get(col, col)
+    return f"{html.escape(name)}: {html.escape(str(m.get('family', '?')))}({args}){within}"
+
+
+def _copula_text(d: Mapping[str, object]) -> str:
+    marginals = d.get("marginals", [])
+    parts = [f"Gaussian copula fitted to {d.get('n_fit', '?')} measured docking errors"]
+    if isinstance(marginals, list) and marginals:
+        parts.append("marginals " + "; ".join(_marginal_text(m) for m in marginals))
+    rho = d.get("correlation")
+    if isinstance(rho, list) and len(rho) == 3 and isinstance(marginals, list):
+        names = [_DOCK_COLUMN.get(str(m.get("column")), "?").split(" ")[0] for m in marginals]
+        pairs = [(0, 1), (0, 2), (1, 2)]
+        if len(names) == 3:
+            parts.append(
+                "correlations "
+                + ", ".join(f"ρ({names[i]},{names[j]}) = {rho[i][j]:.2f}" for i, j in pairs)
+            )
+    return "; ".join(parts)
+
+
+def _summarize_mapping(d: Mapping[str, object]) -> str:
+    """A nested mapping in one readable line, its full JSON folded below.
+
+    Knows the docking-error models (kinds ``copula``, ``copula-per-station``, ``fixed``,
+    ``resample``); any other mapping lists its first scalar entries.
+    """
+    kind = d.get("kind")
+    if kind == "copula":
+        text = _copula_text(d)
+    elif kind == "copula-per-station":
+        stations = d.get("stations", [])
+        items = [
+            f"{html.escape(str(s.get('unit')))} (n = {s.get('count')}): "
+            + _copula_text(s.get("copula", {}))
+            for s in stations
+            if isinstance(s, Mapping)
+        ]
+        text = "one copula per station: " + " | ".join(items)
+    elif kind == "fixed":
+        text = (
+            f"one fixed docking error: x = {format_value(d.get('x_mm'))} mm, "
+            f"y = {format_value(d.get('y_mm'))} mm, θ = {format_value(d.get('theta_deg'))}°"
+        )
+    elif kind == "resample":
+        text = (
+            f"resampling {format_value(d.get('n'))} measured docking errors "
+            f"from {format_value(d.get('source'))}"
+        )
+    else:
+        scalars = [(k, v) for k, v in d.items() if not isinstance(v, (Mapping, list, tuple))]
+        text = ", ".join(f"{html.escape(str(k))} = {format_value(v)}" for k, v in scalars[:6])
+        if len(d) > len(scalars[:6]):
+            text += f" (+{len(d) - len(scalars[:6])} more)"
+    if len(json.dumps(d, default=str)) <= 80:
+        return text
+    return text + _folded_json("full model (JSON)", d)
+
+
+# -- tables ------------------------------------------------------------------------------
+def _table(head: Sequence[str], rows: Sequence[Sequence[str]], numeric: Sequence[int] = ()) -> str:
     th = "".join(f"<th>{h}</th>" for h in head)
-    body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in r) + "</tr>" for r in rows)
+    body = "".join(
+        "<tr>"
+        + "".join(
+            f"<td class='num'>{c}</td>" if i in numeric else f"<td>{c}</td>"
+            for i, c in enumerate(r)
+        )
+        + "</tr>"
+        for r in rows
+    )
     return f"<table><tr>{th}</tr>{body}</table>"
 
 
-def _selection_row(obj: str, kind: str, st: SelectedState) -> list[str]:
-    ci = f"[{st.ci_low:.3f}, {st.ci_high:.3f}]"
-    values = (obj, kind, st.series, st.face, st.conveyor, st.theta_deg, st.y_ma, st.p_hat, st.n)
-    return [_cell(v) for v in values] + [ci, _cell(st.half_window)]
+def _ci(st: SelectedState) -> str:
+    return f"{st.ci_low:.2f}–{st.ci_high:.2f}"
 
 
-def _summary(analysis: AnalysisResult) -> list[list[str]]:
+def _rate(st: SelectedState) -> str:
+    return f"{st.k}/{st.n} = {st.p_hat:.2f}"
+
+
+def _state_short(st: SelectedState) -> str:
+    return f"{html.escape(st.face)}, {html.escape(st.conveyor)}, θ = {st.theta_deg}°"
+
+
+def _turn_text(theta: int) -> str:
+    if theta == 0:
+        return "aligned with the direction of travel (θ = 0°)"
+    if theta == 180:
+        return "turned round (θ = 180°)"
+    way = "counter-clockwise" if theta > 0 else "clockwise"
+    return f"turned <b>{abs(theta)}° {way}</b> (θ = {theta}°)"
+
+
+def _told_apart(sel: Selection) -> bool:
+    return sel.best.ci_low > sel.worst.ci_high
+
+
+def _apart_cell(sel: Selection) -> str:
+    if _no_difference(sel):
+        return "no difference"
+    return "yes" if _told_apart(sel) else "<span class='warn'>not yet</span>"
+
+
+def _overview_rows(analysis: AnalysisResult) -> list[list[str]]:
+    valid = Counter(r.object_id for r in analysis.records if r.status == "ok")
+    wins = Counter(r.object_id for r in analysis.records if r.status == "ok" and r.success)
+    rows = []
+    for sel in analysis.selections:
+        obj = sel.object_id
+        share = f"{wins[obj] / valid[obj]:.1%}" if valid[obj] else "–"
+        rows.append([
+            f"<b>{html.escape(obj)}</b>", str(valid[obj]), share,
+            _state_short(sel.best), _rate(sel.best), _ci(sel.best),
+            _state_short(sel.worst), _rate(sel.worst), _ci(sel.worst),
+            _apart_cell(sel),
+        ])  # fmt: skip
+    return rows
+
+
+_OVERVIEW_HEAD = (
+    "object", "valid experiments", "success share",
+    "best state", "best k/n", "best 95 % CI",
+    "worst state", "worst k/n", "worst 95 % CI", "best and worst told apart?",
+)  # fmt: skip
+
+
+def _no_difference(sel: Selection) -> bool:
+    """Best and worst are one smoothed level: no state stands out (e.g. all succeeded)."""
+    return sel.best.y_ma == sel.worst.y_ma
+
+
+def _advice(sel: Selection) -> str:
+    b, w = sel.best, sel.worst
+    obj = html.escape(sel.object_id)
+    if _no_difference(sel):
+        return (
+            f"<li><b>{obj}</b>: no state stands out: the smoothed success rate is "
+            f"{b.y_ma:.2f} at every state run (e.g. {b.k} of {b.n} at {_state_short(b)}, "
+            f"95 % CI {_ci(b)}), so any of the tested placements does as well as any "
+            "other in these data.</li>"
+        )
+    text = (
+        f"<b>{obj}</b>: put it on its <b>{html.escape(b.face)}</b> face "
+        f"{_CONVEYOR_TEXT.get(b.conveyor, html.escape(b.conveyor))}, {_turn_text(b.theta_deg)}. "
+        f"There it succeeded {b.k} of {b.n} times (95 % CI {_ci(b)}; smoothed over "
+        f"neighbouring angles {_YMA} = {b.y_ma:.2f}). "
+        f"Avoid the <b>{html.escape(w.face)}</b> face "
+        f"{_CONVEYOR_TEXT.get(w.conveyor, html.escape(w.conveyor))} at θ = {w.theta_deg}° "
+        f"({w.k} of {w.n}, 95 % CI {_ci(w)})."
+    )
+    if b.ci_high < 0.5:
+        text += (
+            " <span class='warn'>Even the best state fails more often than it succeeds: "
+            "this object needs another way of handling.</span>"
+        )
+    if _told_apart(sel):
+        text += " <span class='ok'>The intervals do not overlap: the difference is real.</span>"
+    else:
+        text += (
+            " <span class='warn'>The intervals overlap: these data cannot yet tell the best "
+            "state from the worst at 95 %; run more experiments at these states (more runs "
+            "per state) before relying on the choice.</span>"
+        )
+    return f"<li>{text}</li>"
+
+
+def _summary_section(analysis: AnalysisResult, params: Mapping[str, object]) -> str:
+    status = Counter(r.status for r in analysis.records)
+    n = len(analysis.records)
+    source = params.get("results")
+    objects = ", ".join(html.escape(o) for o in analysis.object_ids)
+    lead = f"{n} experiments"
+    if source is not None:
+        lead += f" from <code>{html.escape(str(source))}</code>"
+    lead += f"; {status['ok']} valid"
+    excluded = [f"{status[s]} {s}" for s in ("invalid", "unstable", "error") if status[s]]
+    if excluded:
+        lead += " (not counted: " + ", ".join(excluded) + ")"
+    run = sum(s.n > 0 for s in analysis.states)
+    lead += f"; {run} pre-transfer states run; objects {objects}."
+    parts = [
+        "<section id='summary'><h2>Summary</h2>",
+        f"<p>{lead}</p>",
+        _table(_OVERVIEW_HEAD, _overview_rows(analysis), numeric=(1, 2, 4, 5, 7, 8)),
+        "<h3>What to do</h3><ul class='todo'>",
+        *(_advice(sel) for sel in analysis.selections),
+        "</ul>",
+    ]
+    if analysis.skipped_objects:
+        skipped = ", ".join(html.escape(o) for o in analysis.skipped_objects)
+        parts.append(f"<p class='warn'>No valid experiment, so no advice, for: {skipped}.</p>")
+    parts.append(
+        "<p class='lead'>A state is (face, conveyor, yaw θ): the face the object lies on, "
+        "the belt it starts on (left and right as seen looking in the direction of travel "
+        "from the transport module TM to the transfer unit TU; <i>both</i> = centred across "
+        "the two belts) and θ, the angle of the object's x axis (for the built-in cores: "
+        "towards the pinion) from the direction of travel, counter-clockwise seen from "
+        "above. Best and worst states are chosen by Alg. 1–4 on the success rate smoothed "
+        f"over neighbouring angles ({_YMA}, window {analysis.window}°); k/n and the "
+        "Clopper–Pearson interval are those of the state itself.</p></section>"
+    )
+    return "\n".join(parts)
+
+
+def _counts(analysis: AnalysisResult) -> list[list[str]]:
     status = Counter(r.status for r in analysis.records)
     pairs: list[tuple[str, object]] = [("experiments", len(analysis.records))]
     pairs += [(f"status '{s}'", status[s]) for s in ("ok", "invalid", "unstable", "error")]
@@ -75,20 +339,90 @@ def _summary(analysis: AnalysisResult) -> list[list[str]]:
     if analysis.skipped_objects:
         pairs.append(("objects without 'ok' results", ", ".join(analysis.skipped_objects)))
     pairs.append(("moving-average window (Eq. 6.27) [°]", analysis.window))
-    return [[_cell(k), _cell(v)] for k, v in pairs]
+    return [[html.escape(k), format_value(v)] for k, v in pairs]
 
 
+_SELECTION_HEAD = (
+    "object", "state", "series", "face", "conveyor", "θ [°]", _YMA,
+    "p̂", "n", "95 % CI", "half window [°]",
+)  # fmt: skip
+
+
+def _selection_row(obj: str, kind: str, st: SelectedState) -> list[str]:
+    ci = f"[{st.ci_low:.3f}, {st.ci_high:.3f}]"
+    return [
+        html.escape(obj), kind, html.escape(st.series), html.escape(st.face),
+        html.escape(st.conveyor), str(st.theta_deg), f"{st.y_ma:.3f}", f"{st.p_hat:.3f}",
+        str(st.n), ci, str(st.half_window),
+    ]  # fmt: skip
+
+
+def _param_groups(params: Mapping[str, object]) -> list[tuple[str, list[list[str]]]]:
+    known = {g for g, _ in _GROUPS}
+    grouped: dict[str, list[list[str]]] = {g: [] for g, _ in _GROUPS}
+    for key, value in params.items():
+        group, _, name = str(key).partition(".")
+        if not name or group not in known:
+            group, name = "source", str(key)
+        grouped[group].append([html.escape(name), format_value(value)])
+    return [(title, grouped[g]) for g, title in _GROUPS if grouped[g]]
+
+
+def _details_section(analysis: AnalysisResult, params: Mapping[str, object]) -> str:
+    parts = [
+        "<section id='details'><h2>Details</h2>",
+        "<details><summary>Counts by status</summary>",
+        _table(("quantity", "value"), _counts(analysis), numeric=(1,)),
+        "</details>",
+        "<details><summary>Selected pre-transfer states (Alg. 1–4)</summary>",
+        _table(
+            _SELECTION_HEAD,
+            [
+                _selection_row(sel.object_id, kind, getattr(sel, kind))
+                for sel in analysis.selections
+                for kind in ("best", "worst")
+            ],
+            numeric=(5, 6, 7, 8, 10),
+        ),
+        "</details>",
+        "<details id='parameters'><summary>Parameters</summary>",
+    ]
+    for title, rows in _param_groups(params):
+        parts.append(f"<h4>{html.escape(title)}</h4>")
+        parts.append(_table(("parameter", "value"), rows))
+    if not params:
+        parts.append("<p>none given</p>")
+    parts.append("</details></section>")
+    return "\n".join(parts)
+
+
+# -- figures -----------------------------------------------------------------------------
 def _safe(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]", "_", name)
 
 
+_HOW_TO_READ = (
+    "<p class='lead'>Polar plots: the angle is the yaw θ (0° at the top: the object's x axis "
+    "points in the direction of travel TM → TU; counter-clockwise positive, as seen from "
+    "above); one plot per face.</p>"
+)
+
+
+def _sigma_text(sigmas: list[float]) -> str:
+    if not sigmas:
+        return ""
+    lo, hi = min(sigmas), max(sigmas)
+    return f"{lo:.3g}°" if math.isclose(lo, hi) else f"{lo:.3g}–{hi:.3g}°"
+
+
 def _figures(analysis: AnalysisResult) -> list[tuple[str, str, bytes]]:
-    """(file stem, caption, PNG) of every figure, in page order."""
+    """(file stem, caption HTML, PNG) of every figure, in page order."""
     out = []
     for which, fig_no in (("best", "6.22"), ("worst", "6.23")):
         fig = plot_intervals(interval_plot_data(analysis.selections, which))
         caption = (
-            f"p̂ and 95 % Clopper–Pearson interval of each object's {which} state (Fig. {fig_no})"
+            f"The <b>{which}</b> state of each object: its success rate p̂ = k/n with the 95 % "
+            f"Clopper–Pearson interval (cf. Fig. {fig_no}). A long bar means few experiments."
         )
         out.append((f"intervals_{which}", caption, figure_png(fig)))
     by_object: dict[str, list[ResultRecord]] = {}
@@ -96,14 +430,30 @@ def _figures(analysis: AnalysisResult) -> list[tuple[str, str, bytes]]:
         by_object.setdefault(rec.object_id, []).append(rec)
     selections = {sel.object_id: sel for sel in analysis.selections}
     for obj in sorted(by_object, key=object_sort_key):
+        name = html.escape(obj)
         if obj in selections:
-            data = polar_full_state_data(analysis.series_of(obj), selections[obj])
-            png = figure_png(plot_polar_full_state(data))
-            out.append(
-                (f"full_state_{_safe(obj)}", f"{obj}: smoothed series ȳ^MA (Fig. 6.20)", png)
+            data = polar_full_state_data(
+                analysis.series_of(obj), selections[obj], window=analysis.window
             )
+            sigmas = [c.bandwidth_deg for f in data.faces for c in f.curves]
+            png = figure_png(plot_polar_full_state(data))
+            caption = (
+                f"<b>{name}</b>: success rate over the yaw θ, per face (cf. Fig. 6.20). "
+                "Radius: success rate, 0 at the centre, 1 on the rim. Lines: the states' "
+                f"success rates smoothed over θ (Gaussian kernel, σ = {_sigma_text(sigmas)}; "
+                "gaps where no state was run nearby): solid blue for the left conveyor "
+                "(states with c = left or both), dashed orange for the right conveyor "
+                "(c = right or both). Dots: each state's own k/n. Star and cross: the best "
+                f"and worst state (Alg. 1–4), drawn at their {_YMA}."
+            )
+            out.append((f"full_state_{_safe(obj)}", caption, png))
         png = figure_png(plot_binary_polar(binary_polar_data(by_object[obj], obj)))
-        out.append((f"binary_{_safe(obj)}", f"{obj}: single experiments (Fig. 6.7)", png))
+        caption = (
+            f"<b>{name}</b>: every valid experiment at its yaw θ (cf. Fig. 6.7); green = "
+            "success, red = failure. The ring is the conveyor the object started on: outer "
+            "ring left, middle ring both, inner ring right."
+        )
+        out.append((f"binary_{_safe(obj)}", caption, png))
     return out
 
 
@@ -115,7 +465,9 @@ def write_report(
     Args:
         out_dir: Output folder, created if needed.
         analysis: From `transfertwin.study.analyze`.
-        params: Study parameters to list (e.g. runs, seed, profile), any values.
+        params: Study parameters to list (e.g. runs, seed, profile), any values; keys
+            ``group.name`` (plan, scene, physics, layout, placement) are grouped, the key
+            ``results`` names the source in the summary.
 
     Returns:
         Path of the HTML file.
@@ -125,26 +477,20 @@ def write_report(
     parts = [
         "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>",
         f"<title>transfertwin report</title><style>{_STYLE}</style></head><body>",
-        "<h1>Transfer study report</h1><h2>Parameters</h2>",
-        _table(("parameter", "value"), [[_cell(k), _cell(v)] for k, v in params.items()]),
-        "<h2>Results table</h2>",
-        _table(("quantity", "value"), _summary(analysis)),
-        "<h2>Selected pre-transfer states (Alg. 1–4)</h2>",
-        _table(
-            _SELECTION_HEAD,
-            [
-                _selection_row(sel.object_id, kind, getattr(sel, kind))
-                for sel in analysis.selections
-                for kind in ("best", "worst")
-            ],
-        ),
-        "<h2>Figures</h2>",
+        "<h1>Transfer study report</h1>",
+        "<p class='lead'>Will the object make it from the transport module (TM) to the "
+        "transfer unit (TU) and back, and how should it be put on the belt?</p>",
+        _summary_section(analysis, params),
+        "<section id='figures'><h2>Figures</h2>",
+        _HOW_TO_READ,
     ]
     for stem, caption, png in _figures(analysis):
         write_atomic(out / "figures" / f"{stem}.png", png)
         uri = "data:image/png;base64," + base64.b64encode(png).decode("ascii")
         parts.append(f'<figure><img src="{uri}" alt="{html.escape(stem)}">')
-        parts.append(f"<figcaption>{html.escape(caption)}</figcaption></figure>")
+        parts.append(f"<figcaption>{caption}</figcaption></figure>")
+    parts.append("</section>")
+    parts.append(_details_section(analysis, params))
     parts.append("</body></html>\n")
     path = out / REPORT_NAME
     write_atomic(path, "\n".join(parts))

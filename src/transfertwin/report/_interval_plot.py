@@ -81,10 +81,17 @@ def plot_intervals(data: IntervalPlot, ax: Axes | None = None) -> Figure:
     err = np.vstack([p - np.asarray(data.ci_low), np.asarray(data.ci_high) - p])
     color = SUCCESS_COLOR if data.which == "best" else FAILURE_COLOR
     ax.errorbar(x, p, yerr=err, fmt="o", color=color, ecolor="black", capsize=3, elinewidth=1)
+    if len(x) <= 40:  # k/n next to each point while there is room
+        for xi, pi, ni in zip(x, p, data.n, strict=True):
+            ax.annotate(
+                f"{round(pi * ni)}/{ni}", (xi, pi), xytext=(6, 0), textcoords="offset points",
+                va="center", fontsize="small", color="#333333",
+            )  # fmt: skip
     ax.set_xticks(x, labels=list(data.object_ids), rotation=90 if len(x) > 12 else 0)
+    ax.set_xlim(-0.5, len(x) - 0.5 + 0.3)
     ax.set_ylim(-0.05, 1.05)
-    ax.set_ylabel(r"$\hat{p}$ with 95 % CI")
+    ax.set_ylabel(r"success rate $\hat{p}$ = k/n, 95 % CI")
     fig_no = "6.22" if data.which == "best" else "6.23"
-    ax.set_title(f"{data.which} state per object (cf. Fig. {fig_no}), Clopper–Pearson")
+    ax.set_title(f"{data.which} state per object (cf. Fig. {fig_no}), Clopper–Pearson 95 %")
     ax.grid(axis="y", alpha=0.3)
     return ax.get_figure()

@@ -5,7 +5,9 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from transfertwin.report import REPORT_NAME, write_report
+import pytest
+
+from transfertwin.report import REPORT_NAME, format_value, write_report
 from transfertwin.study.fullstate import analyze
 
 
@@ -57,11 +59,11 @@ def test_write_report_is_self_contained(tmp_path: Path) -> None:
     best_o1 = analysis.selection_of("o1").best
     assert best_o1.theta_deg == 105
     assert (
-        "<tr><td>o1</td><td>best</td><td>front-left</td><td>front</td><td>both</td><td>105</td>"
-        in text
+        "<tr><td>o1</td><td>best</td><td>front-left</td><td>front</td><td>both</td>"
+        "<td class='num'>105</td>" in text
     )
     assert "<tr><td>o2</td><td>worst</td>" in text
-    assert "<td>status &#x27;unstable&#x27;</td><td>1</td>" in text
+    assert "<td>status &#x27;unstable&#x27;</td><td class='num'>1</td>" in text
     assert sorted(p.name for p in (tmp_path / "rep" / "figures").iterdir()) == [
         "binary_o1.png",
         "binary_o2.png",
@@ -71,3 +73,96 @@ def test_write_report_is_self_contained(tmp_path: Path) -> None:
         "intervals_worst.png",
     ]
     assert not list((tmp_path / "rep").rglob("*.tmp"))
+
+
+def docking_model() -> dict:
+    """A copula docking model as a study plan stores it (long: candidates per marginal)."""
+    cands = [
+        {"family": f, "status": "fitted", "bic": 1000.0 + i, "ks_statistic": 0.05,
+         "ks_pvalue": 0.5, "reason": ""}
+        for i, f in enumerate(("normal", "truncnorm", "beta", "student_t", "gamma", "kde"))
+    ]  # fmt: skip
+    marginals = [
+        {"column": c, "family": "normal", "params": {"loc": loc, "scale": 1.5},
+         "bounds": [-20.0, 20.0], "score": {"bic": 1000.0}, "candidates": cands,
+         "criterion": {"name": "bic-ks-gate", "ks_alpha": 0.05}}
+        for c, loc in (("dock_err_x_mm", -7.3), ("dock_err_y_mm", 2.1), ("dock_err_theta_deg", 1.2))
+    ]  # fmt: skip
+    rho = [[1.0, -0.62, 0.15], [-0.62, 1.0, 0.3], [0.15, 0.3, 1.0]]
+    return {
+        "kind": "copula",
+        "version": 1,
+        "n_fit": 191,
+        "correlation": rho,
+        "marginals": marginals,
+    }
+
+
+def test_report_opens_with_a_summary_and_folds_readable_parameters(tmp_path: Path) -> None:
+    analysis = analyze(rows())
+    params = {
+        "results": "s.sqlite",
+        "plan.docking": docking_model(),
+        "plan.runs": 8,
+        "physics.tolerance": 1e-8,
+        "physics.solimp": [0.9, 0.95, 0.001, 0.5, 2.0],
+        "physics.multiccd": True,
+        "scene.gap_m": 0.01188,
+    }
+    text = write_report(tmp_path, analysis, params).read_text(encoding="utf-8")
+    summary, figures = text.index("id='summary'"), text.index("<figure")
+    details = text.index("<details id='parameters'>")
+    assert summary < figures < details
+    # No JSON dump before the folded parameters: the long model is summarised in one line.
+    assert '{"' not in text[:details] and "correlation" not in text[:details]
+    assert '"correlation"' not in text[details:].split("<pre>")[0]
+    assert "Gaussian copula fitted to 191 measured docking errors" in text
+    assert "x [mm]: normal(loc -7.3, scale 1.5) in [-20, 20]" in text
+    assert "ρ(x,y) = -0.62" in text
+    # Numbers in a general format, grouped tables.
+    assert "<td>tolerance</td><td>1e-08</td>" in text
+    assert "<td>gap_m</td><td>0.01188</td>" in text
+    assert "<td>solimp</td><td>0.9, 0.95, 0.001, 0.5, 2</td>" in text
+    assert "<td>multiccd</td><td>true</td>" in text
+    assert "<h4>Physics (MuJoCo)</h4>" in text and "<h4>Study plan</h4>" in text
+    # Summary: per object best/worst with k/n and interval, and what to do.
+    head = text[summary:figures]
+    assert "<h3>What to do</h3>" in head
+    assert "<b>o1</b>: put it on its <b>front</b> face" in head
+    assert "turned <b>105° counter-clockwise</b> (θ = 105°)" in head
+    best = analysis.selection_of("o1").best
+    assert f"{best.k}/{best.n} = {best.p_hat:.2f}" in head
+    assert f"{best.ci_low:.2f}–{best.ci_high:.2f}" in head
+    # Captions and headers as HTML, never a literal TeX-like superscript.
+    assert "^MA" not in text and "ȳ<sup>MA</sup>" in text
+
+
+def test_object_without_a_difference_gets_no_best_worst_advice(tmp_path: Path) -> None:
+    flat = [
+        dict(object_id="o7", face=f, conveyor="both", theta_deg=t, success=1)
+        for f in ("front", "back")
+        for t in range(30, 60)
+    ]
+    text = write_report(tmp_path, analyze(flat), {}).read_text(encoding="utf-8")
+    assert "<b>o7</b>: no state stands out" in text and "Avoid" not in text
+
+
+@pytest.mark.parametrize(
+    ("value", "shown"),
+    [
+        (1e-8, "1e-08"),
+        (0.01188, "0.01188"),
+        (30.0, "30"),
+        (0.1 + 0.2, "0.3"),
+        (float("nan"), "–"),
+        (7, "7"),
+        (False, "false"),
+        (None, "–"),
+        ([0.004, 1.0], "0.004, 1"),
+        ("a<b", "a&lt;b"),
+        ({"kind": "fixed", "x_mm": -8.5, "y_mm": 2.0, "theta_deg": 1.0},
+         "one fixed docking error: x = -8.5 mm, y = 2 mm, θ = 1°"),
+    ],
+)  # fmt: skip
+def test_format_value(value: object, shown: str) -> None:
+    assert format_value(value) == shown

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import csv
 import math
+from pathlib import Path
 
+import numpy as np
 import pytest
 
 from transfertwin._errors import InputError
@@ -11,6 +14,7 @@ from transfertwin.report import (
     RING_RADIUS,
     BinaryPoint,
     binary_polar_data,
+    circular_smooth,
     interval_plot_data,
     polar_full_state_data,
 )
@@ -72,8 +76,8 @@ def test_fig_6_7_binary_polar_data() -> None:
     data = binary_polar_data(rows, "o1")
     assert data.points == (
         BinaryPoint("front", "left", -20, 1, 1.0),
-        BinaryPoint("back", "right", -20, 0, 0.7),
-        BinaryPoint("front", "both", 90, 0, 0.85),
+        BinaryPoint("back", "right", -20, 0, 0.5),
+        BinaryPoint("front", "both", 90, 0, 0.75),
     )
     assert (data.n_excluded, data.n_success) == (1, 1)
     assert [p.theta_deg for p in data.face_points("front")] == [-20, 90]
@@ -100,3 +104,35 @@ def test_fig_6_22_interval_plot_data_natural_order() -> None:
     with pytest.raises(InputError, match="best' or 'worst"):
         interval_plot_data(sels, "median")
     assert math.isclose(sum(best.p_hat), 1.5)
+
+
+def test_circular_smooth_is_a_kernel_mean_on_the_circle() -> None:
+    # Constant rate -> the same constant everywhere near data.
+    y = circular_smooth([0, 90, 180, -90], [3, 3, 3, 3], [4, 4, 4, 4], 30.0)
+    assert np.allclose(y[np.isfinite(y)], 0.75) and np.isfinite(y).all()
+    # Wraps: 179 and -179 are neighbours, so the value at 180 is their n-weighted mean.
+    y = circular_smooth([179, -179], [1, 0], [3, 1], 5.0, grid_deg=[180.0])
+    assert y[0] == pytest.approx(1 / 4)
+    # Far from every run angle (> 2 sigma) there is no estimate.
+    y = circular_smooth([0], [1], [1], 10.0, grid_deg=[15.0, 25.0])
+    assert y[0] == 1.0 and math.isnan(y[1])
+    with pytest.raises(InputError):
+        circular_smooth([0], [2], [1], 10.0)
+
+
+def test_full_state_line_of_sparse_real_data_is_smooth() -> None:
+    """The 191 real experiments (one per state): the drawn line has no 0-1 spikes."""
+    path = Path(__file__).parents[3] / "src" / "transfertwin" / "data"
+    with (path / "calibration_experiments.csv").open(newline="") as fh:
+        real = list(csv.DictReader(fh))
+    stats = state_table(real)
+    data = polar_full_state_data(series_table(stats, "o1"), select(stats, "o1"))
+    raw_jumps = []
+    for curve in (c for face in data.faces for c in face.curves):
+        y = np.asarray(curve.y_smooth)
+        assert len(y) == 361 and np.nanmax(y) <= 1.0 and np.nanmin(y) >= 0.0
+        steps = np.abs(np.diff(y))  # 1° apart; NaN where the line has a gap
+        assert np.nanmax(steps) < 0.1
+        raw_jumps.append(np.max(np.abs(np.diff(curve.y_ma))))
+    # The ȳ^MA values of the same states, joined state to state, jump from 0 to 1.
+    assert max(raw_jumps) == 1.0

@@ -59,3 +59,27 @@ def test_fig_6_22_plot_intervals(tmp_path: Path) -> None:
     assert (
         plot_intervals(interval_plot_data([select(stats, "o1")], "worst"), ax=ax) is ax.get_figure()
     )
+
+
+def _texts(ax) -> set[str]:
+    return {t.get_text() for t in ax.texts}
+
+
+def test_binary_polar_labels_each_ring_with_its_conveyor() -> None:
+    fig = plot_binary_polar(binary_polar_data(rows(), "o1"))
+    for ax in fig.axes:
+        assert {"c = left", "c = both", "c = right"} <= _texts(ax)
+    legend = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert "outer ring: conveyor c = left" in legend and "inner ring: conveyor c = right" in legend
+
+
+def test_full_state_plot_says_what_the_radius_is_and_keeps_labels_off_the_rim() -> None:
+    stats = state_table(rows())
+    fig = plot_polar_full_state(
+        polar_full_state_data(series_table(stats, "o1"), select(stats, "o1"))
+    )
+    for ax in fig.axes:
+        assert any(t.startswith("radius = success rate") for t in _texts(ax))
+        # Radius tick labels sit off the 0° spoke, and none on the rim where curves run.
+        assert ax.get_rlabel_position() != 0.0
+        assert [t.get_text() for t in ax.get_yticklabels()][-1] == ""

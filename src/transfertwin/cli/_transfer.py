@@ -6,6 +6,7 @@ import argparse
 import json
 import math
 import sys
+from typing import TYPE_CHECKING
 
 from rich.console import Console
 from rich.table import Table
@@ -13,6 +14,9 @@ from rich.table import Table
 from transfertwin.cli._common import parse_dock_error
 from transfertwin.cli._paths import out_dir, out_file
 from transfertwin.cli._progress import progress_bar
+
+if TYPE_CHECKING:
+    from transfertwin.study.experiment import ExperimentResult
 
 __all__ = ["register"]
 
@@ -54,11 +58,7 @@ def cmd_transfer(args: argparse.Namespace) -> int:
     if image is not None:
         system = system_for(spec.object_ref, spec.units, spec.scene)
         poses = [(f.phase, f.t_s, f.qpos) for f in result.frames]
-        title = (
-            f"{result.object_id} {spec.face} {spec.conveyor} theta={spec.theta_deg} "
-            f"y1={result.y1} y2={result.y2} success={result.success} ({result.status})"
-        )
-        render_strip(system, poses, image, title=title)
+        render_strip(system, poses, image, title=strip_title(result), travel=TRAVEL)
     row = result.row()
     if args.json:
         clean = {k: (None if isinstance(v, float) and math.isnan(v) else v) for k, v in row.items()}
@@ -68,6 +68,39 @@ def cmd_transfer(args: argparse.Namespace) -> int:
     else:
         _print_result(row)
     return 0
+
+
+#: Direction the belts run in each recorded phase of E^V (+1: TM → TU).
+TRAVEL = {"there": 1, "back": -1}
+
+
+def _outcome(y: int | None, t_end_s: float) -> str:
+    if y is None:
+        return "not determined"
+    word = "success" if y == 1 else "failure"
+    return f"y = {y}, {word}, t_end = {t_end_s:.2f} s"
+
+
+def strip_title(result: ExperimentResult) -> list[str]:
+    """Header lines of a strip image: the state, the docking error, and each transfer's
+    outcome in words (a transfer that was not attempted says so; never 'None')."""
+    x, y, t = result.dock_err_x_mm, result.dock_err_y_mm, result.dock_err_theta_deg
+    lines = [
+        f"{result.object_id}: face {result.face}, conveyor {result.conveyor}, "
+        f"θ = {result.theta_deg}°, seed {result.seed}; docking error x = {x:.2f} mm, "
+        f"y = {y:.2f} mm, θ = {t:.2f}°"
+    ]
+    if result.status != "ok":
+        lines.append(f"status {result.status}: {result.message or 'no outcome'}")
+        return lines
+    there = "TM → TU: " + _outcome(result.y1, result.t_end_1_s)
+    if result.y2 is None:
+        back = "TU → TM: not attempted (y1 = 0)"
+    else:
+        back = "TU → TM: " + _outcome(result.y2, result.t_end_2_s)
+    overall = "success" if result.success else "failure"
+    lines.append(f"{there};  {back};  overall {overall}, t_end = {result.t_end_s:.2f} s")
+    return lines
 
 
 def _print_result(row: dict[str, object]) -> None:

@@ -25,7 +25,7 @@ from transfertwin.sim._names import (
     belt_geom,
     object_hull,
 )
-from transfertwin.sim._render import render_strip
+from transfertwin.sim._render import group_frames, render_strip, strip_camera, strip_pixels
 from transfertwin.sim._scene import build_spec
 from transfertwin.sim._system import (
     MujocoUnitHAL,
@@ -58,10 +58,13 @@ __all__ = [
     "gap_area_m2",
     "gap_areas_cm2",
     "gap_width_m",
+    "group_frames",
     "object_hull",
     "object_quat",
     "render_strip",
     "scene_profile",
+    "strip_camera",
+    "strip_pixels",
     "tu_pose_in_tip_frame",
     "tu_quat",
 ]

@@ -47,7 +47,7 @@ def test_transfer_image_writes_a_png_strip(box_stl, tmp_path):
     from PIL import Image
 
     with Image.open(out) as img:
-        assert img.width > 4 * img.height  # a strip of several frames
+        assert img.width == 4 * 480 and img.height > 260  # rows of four frames
         assert len(img.getcolors(maxcolors=1 << 20)) > 50  # not a blank image
 
 
@@ -105,3 +105,34 @@ def test_python_dash_m_and_console_script_agree():
                            text=True, timeout=120)  # fmt: skip
     assert proc.returncode == proc2.returncode == 0
     assert proc.stdout == proc2.stdout
+
+
+def test_strip_title_names_each_transfer_and_never_says_none():
+    import math as _math
+
+    from transfertwin.cli._transfer import strip_title
+    from transfertwin.study.experiment import ExperimentResult
+
+    base = dict(
+        object_id="o1", face="front", conveyor="left", theta_deg=10, run=0, seed=0,
+        dock_err_x_mm=-8.55, dock_err_y_mm=2.84, dock_err_theta_deg=1.44,
+    )  # fmt: skip
+    failed = ExperimentResult(
+        **base, y1=0, y2=None, success=0, t_end_s=2.0, status="ok", t_end_1_s=2.0,
+        t_end_2_s=_math.nan,
+    )  # fmt: skip
+    text = " | ".join(strip_title(failed))
+    assert "None" not in text and "nan" not in text
+    assert "TU → TM: not attempted (y1 = 0)" in text and "TM → TU: y = 0, failure" in text
+    assert "conveyor left" in text and "θ = 10°" in text and "x = -8.55 mm" in text
+    ok = ExperimentResult(
+        **base, y1=1, y2=1, success=1, t_end_s=6.37, status="ok", t_end_1_s=3.575,
+        t_end_2_s=2.795,
+    )  # fmt: skip
+    assert "overall success, t_end = 6.37 s" in " ".join(strip_title(ok))
+    bad = ExperimentResult(
+        **base, y1=None, y2=None, success=None, t_end_s=_math.nan, status="invalid",
+        message="settled state is not a pre-transfer state (Eq. 6.1)",
+    )  # fmt: skip
+    text = " ".join(strip_title(bad))
+    assert "None" not in text and "status invalid: settled state" in text

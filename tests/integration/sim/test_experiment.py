@@ -51,3 +51,18 @@ def test_state_outside_the_belts_is_invalid(box_stl):
     r = run_experiment(_spec(box_stl, conveyor="left", theta_deg=60, scene=exact))
     assert r.status == "invalid"
     assert (r.y1, r.y2, r.success) == (None, None, None)
+
+
+def test_recorded_frames_run_on_the_transfer_clock(box_stl):
+    """Frame times exclude the settling and end at t_end_s (there at t_end_1_s)."""
+    r = run_experiment(_spec(box_stl, record=True))
+    assert r.status == "ok" and r.success == 1
+    there = [f for f in r.frames if f.phase == "there"]
+    back = [f for f in r.frames if f.phase == "back"]
+    assert there and back and len(there) + len(back) == len(r.frames)
+    assert there[0].t_s == 0.0
+    assert there[-1].t_s == round(r.t_end_1_s, 6)
+    assert back[0].t_s == round(r.t_end_1_s, 6)
+    assert r.frames[-1].t_s == round(r.t_end_s, 6)
+    times = [f.t_s for f in r.frames]
+    assert times == sorted(times)

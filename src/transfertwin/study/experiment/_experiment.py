@@ -81,7 +81,13 @@ class ExperimentSpec:
 
 @dataclass(frozen=True)
 class Frame:
-    """A recorded object pose: phase ('settle', 'there', 'back'), time (s), qpos (7,)."""
+    """A recorded object pose: phase, time (s) and qpos (7,).
+
+    phase is 'there' (TM → TU) or 'back' (TU → TM). t_s runs on the experiment's clock,
+    as t_end_s does: 0 when the first transfer starts (settling before it is not counted);
+    the return transfer goes on from t_end_1_s, so the last frame of a completed
+    experiment is at t_end_s (at the stall time when a transfer stalled and ended early).
+    """
 
     phase: str
     t_s: float
@@ -234,17 +240,17 @@ def run_experiment(
     else:
         object_id = spec.object_ref
     frames: list[Frame] = []
-    phase = ["settle"]
+    phase, offset = ["there"], [0.0]
 
     def record() -> None:
         if spec.record:
-            frames.append(Frame(phase[0], float(system.data.time), _tuple(system.object_qpos())))
+            t_s = round(offset[0] + system.clock.now(), 6)  # the clock of t_end, to 1 µs
+            frames.append(Frame(phase[0], t_s, _tuple(system.object_qpos())))
 
     tu = tu_hal if tu_hal is not None else system.tu
     controller = scene_controller(spec.scene, system.tm, tu, system, system.clock, record)
     try:
         _place_and_settle(system, spec)
-        phase[0] = "there"
         system.clock.start()
         s_pre = controller.state(spec.face, spec.conveyor)
         if not bool(experiment_pre_transfer_set(controller.thresholds).contains(s_pre)):
@@ -257,7 +263,7 @@ def run_experiment(
         back: TransferRecord | None = None
         if there.y == 1:
             settle(system, spec.scene)
-            phase[0] = "back"
+            phase[0], offset[0] = "back", there.t_end_s
             back = controller.transfer(TransferDirection.TU_TO_TM, spec.face, None)
     except SimulationUnstable as exc:
         return ExperimentResult(

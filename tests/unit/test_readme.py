@@ -1,0 +1,102 @@
+"""README's command block works as written: every line parses, every input exists.
+
+Each `$tt ...` line must be accepted by the CLI's parser (no `[optional]` brackets pasted
+into the shell, no unknown option), and every file or folder it reads must be made by an
+earlier line (or ship with the repository): a user who runs the block top to bottom in a
+fresh clone never meets "no such file". Running the commands themselves (at small size)
+is a manual check; this test keeps the text honest cheaply.
+"""
+
+from __future__ import annotations
+
+import re
+import shlex
+from pathlib import Path
+
+import pytest
+
+from transfertwin._errors import InputError
+from transfertwin.cli import build_parser
+
+ROOT = Path(__file__).parents[2]
+#: Options whose value is written by the command (the rest are read).
+OUTPUT_OPTIONS = {"--out", "--image"}
+#: (option, command, subcommand) whose value the command creates.
+MAKERS = {("--workdir", "cps", "up"), ("--db", "study", "run")}
+PATH_LIKE = re.compile(r"^[\w./-]+(\.(stl|obj|ply|json|csv|sqlite|parquet|toml|aasx|png)|/)$")
+
+
+def command_block() -> list[str]:
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    section = text.split("## Commands", 1)[1]
+    block = section.split("```bash", 1)[1].split("```", 1)[0]
+    return block.replace("\\\n", " ").splitlines()
+
+
+def commands() -> list[list[str]]:
+    """The block's `$tt` commands as argument lists, `for` loops unrolled."""
+    out: list[list[str]] = []
+    loop: list[str] | None = None
+    for line in command_block():
+        tokens = shlex.split(line, comments=True)
+        if not tokens or tokens[0].startswith("tt="):
+            continue
+        if tokens[0] == "./dev.sh":
+            assert tokens[1] in ("run", "test", "exec"), line
+            continue
+        if tokens[0] == "for":
+            assert tokens[2] == "in" and tokens[-1].endswith("do"), line
+            loop = [t.rstrip(";") for t in tokens[3:-1]]
+            continue
+        assert tokens[0] == "$tt", f"not a transfertwin command: {line!r}"
+        args = [t.removesuffix(";") for t in tokens[1:] if t not in ("&", "done")]
+        if loop is not None:
+            out += [[a.replace("$o", value) for a in args] for value in loop]
+            loop = None
+        else:
+            out.append(args)
+    return out
+
+
+def test_block_has_the_commands() -> None:
+    cmds = commands()
+    assert len(cmds) > 20
+    assert {c[0] for c in cmds} >= {"transfer", "study", "analyze", "calibrate", "cps"}
+
+
+@pytest.mark.parametrize("args", commands(), ids=lambda a: " ".join(a[:3]))
+def test_every_command_parses(args: list[str]) -> None:
+    try:
+        build_parser().parse_args(args)
+    except (InputError, SystemExit) as exc:
+        pytest.fail(f"README: `transfertwin {' '.join(args)}` does not parse: {exc}")
+
+
+def test_every_input_is_made_by_an_earlier_command() -> None:
+    made: set[str] = set()
+    for args in commands():
+        reads = []
+        for i, token in enumerate(args):
+            before = args[i - 1] if i else ""
+            if (before, *args[:2]) in MAKERS or before in OUTPUT_OPTIONS:
+                made.add(token)
+            elif PATH_LIKE.match(token) and not token.startswith("-"):
+                reads.append(token)
+        for path in reads:
+            inside = any(path.startswith(m) for m in made if m.endswith("/"))
+            assert path in made or inside or (ROOT / path).exists(), (
+                f"README: `transfertwin {' '.join(args)}` reads {path}, "
+                "which no earlier command makes"
+            )
+
+
+def test_a_study_db_is_not_reused_for_another_plan() -> None:
+    """`study run` refuses a different plan on an existing db: the block must not try."""
+    plans: dict[str, list[str]] = {}
+    ignore = {"--workers", "--max-experiments"}
+    for args in commands():
+        if args[:2] != ["study", "run"]:
+            continue
+        db = args[args.index("--db") + 1]
+        plan = [a for i, a in enumerate(args) if a not in ignore and args[i - 1] not in ignore]
+        assert plans.setdefault(db, plan) == plan, f"README: {db} is reused for another plan"

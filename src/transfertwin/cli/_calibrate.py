@@ -78,7 +78,9 @@ def cmd_run(args: argparse.Namespace) -> int:
     print(f"real objects mapped to meshes: {_mapping_note(result.object_map)} "
           "(the real cores' scans are not public)")  # fmt: skip
     for key in ("f05", "precision", "recall", "accuracy"):
-        print(f"{key:9s} {metrics[key]['mean']:.3f} ± {metrics[key]['std']:.3f}")
+        std = metrics[key]["std"]
+        spread = f" ± {std:.3f}" if math.isfinite(std) else " (one run: no spread)"
+        print(f"{key:9s} {metrics[key]['mean']:.3f}{spread}")
     print(out / "metrics.json")
     return 0
 

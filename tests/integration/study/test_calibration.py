@@ -61,6 +61,15 @@ def test_calibrate_run_cli_writes_metrics_json(tmp_path, capsys):
     assert "not public" in capsys.readouterr().out
 
 
+def test_calibrate_run_with_one_run_prints_no_nan_spread(tmp_path, capsys):
+    out = tmp_path / "cal1"
+    assert main(["calibrate", "run", "--runs", "1", "--limit", "2", "--workers", "1",
+                 "--out", str(out)]) == 0  # fmt: skip
+    printed = capsys.readouterr().out
+    assert "nan" not in printed and "one run: no spread" in printed
+    assert "NaN" not in (out / "metrics.json").read_text()  # strict JSON: null
+
+
 def test_calibrate_tune_saves_a_loadable_profile(tmp_path):
     from transfertwin.study import load_profile
 

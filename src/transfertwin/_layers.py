@@ -39,6 +39,7 @@ LAYERS: tuple[str, ...] = (
     "cps.apps",
     "cps",
     "report",
+    "web",
     "cli",
 )
 

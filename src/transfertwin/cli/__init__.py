@@ -22,6 +22,7 @@ from transfertwin.cli import (
     _study,
     _transfer,
     _validate,
+    _web,
 )
 from transfertwin.cli._common import Parser
 
@@ -36,7 +37,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-v", "--verbose", action="count", default=0,
                         help="-v: progress messages (INFO), -vv: debug logging")  # fmt: skip
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for group in (_transfer, _study, _calibrate, _cps, _docking, _validate, _rehearse, _data):
+    for group in (_transfer, _study, _calibrate, _cps, _docking, _validate, _rehearse, _data, _web):
         group.register(sub)
     return parser
 

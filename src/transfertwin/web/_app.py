@@ -1,0 +1,337 @@
+"""The console's ASGI app (Starlette): pages, JSON API, server-sent live values.
+
+Routes: ``/`` (the page), ``/static/*`` (its JS/CSS, plotly.js from the installed `plotly`
+package), ``/api/config``, ``/api/assets``, ``/api/assets/{id}/aas``, ``/api/live`` (SSE),
+``/api/orders`` (GET, POST), ``/api/orders/{id}``, ``/api/studies``,
+``/api/studies/{name}/map``, ``/api/studies/{name}/results.{csv|parquet}``.
+
+Every error is a JSON ``{"error": message}`` with a 4xx status (5xx only for a fault of the
+console itself, without a traceback). Write actions need the token (header
+``Authorization: Bearer T``, or a ``token`` field of the body); cookies never authorise a
+write, so another site cannot make the browser place an order.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import functools
+import hmac
+import json
+import logging
+from collections.abc import AsyncIterator, Awaitable, Callable
+from importlib import resources
+from pathlib import Path
+from typing import Any
+from urllib.parse import parse_qs
+
+from starlette.applications import Starlette
+from starlette.concurrency import run_in_threadpool
+from starlette.exceptions import HTTPException
+from starlette.middleware import Middleware
+from starlette.middleware.trustedhost import TrustedHostMiddleware
+from starlette.requests import Request
+from starlette.responses import (
+    FileResponse,
+    HTMLResponse,
+    JSONResponse,
+    Response,
+    StreamingResponse,
+)
+from starlette.routing import Mount, Route
+from starlette.staticfiles import StaticFiles
+
+from transfertwin._errors import InputError
+from transfertwin.web._config import WebConfig
+from transfertwin.web._gateway import CpsGateway
+from transfertwin.web._studies import StudyView
+
+__all__ = ["MAX_BODY_BYTES", "create_app", "plotly_js"]
+
+log = logging.getLogger("transfertwin.web")
+audit = logging.getLogger("transfertwin.web.audit")
+
+MAX_BODY_BYTES = 16 * 1024
+_COOKIE = "tt_token"
+_CSP = ("default-src 'self'; script-src 'self'; style-src 'self' 'unsafe-inline'; "
+        "img-src 'self' data: blob:; connect-src 'self'; frame-ancestors 'none'")  # fmt: skip
+
+
+def plotly_js() -> Path:
+    """plotly.min.js as the installed `plotly` Python package ships it (no CDN)."""
+    import plotly
+
+    path = Path(plotly.__file__).parent / "package_data" / "plotly.min.js"
+    if not path.is_file():
+        raise InputError(f"the plotly package has no bundled plotly.min.js ({path})")
+    return path
+
+
+def _static_dir() -> Path:
+    return Path(str(resources.files("transfertwin.web").joinpath("static")))
+
+
+def _error(status: int, message: str) -> JSONResponse:
+    return JSONResponse({"error": message}, status_code=status)
+
+
+def _api(fn: Callable[..., Awaitable[Response]]) -> Callable[[Request], Awaitable[Response]]:
+    """Every failure becomes a JSON error; nothing of a traceback reaches the client."""
+
+    @functools.wraps(fn)
+    async def wrapped(request: Request) -> Response:
+        try:
+            return await fn(request)
+        except InputError as exc:
+            return _error(422, str(exc))
+        except LookupError as exc:
+            return _error(404, str(exc.args[0]) if exc.args else "not found")
+        except HTTPException as exc:
+            return _error(exc.status_code, str(exc.detail))
+        except (asyncio.CancelledError, KeyboardInterrupt):
+            raise
+        except Exception as exc:
+            log.warning("internal error in %s: %s", request.url.path, exc, exc_info=True)
+            return _error(500, f"internal error ({type(exc).__name__})")
+
+    return wrapped
+
+
+class _SecurityHeaders:
+    """Pure ASGI middleware: CSP and friends on every response (streaming included)."""
+
+    def __init__(self, app) -> None:
+        self.app = app
+
+    async def __call__(self, scope, receive, send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+
+        async def send_with_headers(message) -> None:
+            if message["type"] == "http.response.start":
+                headers = list(message.get("headers", []))
+                headers += [
+                    (b"content-security-policy", _CSP.encode()),
+                    (b"x-content-type-options", b"nosniff"),
+                    (b"x-frame-options", b"DENY"),
+                    (b"referrer-policy", b"no-referrer"),
+                    (b"cache-control", b"no-store"),
+                ]
+                message = {**message, "headers": headers}
+            await send(message)
+
+        await self.app(scope, receive, send_with_headers)
+
+
+def create_app(config: WebConfig) -> Starlette:
+    """The console app for `config` (its CPS sessions open with the app's lifespan)."""
+    studies = {p.name: StudyView(p) for p in config.dbs}
+    state: dict[str, CpsGateway | None] = {"cps": None}
+    token = config.session_token
+
+    def matches(candidate: object) -> bool:
+        return isinstance(candidate, str) and hmac.compare_digest(
+            candidate.encode(), token.encode()
+        )
+
+    def header_token(request: Request) -> str | None:
+        auth = request.headers.get("authorization", "")
+        return auth[7:].strip() if auth.lower().startswith("bearer ") else None
+
+    def check_read(request: Request) -> None:
+        if not config.reads_need_token:
+            return
+        for candidate in (header_token(request), request.cookies.get(_COOKIE),
+                          request.query_params.get("token")):  # fmt: skip
+            if matches(candidate):
+                return
+        raise HTTPException(401, "this console needs its token (open it with ?token=...)")
+
+    def gateway() -> CpsGateway:
+        if state["cps"] is None:
+            raise HTTPException(404, "no CPS: start the console with --cps WORKDIR")
+        return state["cps"]
+
+    def study(name: str) -> StudyView:
+        if name not in studies:
+            raise HTTPException(404, f"no study {name[:80]!r}; studies: {', '.join(studies)}")
+        return studies[name]
+
+    async def body_of(request: Request) -> dict[str, Any]:
+        raw = await request.body()
+        if len(raw) > MAX_BODY_BYTES:
+            raise HTTPException(413, f"request body over {MAX_BODY_BYTES} bytes")
+        ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
+        if ctype == "application/json":
+            try:
+                data = json.loads(raw.decode("utf-8"))
+            except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+                raise HTTPException(400, f"malformed JSON: {exc}") from None
+        elif ctype == "application/x-www-form-urlencoded":
+            try:
+                form = parse_qs(raw.decode("utf-8"), keep_blank_values=True, strict_parsing=False)
+            except (UnicodeDecodeError, ValueError) as exc:
+                raise HTTPException(400, f"malformed form: {exc}") from None
+            data = {k: v[-1] for k, v in form.items()}
+        else:
+            raise HTTPException(415, "send application/json or a form")
+        if not isinstance(data, dict):
+            raise HTTPException(400, "the body must be a JSON object")
+        return data
+
+    # -- pages ----------------------------------------------------------------------------
+    async def index(request: Request) -> Response:
+        given = request.query_params.get("token")
+        if config.reads_need_token and not (
+            matches(given) or matches(request.cookies.get(_COOKIE))
+        ):
+            return HTMLResponse("<h1>401</h1><p>Open the console with ?token=...</p>", 401)
+        html = (_static_dir() / "index.html").read_text()
+        response = HTMLResponse(html)
+        if matches(given) and config.reads_need_token:
+            response.set_cookie(_COOKIE, token, httponly=True, samesite="strict")
+        return response
+
+    async def plotly(request: Request) -> Response:
+        return FileResponse(plotly_js(), media_type="text/javascript")
+
+    # -- API ------------------------------------------------------------------------------
+    @_api
+    async def api_config(request: Request) -> Response:
+        check_read(request)
+        return JSONResponse({"cps": state["cps"] is not None, "studies": list(studies),
+                             "reads_need_token": config.reads_need_token,
+                             "live_period_s": config.live_period_s})  # fmt: skip
+
+    @_api
+    async def api_assets(request: Request) -> Response:
+        check_read(request)
+        gw = gateway()
+        return JSONResponse({"assets": gw.assets(), "kg_error": gw.kg_error,
+                             "objects": gw.ids_of("object"),
+                             "units": gw.ids_of("transfer_unit")})  # fmt: skip
+
+    @_api
+    async def api_aas(request: Request) -> Response:
+        check_read(request)
+        return JSONResponse({"submodels": await gateway().aas(request.path_params["aid"])})
+
+    @_api
+    async def api_live(request: Request) -> Response:
+        check_read(request)
+        gw = gateway()
+        try:
+            max_events = int(request.query_params.get("max_events", "0"))
+        except ValueError:
+            raise InputError("max_events must be an integer") from None
+        if not 0 <= max_events <= 100000:
+            raise InputError("max_events must be in 0..100000 (0: unlimited)")
+
+        async def events() -> AsyncIterator[str]:
+            n = 0
+            while not max_events or n < max_events:
+                payload = gw.live()
+                payload["orders"] = [o.public() for o in gw.orders.values()]
+                yield f"event: live\ndata: {json.dumps(payload)}\n\n"
+                n += 1
+                if await request.is_disconnected():
+                    return
+                await asyncio.sleep(config.live_period_s)
+
+        return StreamingResponse(events(), media_type="text/event-stream",
+                                 headers={"X-Accel-Buffering": "no"})  # fmt: skip
+
+    @_api
+    async def api_orders(request: Request) -> Response:
+        gw = gateway()
+        if request.method == "GET":
+            check_read(request)
+            return JSONResponse({"orders": [o.public() for o in gw.orders.values()]})
+        client = request.client.host if request.client else "?"
+        body = await body_of(request)
+        if not (matches(header_token(request)) or matches(body.get("token"))):
+            audit.warning("order refused: no valid token from %s", client)
+            raise HTTPException(401, "placing an order needs the console's token")
+        obj, source, target = await gw.validate_order(body)
+        order = await gw.submit(obj, source, target, client)
+        return JSONResponse(order.public(), status_code=201)
+
+    @_api
+    async def api_order(request: Request) -> Response:
+        check_read(request)
+        oid = request.path_params["oid"]
+        order = gateway().orders.get(oid)
+        if order is None:
+            raise LookupError(f"no order {oid[:40]!r}")
+        return JSONResponse(order.public())
+
+    @_api
+    async def api_studies(request: Request) -> Response:
+        check_read(request)
+        views = list(studies.values())
+        return JSONResponse({"studies": await run_in_threadpool(
+            lambda: [v.progress() for v in views])})  # fmt: skip
+
+    @_api
+    async def api_study_map(request: Request) -> Response:
+        check_read(request)
+        view = study(request.path_params["name"])
+        return JSONResponse(await run_in_threadpool(view.success_map))
+
+    @_api
+    async def api_study_export(request: Request) -> Response:
+        check_read(request)
+        view = study(request.path_params["name"])
+        fmt = request.path_params["fmt"]
+        data = await run_in_threadpool(view.export, fmt)
+        media = "text/csv" if fmt == "csv" else "application/vnd.apache.parquet"
+        stem = Path(view.name).stem
+        return Response(data, media_type=media, headers={
+            "Content-Disposition": f'attachment; filename="{stem}.{fmt}"'})  # fmt: skip
+
+    @_api
+    async def not_found(request: Request) -> Response:
+        raise HTTPException(404, f"no such page: {request.url.path[:80]}")
+
+    @contextlib.asynccontextmanager
+    async def lifespan(app: Starlette) -> AsyncIterator[None]:
+        if config.cps is not None:
+            gw = CpsGateway(config.cps, config.live_period_s)
+            await gw.start()
+            state["cps"] = gw
+        try:
+            yield
+        finally:
+            if state["cps"] is not None:
+                await state["cps"].stop()
+                state["cps"] = None
+
+    routes = [
+        Route("/", index),
+        Route("/static/vendor/plotly.min.js", plotly),
+        Mount("/static", StaticFiles(directory=_static_dir()), name="static"),
+        Route("/api/config", api_config),
+        Route("/api/assets", api_assets),
+        Route("/api/assets/{aid}/aas", api_aas),
+        Route("/api/live", api_live),
+        Route("/api/orders", api_orders, methods=["GET", "POST"]),
+        Route("/api/orders/{oid}", api_order),
+        Route("/api/studies", api_studies),
+        Route("/api/studies/{name}/map", api_study_map),
+        Route("/api/studies/{name}/results.{fmt}", api_study_export),
+        Route("/{path:path}", not_found, methods=["GET", "POST", "PUT", "DELETE", "PATCH"]),
+    ]
+    hosts = ["*"] if config.reads_need_token else sorted(
+        {config.host, "localhost", "127.0.0.1", "[::1]"})  # fmt: skip
+    middleware = [Middleware(_SecurityHeaders), Middleware(TrustedHostMiddleware,
+                                                          allowed_hosts=hosts)]  # fmt: skip
+
+    async def http_error(request: Request, exc: Exception) -> Response:
+        if isinstance(exc, HTTPException):
+            return _error(exc.status_code, str(exc.detail))
+        return _error(500, "internal error")
+
+    return Starlette(routes=routes, middleware=middleware, lifespan=lifespan,
+                     exception_handlers={HTTPException: http_error,
+                                         Exception: http_error})  # fmt: skip

@@ -40,6 +40,7 @@ def cmd_web(args: argparse.Namespace) -> int:
         print(f"console: {url}", flush=True)
 
     serve(config, on_ready=ready)
+    print("console down", flush=True)
     return 0
 
 

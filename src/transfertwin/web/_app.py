@@ -320,7 +320,7 @@ def create_app(config: WebConfig) -> Starlette:
         Route("/api/studies", api_studies),
         Route("/api/studies/{name}/map", api_study_map),
         Route("/api/studies/{name}/results.{fmt}", api_study_export),
-        Route("/{path:path}", not_found, methods=["GET", "POST", "PUT", "DELETE", "PATCH"]),
+        Route("/{path:path}", not_found),
     ]
     hosts = ["*"] if config.reads_need_token else sorted(
         {config.host, "localhost", "127.0.0.1", "[::1]"})  # fmt: skip

@@ -35,27 +35,33 @@ from transfertwin.cps.opcua import (
 )
 from transfertwin.cps.opcua import load_credentials as _load_credentials
 
-__all__ = ["ASSETS_QUERY", "CpsGateway", "Order"]
+__all__ = ["ASSETS_QUERY", "CAPABILITIES_QUERY", "CpsGateway", "Order"]
 
 log = logging.getLogger("transfertwin.web")
 audit = logging.getLogger("transfertwin.web.audit")
 
+# rdflib cannot GROUP_CONCAT(DISTINCT ...) a variable left unbound by an OPTIONAL: the
+# capabilities (which not every asset has) come from a query of their own.
 ASSETS_QUERY = """
 PREFIX tt: <https://transfertwin.dev/ontology#>
 SELECT ?id (GROUP_CONCAT(DISTINCT ?cls; separator="/") AS ?class) (SAMPLE(?t) AS ?type)
-       (GROUP_CONCAT(DISTINCT ?cap; separator=",") AS ?capabilities)
        (SAMPLE(?st) AS ?status) (SAMPLE(?os) AS ?state) (SAMPLE(?stn) AS ?station)
        (SAMPLE(?ep) AS ?endpoint) (SAMPLE(?sp) AS ?security) WHERE {
   ?a tt:assetId ?id .
   OPTIONAL { ?a a ?c . FILTER(STRSTARTS(STR(?c), STR(tt:))) BIND(STRAFTER(STR(?c), "#") AS ?cls) }
   OPTIONAL { ?a tt:assetType ?at . BIND(STRAFTER(STR(?at), "#") AS ?t) }
-  OPTIONAL { ?a tt:hasCapability ?ci . BIND(STRAFTER(STR(?ci), "#") AS ?cap) }
   OPTIONAL { ?a tt:status ?st }
   OPTIONAL { ?a tt:operationalState ?os }
   OPTIONAL { ?a tt:atStation ?s . BIND(STRAFTER(STR(?s), "/station/") AS ?stn) }
   OPTIONAL { ?a tt:endpoint ?ep }
   OPTIONAL { ?a tt:hasInterface ?i . ?i tt:securityPolicy ?sp }
 } GROUP BY ?id ORDER BY ?id
+"""
+CAPABILITIES_QUERY = """
+PREFIX tt: <https://transfertwin.dev/ontology#>
+SELECT ?id ?cap WHERE {
+  ?a tt:assetId ?id ; tt:hasCapability ?c . BIND(STRAFTER(STR(?c), "#") AS ?cap)
+} ORDER BY ?id ?cap
 """
 
 _LOCATION_QUERY = """
@@ -130,6 +136,7 @@ class CpsGateway:
         )
         self._assets: dict[str, dict[str, Any]] = {a["id"]: a for a in info["assets"]}
         self._sessions: dict[str, AssetClient] = {}
+        self._kg: AssetClient | None = None
         self.values: dict[str, dict[str, Any]] = {a: {} for a in self._assets}
         self.online: dict[str, bool] = dict.fromkeys(self._assets, False)
         self.kg_rows: list[dict[str, Any]] = []
@@ -186,19 +193,34 @@ class CpsGateway:
             await asyncio.sleep(1.0)
 
     async def _watch_graph(self) -> None:
-        """Refresh the knowledge graph's view of the assets every second."""
+        """Keep an operator session with the knowledge graph; refresh the assets each second."""
+        if "KG" not in self._assets:
+            self.kg_error = "the CPS has no knowledge graph asset"
+            return
         while True:
-            if "KG" in self._assets:
-                try:
-                    self.kg_rows = await self._query(ASSETS_QUERY)
-                    self.kg_error = None
-                except asyncio.CancelledError:
-                    raise
-                except Exception as exc:
-                    self.kg_error = f"knowledge graph not answering ({type(exc).__name__})"
+            try:
+                async with self._session("KG", "operator") as kg:
+                    self._kg = kg
+                    while True:
+                        rows = json.loads(await kg.call("Query", ASSETS_QUERY))
+                        caps: dict[str, list[str]] = {}
+                        for r in json.loads(await kg.call("Query", CAPABILITIES_QUERY)):
+                            caps.setdefault(r["id"], []).append(r["cap"])
+                        for r in rows:
+                            r["capabilities"] = caps.get(r["id"], [])
+                        self.kg_rows, self.kg_error = rows, None
+                        await asyncio.sleep(1.0)
+            except asyncio.CancelledError:
+                raise
+            except Exception as exc:
+                self.kg_error = f"knowledge graph not answering ({type(exc).__name__})"
+            finally:
+                self._kg = None
             await asyncio.sleep(1.0)
 
     async def _query(self, sparql: str) -> list[dict[str, Any]]:
+        if self._kg is not None:
+            return json.loads(await self._kg.call("Query", sparql))
         async with self._session("KG", "operator") as kg:
             return json.loads(await kg.call("Query", sparql))
 
@@ -220,7 +242,7 @@ class CpsGateway:
             r = by_id.get(aid, {})
             classes = [c for c in str(r.get("class") or "").split("/") if c]
             kind = next((c for c in classes if c in _KINDS), a.get("kind"))
-            caps = sorted(c for c in str(r.get("capabilities") or "").split(",") if c)
+            caps = sorted(r.get("capabilities") or [])
             out.append({
                 "id": aid,
                 "class": a.get("class"),
@@ -368,13 +390,13 @@ class CpsGateway:
         deadline = time.monotonic() + timeout_s
         op = str(order.operation)
         while time.monotonic() < deadline:
-            for tm in tms_ids:
+            lines = self._log_lines(op)
+            for tm in tms_ids if not lines else ():  # no CPS log: what the modules report
                 v = self.values.get(tm, {})
                 if v.get("State") == "busy" or v.get("DockedAt"):
                     docked = f", docked at {v['DockedAt']}" if v.get("DockedAt") else ""
                     task = f" ({v['CurrentTask']})" if v.get("CurrentTask") else ""
                     order.step(f"{tm}: {v.get('State')}{docked}{task}")
-            lines = self._log_lines(op)
             for ln in lines[seen_log:]:
                 order.step(ln)
             seen_log = len(lines)

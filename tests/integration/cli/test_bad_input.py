@@ -4,6 +4,7 @@ traceback, and no file left behind (issue: reliability, item 8)."""
 from __future__ import annotations
 
 import os
+import socket
 from pathlib import Path
 
 import pytest
@@ -150,6 +151,13 @@ BAD: list[tuple[str, list[str]]] = [
     ("rehearse theta step not dividing 360", [*REH, "--theta-step", "7"]),
     ("rehearse holdout of 1", [*REH, "--holdout", "1"]),
     ("rehearse into /sys", [*REH[:-1], "/sys/reh"]),
+    ("web off loopback without token", ["web", "--host", "0.0.0.0"]),
+    ("web short token", ["web", "--token", "abc"]),
+    ("web port out of range", ["web", "--port", "70000"]),
+    ("web missing db", ["web", "--db", "missing.sqlite"]),
+    ("web db not a store", ["web", "--db", "real.csv"]),
+    ("web cps not running", ["web", "--cps", "nowhere"]),
+    ("web port busy", ["web", "--port", "BUSY"]),
     ("unknown command", ["frobnicate"]),
 ]
 
@@ -174,7 +182,11 @@ def _tree(root: Path) -> set[str]:
 @pytest.mark.parametrize(("case", "argv"), BAD, ids=[c for c, _ in BAD])
 def test_bad_input_exits_2_with_one_line_and_leaves_nothing(case, argv, workdir, capfd) -> None:
     before = _tree(workdir)
-    code = main(argv)
+    with socket.socket() as busy:  # a port another program listens on
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = str(busy.getsockname()[1])
+        code = main([port if a == "BUSY" else a for a in argv])
     out, err = capfd.readouterr()
     assert code == 2, (case, err)
     lines = err.strip().splitlines()

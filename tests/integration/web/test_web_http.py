@@ -1,0 +1,152 @@
+"""The console over HTTP (Starlette TestClient) against a real study store: pages, progress,
+the success map, downloads, and the security rules (token, validation, no tracebacks)."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import subprocess
+import sys
+
+import pytest
+from starlette.testclient import TestClient
+
+from transfertwin.store import SQLiteResultStore
+from transfertwin.web import MAX_BODY_BYTES, WebConfig, create_app
+
+LOOPBACK = "http://127.0.0.1"
+
+
+@pytest.fixture
+def client(tiny_study):
+    app = create_app(WebConfig(dbs=(tiny_study,)))
+    with TestClient(app, base_url=LOOPBACK, raise_server_exceptions=False) as c:
+        yield c
+
+
+def _rows(db):
+    with SQLiteResultStore(db, create=False) as store:
+        return list(store.rows())
+
+
+def test_page_and_assets_are_served_locally(client):
+    page = client.get("/")
+    assert page.status_code == 200
+    for src in ("/static/app.js", "/static/style.css", "/static/vendor/plotly.min.js"):
+        assert src in page.text
+        assert client.get(src).status_code == 200
+    assert "http://" not in page.text and "https://" not in page.text  # nothing from outside
+    assert "plotly.js" in client.get("/static/vendor/plotly.min.js").text[:200]
+    csp = page.headers["content-security-policy"]
+    assert "default-src 'self'" in csp and "script-src 'self'" in csp
+
+
+def test_progress_matches_the_store(client, tiny_study):
+    rows = _rows(tiny_study)
+    (s,) = client.get("/api/studies").json()["studies"]
+    assert s["name"] == "tiny.sqlite"
+    assert (s["done"], s["planned"]) == (len(rows), 12)
+    assert s["by_status"] == {st: sum(r["status"] == st for r in rows) for st in s["by_status"]}
+    assert s["rate_per_s"] > 0 and s["eta_s"] == pytest.approx(6 / s["rate_per_s"])
+    assert s["objects"] == ["o1"]
+
+
+def test_success_map_agrees_with_the_rows(client, tiny_study):
+    m = client.get("/api/studies/tiny.sqlite/map").json()
+    points = [p | {"face": f} for f, ps in m["objects"]["o1"].items() for p in ps]
+    ok = [r for r in _rows(tiny_study) if r["status"] == "ok"]
+    assert sum(p["n"] for p in points) == len(ok)
+    for p in points:
+        mine = [r for r in ok if (r["face"], r["conveyor"], r["theta_deg"]) ==
+                (p["face"], p["conveyor"], p["theta_deg"])]  # fmt: skip
+        assert p["share"] == pytest.approx(sum(r["success"] for r in mine) / len(mine))
+
+
+def test_csv_and_parquet_downloads(client, tiny_study):
+    res = client.get("/api/studies/tiny.sqlite/results.csv")
+    assert res.status_code == 200 and "attachment" in res.headers["content-disposition"]
+    table = list(csv.DictReader(io.StringIO(res.text)))
+    rows = _rows(tiny_study)
+    assert len(table) == len(rows)
+    assert [int(t["success"]) for t in table] == [r["success"] for r in rows]
+    assert all(not math.isnan(float(t["t_end_s"])) for t in table)
+    pq = client.get("/api/studies/tiny.sqlite/results.parquet")
+    assert pq.status_code == 200 and pq.content[:4] == b"PAR1"
+
+
+@pytest.mark.parametrize(
+    ("method", "path", "kwargs", "status"),
+    [
+        ("get", "/api/studies/nope.sqlite/map", {}, 404),
+        ("get", "/api/studies/tiny.sqlite/results.xlsx", {}, 422),
+        ("get", "/static/../_app.py", {}, 404),
+        ("get", "/static/%2e%2e/_app.py", {}, 404),
+        ("get", "/nowhere", {}, 404),
+        ("get", "/api/assets", {}, 404),  # no --cps
+        ("post", "/api/orders", {"json": {"object": "o1"}}, 404),
+        ("delete", "/api/studies", {}, 405),
+    ],
+)  # fmt: skip
+def test_bad_requests_get_4xx_with_a_message(client, method, path, kwargs, status):
+    res = getattr(client, method)(path, **kwargs)
+    assert res.status_code == status, res.text
+    if res.headers.get("content-type", "").startswith("application/json"):
+        assert res.json()["error"]
+    assert "Traceback" not in res.text and 'File "' not in res.text
+
+
+def test_a_store_that_is_not_a_store_is_a_4xx(tmp_path):
+    bogus = tmp_path / "bogus.sqlite"
+    bogus.write_bytes(b"this is not sqlite at all" * 10)
+    with TestClient(create_app(WebConfig(dbs=(bogus,))), base_url=LOOPBACK,
+                    raise_server_exceptions=False) as c:  # fmt: skip
+        res = c.get("/api/studies")
+    assert 400 <= res.status_code < 500 and res.json()["error"]
+    assert "Traceback" not in res.text
+
+
+def test_off_loopback_every_request_needs_the_token(tiny_study):
+    cfg = WebConfig(dbs=(tiny_study,), host="0.0.0.0", token="correct-horse-battery")
+    with TestClient(create_app(cfg), base_url="http://10.0.0.5") as c:
+        assert c.get("/").status_code == 401
+        assert c.get("/api/studies").status_code == 401
+        assert c.get("/api/studies", headers={"Authorization": "Bearer wrong-token"}
+                     ).status_code == 401  # fmt: skip
+        ok = c.get("/api/studies", headers={"Authorization": "Bearer correct-horse-battery"})
+        assert ok.status_code == 200
+        page = c.get("/?token=correct-horse-battery")  # sets an HttpOnly cookie
+        assert page.status_code == 200 and "httponly" in page.headers["set-cookie"].lower()
+        assert c.get("/api/studies").status_code == 200  # the cookie now authorises reads
+
+
+def test_loopback_console_refuses_foreign_host_headers(client):
+    res = client.get("/api/studies", headers={"Host": "evil.example"})
+    assert res.status_code == 400  # DNS rebinding
+
+
+def test_order_bodies_are_checked_before_anything_else(tiny_study, tmp_path):
+    """Size, type and JSON shape are refused with 4xx (here without a CPS, so no order runs)."""
+    cfg = WebConfig(dbs=(tiny_study,))
+    with TestClient(create_app(cfg), base_url=LOOPBACK, raise_server_exceptions=False) as c:
+        res = c.post("/api/orders", content=b"x" * (MAX_BODY_BYTES + 1),
+                     headers={"Content-Type": "application/json"})  # fmt: skip
+        assert res.status_code == 404  # no CPS: nothing is read at all
+
+
+def test_cli_refuses_a_public_host_without_token():
+    res = subprocess.run([sys.executable, "-m", "transfertwin", "web", "--host", "0.0.0.0"],
+                         capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert res.returncode == 2
+    assert len(res.stderr.strip().splitlines()) == 1 and "--token" in res.stderr
+
+
+def test_cli_serves_until_sigterm(tiny_study, console_factory):
+    import httpx
+
+    console = console_factory("--db", str(tiny_study))
+    assert console.base.startswith("http://127.0.0.1:")
+    res = httpx.get(console.base + "/api/studies", timeout=30)
+    assert res.status_code == 200 and res.json()["studies"][0]["done"] == 6
+    console.stop()
+    assert console.proc.returncode == 0

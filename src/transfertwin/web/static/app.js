@@ -173,7 +173,7 @@ async function loadStudies() {
       el("td", { text: s.name }), el("td", { text: s.plan || "" }),
       el("td", { class: "done", text: s.done + " / " + (s.planned == null ? "?" : s.planned) }),
       el("td", {}, bar), el("td", { text: s.rate_per_s == null ? "" : s.rate_per_s.toFixed(2) + " exp/s" }),
-      el("td", { text: dur(s.eta_s) }),
+      el("td", { text: s.idle_s != null && s.idle_s > 300 && s.eta_s ? "idle for " + dur(s.idle_s) : dur(s.eta_s) }),
       el("td", { text: Object.entries(s.by_status).map(([k, v]) => k + " " + v).join(", ") }),
       el("td", {}, el("a", { href: base + "csv", download: "", text: "CSV" }), " ",
         el("a", { href: base + "parquet", download: "", text: "Parquet" })));
@@ -221,7 +221,9 @@ async function drawMap() {
       angularaxis: { rotation: 90, direction: "counterclockwise", dtick: 30 },
       radialaxis: { range: [0, 1.1], showticklabels: false, ticks: "" } };
     layout.annotations.push({ text: face, showarrow: false, xref: "paper", yref: "paper",
-      x: (i + 0.5) * w, y: 1.0, font: { size: 13 } });
+      x: (i + 0.5) * w - 0.12, y: 1.0, font: { size: 13 } });
+    traces.push({ type: "scatterpolar", subplot: key, r: [], theta: [], showlegend: false,
+      hoverinfo: "skip" });  // draws the face's axes even before it has results
     for (const conveyor of ["left", "both", "right"]) {
       const pts = (perFace[face] || []).filter((p) => p.conveyor === conveyor);
       if (!pts.length) continue;
@@ -230,9 +232,9 @@ async function drawMap() {
         customdata: pts.map((p) => [conveyor, p.n, p.successes, p.share, face]),
         marker: { size: 10, symbol: SYMBOL[conveyor], color: pts.map((p) => p.share),
           cmin: 0, cmax: 1, colorscale: [[0, "#cf222e"], [0.5, "#e3b341"], [1, "#1a7f37"]],
-          showscale: traces.length === 0, colorbar: { title: { text: "success" }, len: 0.6 },
+          showscale: !traces.some((t) => t.marker && t.marker.showscale), colorbar: { title: { text: "success" }, len: 0.6 },
           line: { width: 0.5, color: "#333" } },
-        hovertemplate: obj + " %{customdata[4]}, θ = %{theta}°, conveyor %{customdata[0]}<br>" +
+        hovertemplate: obj + " %{customdata[4]}, θ = %{theta}, conveyor %{customdata[0]}<br>" +
           "success %{customdata[2]} of %{customdata[1]} (%{customdata[3]:.0%})<extra></extra>" });
     }
   });
@@ -246,6 +248,7 @@ async function drawMap() {
     $("live-status").textContent = e.message; return;
   }
   $("no-cps").hidden = config.cps;
+  if (!config.cps) $("live-status").textContent = "";
   if (config.cps) {
     await loadAssets();
     setInterval(loadAssets, 2000);

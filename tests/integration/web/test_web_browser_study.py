@@ -1,0 +1,29 @@
+"""A browser opens the console on a study store: progress, the polar success map, hover."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.integration.web.conftest import save_screenshot
+
+
+@pytest.mark.slow
+def test_browser_shows_the_polar_map_and_hover_values(tiny_study, console_factory, page,
+                                                       tmp_path):  # fmt: skip
+    console = console_factory("--db", str(tiny_study))
+    page.goto(console.url)
+    page.wait_for_selector("#study-tiny\\.sqlite")
+    assert page.inner_text("#study-tiny\\.sqlite td.done") == "6 / 12"
+    points = page.locator("#polar .scatterlayer path.point")
+    points.first.wait_for()
+    n_points = points.count()
+    assert n_points == 6  # one marker per state run so far
+    box = points.first.bounding_box()
+    page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    hover = page.locator(".hoverlayer .hovertext")
+    hover.first.wait_for()
+    text = hover.first.text_content()  # SVG: no innerText
+    assert "o1" in text and "θ =" in text and "success" in text
+    save_screenshot(page, tmp_path, "web-console-study")
+    href = page.get_attribute("#study-tiny\\.sqlite a:text('CSV')", "href")
+    assert href == "/api/studies/tiny.sqlite/results.csv"

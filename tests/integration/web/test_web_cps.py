@@ -1,0 +1,146 @@
+"""The console against a CPS started by the test (`transfertwin cps up`): assets from the
+knowledge graph, AAS browsing and live values over OPC UA, orders followed to their outcome,
+and no OPC UA credential in anything the browser receives. Browser tests drive Debian's
+chromium through Playwright (marked slow)."""
+
+from __future__ import annotations
+
+import json
+import time
+
+import pytest
+from starlette.testclient import TestClient
+
+from tests.integration.web.conftest import credential_strings, save_screenshot, wait_for
+from transfertwin.web import WebConfig, create_app
+
+OUTCOMES = {"delivered", "failed at pick-up", "failed at delivery"}
+
+
+def test_assets_live_values_orders_and_no_credentials(cps_workdir):
+    cfg = WebConfig(cps=cps_workdir)
+    seen: list[str] = []
+    with TestClient(create_app(cfg), base_url="http://127.0.0.1",
+                    raise_server_exceptions=False) as c:  # fmt: skip
+
+        def get(path, **kw):
+            res = c.get(path, **kw)
+            seen.append(res.text + json.dumps(dict(res.headers)))
+            return res
+
+        def post(path, **kw):
+            res = c.post(path, **kw)
+            seen.append(res.text + json.dumps(dict(res.headers)))
+            return res
+
+        def ready():
+            a = get("/api/assets").json()["assets"]
+            return a if all(x["reachable"] and x["status"] == "online" for x in a) else None
+
+        assets = {a["id"]: a for a in wait_for(ready, 120, "every asset online")}
+        info = json.loads((cps_workdir / "cps.json").read_text())
+        assert set(assets) == {a["id"] for a in info["assets"]}
+        assert assets["TU_A"]["type"] == "D/E" and assets["TU_A"]["station"] == "A"
+        assert "Transport" in assets["TM_1"]["capabilities"]
+        assert assets["TMS"]["kind"] == "LogicalAsset"
+        assert all(a["endpoint"].startswith("opc.tcp://127.0.0.1:") for a in assets.values())
+
+        for aid in assets:
+            sms = {s["id_short"]: s for s in get(f"/api/assets/{aid}/aas").json()["submodels"]}
+            assert "Identification" in sms
+        tu = {s["id_short"]: s for s in get("/api/assets/TU_A/aas").json()["submodels"]}
+        props = {e["id_short"]: e for e in tu["OperationalData"]["elements"]}
+        assert props["BeltSpeedLeft"]["value"] == 0.0
+        assert get("/api/assets/NOPE/aas").status_code == 404
+        assert get("/api/assets/..%2Fx/aas").status_code == 404
+
+        t0 = time.monotonic()
+        live = get("/api/live?max_events=4")
+        elapsed = time.monotonic() - t0
+        events = [json.loads(line[6:]) for line in live.text.splitlines()
+                  if line.startswith("data: ")]  # fmt: skip
+        assert len(events) == 4 and elapsed < 4.0  # >= 1 Hz
+        assert events[-1]["online"]["TM_1"] and "State" in events[-1]["values"]["TM_1"]
+        assert get("/api/live?max_events=x").status_code == 422
+
+        auth = {"Authorization": f"Bearer {cfg.session_token}"}
+        order = {"object": "o3", "source": "TU_B", "target": "TU_D"}
+        assert post("/api/orders", json=order).status_code == 401
+        assert post("/api/orders", json=order, headers={"Authorization": "Bearer x"}
+                    ).status_code == 401  # fmt: skip
+        bad = [
+            ({**order, "object": "o99"}, 422),
+            ({**order, "object": ["o3"]}, 422),
+            ({**order, "target": "TU_B"}, 422),
+            ({**order, "target": "TU_Z"}, 422),
+            ({**order, "target": "'; DROP"}, 422),
+            ({**order, "speed": 3}, 422),
+        ]
+        for body, status in bad:
+            res = post("/api/orders", json=body, headers=auth)
+            assert res.status_code == status and res.json()["error"], (body, res.text)
+        res = post("/api/orders", content=b"{not json", headers={**auth,
+                   "Content-Type": "application/json"})  # fmt: skip
+        assert res.status_code == 400
+        res = post("/api/orders", content=b"[1, 2]", headers={**auth,
+                   "Content-Type": "application/json"})  # fmt: skip
+        assert res.status_code == 400
+        res = post("/api/orders", content=b"object=o3", headers={**auth,
+                   "Content-Type": "text/plain"})  # fmt: skip
+        assert res.status_code == 415
+
+        form = "object=o3&source=TU_B&target=D&token=" + cfg.session_token  # station D
+        placed = post("/api/orders", content=form.encode(),
+                      headers={"Content-Type": "application/x-www-form-urlencoded"})  # fmt: skip
+        assert placed.status_code == 201, placed.text
+        oid = placed.json()["id"]
+        assert placed.json()["target"] == "TU_D"
+
+        def finished():
+            o = get(f"/api/orders/{oid}").json()
+            return o if o["state"] == "finished" else None
+
+        done = wait_for(finished, 300, "the order's outcome", period=1.0)
+        assert done["outcome"] in OUTCOMES
+        texts = [s["text"] for s in done["steps"]]
+        assert any("docked at TU_B" in t for t in texts), texts
+        assert get("/api/orders").json()["orders"][0]["id"] == oid
+
+    secrets = credential_strings(cps_workdir)
+    assert len(secrets) == 4
+    for text in seen:
+        for secret in secrets:
+            assert secret not in text
+
+
+@pytest.mark.slow
+def test_browser_sees_assets_and_places_an_order(cps_workdir, console_factory, page, tmp_path):
+    console = console_factory("--cps", str(cps_workdir))
+    page.goto(console.url)
+    page.wait_for_selector("#asset-TM_1 td.c-reachable.on", timeout=120_000)
+    page.wait_for_function(
+        "document.querySelectorAll('#assets td.c-reachable.on').length === 14", timeout=120_000
+    )
+    assert "token" not in page.url  # the token left the address bar
+    live = page.inner_text("#asset-TU_A .c-live")
+    assert "BeltSpeedLeft=" in live
+    page.click("#asset-TU_A")
+    page.wait_for_selector("#aas details[data-submodel='OperationalData']")
+    save_screenshot(page, tmp_path, "web-console-assets")
+
+    page.click("nav .tab[data-tab='orders']")
+    page.select_option("#order-object", "o2")
+    page.select_option("#order-source", "TU_A")
+    page.select_option("#order-target", "TU_C")
+    page.click("#order-submit")
+    page.wait_for_selector("#order-message.ok")
+    page.wait_for_selector("#orders tr[data-state='finished']", timeout=300_000)
+    outcome = page.inner_text("#orders tr[data-state='finished'] td.outcome")
+    assert outcome in OUTCOMES
+    save_screenshot(page, tmp_path, "web-console-order")
+    html = page.content()
+    for secret in credential_strings(cps_workdir):
+        assert secret not in html
+    console.stop()
+    audit = (cps_workdir / "web-audit.log").read_text()
+    assert "o2 TU_A -> TU_C" in audit

@@ -18,6 +18,8 @@ for lib in libEGL.so.1 libEGL_mesa.so.0 libOSMesa.so libusb-1.0.so.0 libgomp.so.
         esac
     fi
 done
+# The browser tests of the web console drive Debian's chromium (Playwright, no download).
+command -v chromium >/dev/null 2>&1 || need_apt+=(chromium)
 if [ ${#need_apt[@]} -gt 0 ]; then
     echo "dev.sh: installing system packages: ${need_apt[*]}" >&2
     SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"

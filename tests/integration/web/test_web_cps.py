@@ -115,12 +115,12 @@ def test_assets_live_values_orders_and_no_credentials(cps_workdir):
 
 @pytest.mark.slow
 def test_browser_sees_assets_and_places_an_order(cps_workdir, console_factory, page, tmp_path):
+    from playwright.sync_api import expect
+
     console = console_factory("--cps", str(cps_workdir))
     page.goto(console.url)
     page.wait_for_selector("#asset-TM_1 td.c-reachable.on", timeout=120_000)
-    page.wait_for_function(
-        "document.querySelectorAll('#assets td.c-reachable.on').length === 14", timeout=120_000
-    )
+    expect(page.locator("#assets td.c-reachable.on")).to_have_count(14, timeout=120_000)
     assert "token" not in page.url  # the token left the address bar
     live = page.inner_text("#asset-TU_A .c-live")
     assert "BeltSpeedLeft=" in live

@@ -64,14 +64,14 @@ def test_assets_live_values_orders_and_no_credentials(cps_workdir):
         assert get("/api/live?max_events=x").status_code == 422
 
         auth = {"Authorization": f"Bearer {cfg.session_token}"}
-        order = {"object": "o3", "source": "TU_B", "target": "TU_D"}
+        order = {"object": "o3", "source": "TU_C", "target": "TU_D"}  # o3 starts on TU_C
         assert post("/api/orders", json=order).status_code == 401
         assert post("/api/orders", json=order, headers={"Authorization": "Bearer x"}
                     ).status_code == 401  # fmt: skip
         bad = [
             ({**order, "object": "o99"}, 422),
             ({**order, "object": ["o3"]}, 422),
-            ({**order, "target": "TU_B"}, 422),
+            ({**order, "target": "TU_C"}, 422),  # source == target
             ({**order, "target": "TU_Z"}, 422),
             ({**order, "target": "'; DROP"}, 422),
             ({**order, "speed": 3}, 422),
@@ -89,7 +89,7 @@ def test_assets_live_values_orders_and_no_credentials(cps_workdir):
                    "Content-Type": "text/plain"})  # fmt: skip
         assert res.status_code == 415
 
-        form = "object=o3&source=TU_B&target=D&token=" + cfg.session_token  # station D
+        form = "object=o3&source=TU_C&target=D&token=" + cfg.session_token  # station D
         placed = post("/api/orders", content=form.encode(),
                       headers={"Content-Type": "application/x-www-form-urlencoded"})  # fmt: skip
         assert placed.status_code == 201, placed.text
@@ -103,7 +103,7 @@ def test_assets_live_values_orders_and_no_credentials(cps_workdir):
         done = wait_for(finished, 300, "the order's outcome", period=1.0)
         assert done["outcome"] in OUTCOMES
         texts = [s["text"] for s in done["steps"]]
-        assert any("docked at TU_B" in t for t in texts), texts
+        assert any("docked at TU_C" in t for t in texts), texts
         assert get("/api/orders").json()["orders"][0]["id"] == oid
 
     secrets = credential_strings(cps_workdir)
@@ -130,7 +130,7 @@ def test_browser_sees_assets_and_places_an_order(cps_workdir, console_factory, p
 
     page.click("nav .tab[data-tab='orders']")
     page.select_option("#order-object", "o2")
-    page.select_option("#order-source", "TU_A")
+    page.select_option("#order-source", "TU_B")  # o2 starts on TU_B
     page.select_option("#order-target", "TU_C")
     page.click("#order-submit")
     page.wait_for_selector("#order-message.ok")
@@ -143,4 +143,4 @@ def test_browser_sees_assets_and_places_an_order(cps_workdir, console_factory, p
         assert secret not in html
     console.stop()
     audit = (cps_workdir / "web-audit.log").read_text()
-    assert "o2 TU_A -> TU_C" in audit
+    assert "o2 TU_B -> TU_C" in audit

@@ -30,9 +30,22 @@ def _geom_pos(system: VirtualTransferSystem, name: str) -> np.ndarray:
     return system.data.geom_xpos[system.model.geom(name).id].copy()
 
 
-def _run(overrides: dict, ref: str = "o1", face: str = "front", conveyor: str = "both"):
+_PLAIN: dict[str, str] = {}
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _plain_o1(tmp_path_factory) -> None:
+    """o1's plain body (a proxy without protrusions): its shipped resting features would
+    catch at the gap by themselves and hide each mechanism's own effect."""
+    path = tmp_path_factory.mktemp("plain") / "o1.proxy.json"
+    path.write_text(json.dumps({"object_id": "o1", "base": "o1", "protrusions": []}))
+    _PLAIN["o1"] = str(path)
+
+
+def _run(overrides: dict, ref: str | None = None, face: str = "front", conveyor: str = "both"):
     scene = SceneConfig().with_overrides(**overrides)
-    return run_experiment(ExperimentSpec(ref, face, conveyor, 0, scene=scene, seed=1))
+    spec = ExperimentSpec(ref or _PLAIN["o1"], face, conveyor, 0, scene=scene, seed=1)
+    return run_experiment(spec)
 
 
 def test_height_step_moves_every_tu_belt_geom_and_no_tm_geom():

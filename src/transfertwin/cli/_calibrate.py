@@ -15,7 +15,7 @@ from rich.console import Console
 
 from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
-from transfertwin.cli._common import positive_int, worker_count
+from transfertwin.cli._common import add_executor_args, positive_int, with_executor, worker_count
 from transfertwin.cli._paths import out_dir
 from transfertwin.cli._progress import progress_bar
 
@@ -46,7 +46,7 @@ def _common(args: argparse.Namespace):
     mapping = parse_object_map(args.object_map, ids)
     workers = worker_count(args.workers)
     calib = {"runs": args.runs, "object_map": mapping, "seed": args.seed, "workers": workers,
-             "units": args.units}  # fmt: skip
+             "units": args.units, "executor": getattr(args, "started_executor", None)}  # fmt: skip
     return rows, scene, name, calib
 
 
@@ -384,7 +384,8 @@ def cmd_object(args: argparse.Namespace) -> int:
     with progress_bar(f"calibrate {args.object}", Console(stderr=True)) as on_progress:
         fit = fit_proxy(rows, args.object, depths_m=depths, work_dir=out / "candidates",
                         scene=scene, runs=args.runs, seed=args.seed, workers=calib["workers"],
-                        penalty=args.penalty, on_progress=on_progress)  # fmt: skip
+                        penalty=args.penalty, on_progress=on_progress,
+                        executor=calib["executor"])  # fmt: skip
     proxy = write_proxy(fit.spec, out / f"{args.object}.proxy.json")
     save_candidates(fit, candidates_path(out, args.object))
     for f in fit.faces:
@@ -426,6 +427,9 @@ def _signature_line(label: str, sig: dict[str, dict[str, object]]) -> str:
 def cmd_sensitivity(args: argparse.Namespace) -> int:
     """One-at-a-time (or Morris) sensitivity of the replay to candidate gap mechanisms."""
     from rich.table import Table
+
+    if getattr(args, "executor", "local") != "local":
+        raise InputError("calibrate sensitivity runs on local worker processes only (no --executor)")
 
     from transfertwin.report import (
         figure_png,
@@ -522,6 +526,7 @@ def _shared(p: argparse.ArgumentParser) -> None:
     p.add_argument("--object-map", help="real id to mesh: o1=PATH,o18=o5 (default: same id)")
     p.add_argument("--units", default="m", help="length unit of mapped mesh files")
     p.add_argument("--workers", type=int, help="worker processes (default: all cores)")
+    add_executor_args(p)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--limit", type=int, default=0, help="use only the first N real rows")
     p.add_argument("--out", required=True, help="output directory")
@@ -533,18 +538,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     csub = cal.add_subparsers(dest="calibrate_command", required=True, parser_class=type(cal))
     p = csub.add_parser("run", help="replay real experiments; metrics.json (F0.5 etc.)")
     _shared(p)
-    p.set_defaults(func=cmd_run)
+    p.set_defaults(func=with_executor(cmd_run))
     p = csub.add_parser("sweep", help="one-at-a-time sweep of a setting (Fig. 6.12/6.14)")
     _shared(p)
     p.add_argument("--param", required=True, help="mu, gap_mm, physics.solver, ...")
     p.add_argument("--values", required=True, help="comma-separated values")
     p.add_argument("--metric", default="f05")
-    p.set_defaults(func=cmd_sweep)
+    p.set_defaults(func=with_executor(cmd_sweep))
     p = csub.add_parser("simstudy", help="simulation-parameter study (Sec. 6.5.1, Fig. 6.12)")
     _shared(p)
     p.add_argument("--sets", help="labels to run, e.g. S0,S3,S5 (default: all)")
     p.add_argument("--metric", default="f05")
-    p.set_defaults(func=cmd_simstudy)
+    p.set_defaults(func=with_executor(cmd_simstudy))
     p = csub.add_parser("object", help="calibrate a proxy object from real outcomes (no scan)")
     _shared(p)
     p.add_argument("--object", required=True, help="real object id, e.g. o1")
@@ -553,7 +558,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="candidate protrusion depths below a face (0 is always tried)")  # fmt: skip
     p.add_argument("--penalty", type=float, default=0.02,
                    help="Brier penalty at the deepest candidate (towards the prior)")  # fmt: skip
-    p.set_defaults(func=cmd_object, runs=2)
+    p.set_defaults(func=with_executor(cmd_object), runs=2)
     p = csub.add_parser("evaluate", help="twin vs baselines, in-sample and cross-validated")
     _shared(p)
     p.add_argument("--folds", type=int, default=5, help="stratified folds K (default 5)")
@@ -562,7 +567,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "chosen in the training folds (default: simulate --profile)")  # fmt: skip
     p.add_argument("--penalty", type=float, default=0.02,
                    help="Brier penalty at the deepest proxy candidate")  # fmt: skip
-    p.set_defaults(func=cmd_evaluate)
+    p.set_defaults(func=with_executor(cmd_evaluate))
     p = csub.add_parser("sensitivity", help="which gap mechanism changes the outcomes (OAT/Morris)")
     _shared(p)
     p.add_argument("--params", help="NAME=LO:HI,... (default: every candidate mechanism; "
@@ -596,4 +601,4 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--study-name", help="study name (default: derived from the settings)")
     p.add_argument("--name", default="calibrated", help="name of the saved profile")
     p.add_argument("--save-profile", help="profile path (default OUT/profile.toml)")
-    p.set_defaults(func=cmd_tune)
+    p.set_defaults(func=with_executor(cmd_tune))

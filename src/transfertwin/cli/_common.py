@@ -3,11 +3,21 @@
 from __future__ import annotations
 
 import argparse
+import functools
 import os
+from collections.abc import Callable
 
 from transfertwin._errors import InputError
 
-__all__ = ["Parser", "parse_dock_error", "positive_int", "worker_count"]
+__all__ = [
+    "Parser",
+    "add_executor_args",
+    "executor_from_args",
+    "parse_dock_error",
+    "positive_int",
+    "with_executor",
+    "worker_count",
+]
 
 
 class Parser(argparse.ArgumentParser):
@@ -43,3 +53,43 @@ def worker_count(value: int | None) -> int:
     if value is None:
         return os.cpu_count() or 1
     return positive_int("--workers", value)
+
+
+def add_executor_args(p: argparse.ArgumentParser) -> None:
+    """``--executor local|ray``, ``--address`` and ``--chunk-size`` (docs/scaling.md)."""
+    p.add_argument("--executor", choices=("local", "ray"), default="local",
+                   help="local processes (default) or Ray tasks (docs/scaling.md)")  # fmt: skip
+    p.add_argument("--address", help="with --executor ray: auto or HOST:PORT of a running "
+                   "Ray cluster (default: start a local Ray with --workers CPUs)")  # fmt: skip
+    p.add_argument("--chunk-size", type=int, help="with --executor ray: experiments per "
+                   "Ray task (default 8)")  # fmt: skip
+
+
+def executor_from_args(args: argparse.Namespace, workers: int):  # -> RayExecutor | None
+    """The executor `add_executor_args` chose, not started; None for local processes (Ray
+    is then neither imported nor started)."""
+    if args.executor == "local":
+        if args.address is not None or args.chunk_size is not None:
+            raise InputError("--address and --chunk-size need --executor ray")
+        return None
+    from transfertwin.study.experiment import RayExecutor
+
+    chunk = positive_int("--chunk-size", args.chunk_size) if args.chunk_size is not None else 8
+    return RayExecutor(args.address, workers=workers, chunk_size=chunk)
+
+
+def with_executor(command: Callable[[argparse.Namespace], int]):
+    """Wrap a command so that the executor of ``--executor`` runs for its whole duration,
+    available as ``args.started_executor`` (None for local processes)."""
+
+    @functools.wraps(command)
+    def run(args: argparse.Namespace) -> int:
+        executor = executor_from_args(args, worker_count(args.workers))
+        if executor is None:
+            args.started_executor = None
+            return command(args)
+        with executor:
+            args.started_executor = executor
+            return command(args)
+
+    return run

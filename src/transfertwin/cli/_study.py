@@ -3,13 +3,20 @@
 from __future__ import annotations
 
 import argparse
+from contextlib import ExitStack
 from pathlib import Path
 
 from rich.console import Console
 from rich.table import Table
 
 from transfertwin._errors import InputError
-from transfertwin.cli._common import parse_dock_error, positive_int, worker_count
+from transfertwin.cli._common import (
+    add_executor_args,
+    executor_from_args,
+    parse_dock_error,
+    positive_int,
+    worker_count,
+)
 from transfertwin.cli._paths import out_dir, out_file
 from transfertwin.cli._progress import progress_bar
 
@@ -69,7 +76,7 @@ def _sampling_from_args(args: argparse.Namespace) -> dict[str, object]:
 
 
 def cmd_study_run(args: argparse.Namespace) -> int:
-    """Run (or resume) a full-state study into a SQLite store."""
+    """Run (or resume) a full-state study into a SQLite db, on local workers or Ray."""
     from transfertwin.store import SQLiteResultStore
     from transfertwin.study.experiment import check_plan, run_study, summarize
 
@@ -77,27 +84,37 @@ def cmd_study_run(args: argparse.Namespace) -> int:
     workers = worker_count(args.workers)
     if args.max_experiments is not None:
         positive_int("--max-experiments", args.max_experiments)
+    executor = executor_from_args(args, workers)
     plan = _plan_from_args(args)
     check_plan(plan)  # every mesh loads before the db is created
     console = Console(stderr=True)
-    with SQLiteResultStore(db) as store:
+    with ExitStack() as stack:
+        if executor is not None:
+            stack.enter_context(executor)  # Ray reachable before the db is created
+            where = args.address or "local Ray"
+            runner = f"Ray ({where}, {executor.cpus} CPUs, {executor.chunk_size} per task)"
+        else:
+            runner = f"{workers} workers"
+        store = stack.enter_context(SQLiteResultStore(db))
         store.init_plan(plan.plan_hash, plan.to_json())  # refuses another plan up front
         adaptive = plan.sampling == "adaptive"
         console.print(
             f"plan {plan.plan_hash[:12]}: {len(plan.objects)} objects x "
             f"{len(plan.states())} states x {'at most ' if adaptive else ''}{plan.runs} runs = "
             f"{plan.n_experiments} experiments, {plan.sampling} sampling, "
-            f"profile {plan.profile_name}, {workers} workers"
+            f"profile {plan.profile_name}, {runner}"
         )
         with progress_bar("study", console) as on_progress:
             if adaptive:
                 from transfertwin.study.adaptive import run_adaptive
 
                 outcome = run_adaptive(plan, store, workers=workers, on_progress=on_progress,
-                                       max_experiments=args.max_experiments)  # fmt: skip
+                                       max_experiments=args.max_experiments,
+                                       executor=executor)  # fmt: skip
             else:
                 outcome = run_study(plan, store, workers=workers, on_progress=on_progress,
-                                    max_experiments=args.max_experiments)  # fmt: skip
+                                    max_experiments=args.max_experiments,
+                                    executor=executor)  # fmt: skip
         _print_summary(summarize(store.rows()), console)
         console.print(
             f"{outcome.ran} new results in {outcome.seconds:.1f} s ({outcome.rate:.2f} exp/s); "
@@ -214,6 +231,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "intervals (default 0.9)")  # fmt: skip
     p.add_argument("--adaptive-epsilon", type=float, help="indifference zone in success "
                    "share (default 0.1)")  # fmt: skip
+    add_executor_args(p)
     p.set_defaults(func=cmd_study_run)
     p = ssub.add_parser("status", help="done/planned and rows by status")
     p.add_argument("--db", required=True)

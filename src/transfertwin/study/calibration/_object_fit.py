@@ -26,7 +26,7 @@ from transfertwin.objects import PROXY_SUFFIX, Protrusion, ProxySpec, write_prox
 from transfertwin.sim import SceneConfig
 from transfertwin.study.calibration._evaluate import choose_candidates
 from transfertwin.study.calibration._replay import check_real_rows, replay_specs
-from transfertwin.study.experiment import run_rows
+from transfertwin.study.experiment import Executor, run_rows
 
 __all__ = [
     "FaceFit",
@@ -82,6 +82,7 @@ def fit_proxy(
     workers: int = 1,
     penalty: float = 0.02,
     on_progress: Callable[[int, int], None] | None = None,
+    executor: Executor | None = None,
 ) -> ProxyFit:
     """Fit the protrusion depth of each face of `object_id` to its real rows.
 
@@ -98,6 +99,9 @@ def fit_proxy(
         workers: Worker processes.
         penalty: Brier-score penalty at the deepest candidate (linear in the grid index).
         on_progress: Called with (done, total) experiments.
+        executor: Runs the experiments instead of `workers` local processes (e.g. a
+            started `RayExecutor`; candidate files in `work_dir` must then be readable
+            where the experiments run).
     """
     mine = [r for r in rows if str(r["object_id"]) == object_id]
     if not mine:
@@ -123,7 +127,7 @@ def fit_proxy(
                     where[(name, s.run, s.seed)] = (face, k, i)
                 specs += batch
     wins = {f: np.zeros((len(depths), sum(r["face"] == f for r in mine))) for f in faces}
-    for done, row in enumerate(run_rows(specs, workers), start=1):
+    for done, row in enumerate(run_rows(specs, workers, executor), start=1):
         face, k, i = where[(str(row["object_id"]), int(row["run"]), int(row["seed"]))]
         wins[face][k, i] += 1 if row["status"] == "ok" and row["success"] == 1 else 0
         if on_progress is not None:

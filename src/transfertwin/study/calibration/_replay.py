@@ -25,7 +25,12 @@ from transfertwin.ots import check_theta_deg, parse_conveyor, parse_face
 from transfertwin.sim import DockingError, SceneConfig
 from transfertwin.store import DOCKING_ERROR_COLUMNS
 from transfertwin.study.calibration._metrics import ConfusionMatrix, summarize_runs
-from transfertwin.study.experiment import ExperimentSpec, experiment_seeds, run_rows
+from transfertwin.study.experiment import (
+    Executor,
+    ExperimentSpec,
+    experiment_seeds,
+    run_rows,
+)
 
 __all__ = [
     "CalibrationResult",
@@ -160,6 +165,7 @@ def calibrate(
     workers: int = 1,
     units: str = "m",
     on_result: Callable[[], None] | None = None,
+    executor: Executor | None = None,
 ) -> CalibrationResult:
     """Replay every real row `runs` times and score each run against the real outcomes.
 
@@ -172,6 +178,8 @@ def calibrate(
         workers: Worker processes.
         units: Length unit of mapped mesh files.
         on_result: Called after each experiment (progress).
+        executor: Runs the experiments instead of `workers` local processes (e.g. a
+            started `RayExecutor`); the result does not depend on it.
     """
     check_real_rows(rows)
     if runs < 1:
@@ -189,7 +197,7 @@ def calibrate(
         raise RuntimeError("replay seeds collide; use another --seed")
     predicted = [[0] * len(rows) for _ in range(runs)]
     not_ok = [0] * runs
-    for row in run_rows(specs, workers):
+    for row in run_rows(specs, workers, executor):
         r, i = int(row["run"]), index[(int(row["run"]), int(row["seed"]))]
         if row["status"] == "ok":
             predicted[r][i] = int(row["success"])

@@ -262,7 +262,7 @@ def tune_tpe(
         work_dir: Folder for the trials' proxy files (see `replay_trial`).
         on_trial: Called with each new complete trial.
         on_progress: Called with (done, total) experiments of this call.
-        **calib: `calibrate` arguments: runs, seed, object_map, workers, units.
+        **calib: `calibrate` arguments: runs, seed, object_map, workers, units, executor.
     """
     import optuna
 

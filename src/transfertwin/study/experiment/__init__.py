@@ -26,7 +26,9 @@ from transfertwin.study.experiment._profile import (
     scene_from_dict,
     scene_to_dict,
 )
+from transfertwin.study.experiment._ray import RayExecutor
 from transfertwin.study.experiment._runner import (
+    Executor,
     ObjectSummary,
     StudyOutcome,
     check_plan,
@@ -40,11 +42,13 @@ __all__ = [
     "PRESETS",
     "RESULT_COLUMNS",
     "SAMPLING_MODES",
+    "Executor",
     "ExperimentResult",
     "ExperimentSpec",
     "Frame",
     "ObjectSummary",
     "Preset",
+    "RayExecutor",
     "StudyOutcome",
     "StudyPlan",
     "check_plan",

@@ -4,6 +4,8 @@ Each result is committed as soon as it arrives, keyed by (object, state, run), s
 interrupted or killed study loses at most the experiments in flight; running the same plan
 on the same store again skips what is done. Workers are processes (``spawn``), each keeping
 its compiled virtual systems between experiments; the parent is the store's only writer.
+Another executor (e.g. `RayExecutor`, for a cluster) can run the experiments instead: it
+hands back rows in batches and the parent still writes them.
 """
 
 from __future__ import annotations
@@ -17,8 +19,9 @@ import time
 from collections import Counter, defaultdict
 from collections.abc import Callable, Collection, Container, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from contextlib import closing
 from dataclasses import dataclass
-from typing import TypeVar
+from typing import Protocol, TypeVar
 
 from transfertwin._errors import InputError
 from transfertwin.objects import load_object
@@ -27,6 +30,7 @@ from transfertwin.study.experiment._experiment import ExperimentSpec, run_experi
 from transfertwin.study.experiment._plan import StudyPlan
 
 __all__ = [
+    "Executor",
     "ObjectSummary",
     "StudyOutcome",
     "check_plan",
@@ -56,6 +60,14 @@ def _exit_with_parent(parent_pid: int, period_s: float = 0.5) -> None:
 def _run_row(spec: ExperimentSpec) -> dict[str, object]:
     """Worker entry point: one experiment → one result row."""
     return run_experiment(spec).row()
+
+
+class Executor(Protocol):
+    """Runs experiments somewhere else than the local worker processes (e.g. `RayExecutor`)."""
+
+    def batches(self, specs: Iterable[ExperimentSpec]) -> Iterator[list[dict[str, object]]]:
+        """Yield the result rows of `specs` in batches, as they complete."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -140,14 +152,21 @@ def _pending(
     return todo, (spec for _, spec in plan.specs(object_ids, skip))
 
 
-def run_rows(specs: Iterable[ExperimentSpec], workers: int) -> Iterator[dict[str, object]]:
-    """Run experiments on `workers` processes; yields result rows as they complete
-    (unordered when workers > 1).
+def run_rows(
+    specs: Iterable[ExperimentSpec], workers: int, executor: Executor | None = None
+) -> Iterator[dict[str, object]]:
+    """Run experiments on `workers` processes (or on `executor`); yields result rows as they
+    complete (unordered when workers > 1 or with an executor).
 
     At most a few experiments per worker are in flight, so an interrupted run loses little.
     A worker that dies (e.g. a crash inside the engine) raises `BrokenProcessPool` here
     instead of hanging the study.
     """
+    if executor is not None:
+        with closing(executor.batches(specs)) as batches:
+            for batch in batches:
+                yield from batch
+        return
     for _, row in run_tagged(((None, s) for s in specs), workers):
         yield row
 
@@ -191,20 +210,23 @@ def run_study(
     on_result: Callable[[dict[str, object]], None] | None = None,
     on_progress: Callable[[int, int], None] | None = None,
     keys: Collection[tuple] | None = None,
+    executor: Executor | None = None,
 ) -> StudyOutcome:
     """Run every experiment of `plan` not yet in `store` (or only those of `keys`).
 
     Args:
         plan: The study plan; stored on first use, and a different plan is refused.
         store: Result store (single writer: this process).
-        workers: Worker processes; 1 runs in this process.
+        workers: Worker processes; 1 runs in this process (unused with `executor`).
         max_experiments: Stop after this many new results (for partial runs/timing).
         on_result: Called with each stored row.
         on_progress: Called with (done, total) of this call's experiments, once before the
-            first result and after each one.
+            first result and after each stored batch (each row, locally).
         keys: Run only the experiments with these store keys (object_id, face, conveyor,
             theta_deg, run) — a round of an adaptive study; keys outside the plan are
             ignored. Required for an adaptive plan, which `run_adaptive` drives.
+        executor: Runs the experiments instead of local processes (e.g. a started
+            `RayExecutor`); each batch it returns is stored in one transaction.
 
     Returns:
         Counts and timing; `interrupted` is True after Ctrl-C (results so far are kept).
@@ -225,12 +247,15 @@ def run_study(
     ran, interrupted = 0, False
     t0 = time.perf_counter()
     report(0, todo)
+    batches = executor.batches(specs) if executor else ([row] for row in run_rows(specs, workers))
     try:
-        for row in run_rows(specs, workers):
-            ran += store.put([row])
-            if on_result is not None:
-                on_result(row)
-            report(ran, todo)
+        with closing(batches):  # type: ignore[arg-type]
+            for batch in batches:
+                ran += store.put(batch)
+                if on_result is not None:
+                    for row in batch:
+                        on_result(row)
+                report(ran, todo)
     except KeyboardInterrupt:
         interrupted = True
     return StudyOutcome(plan.n_experiments, len(done), ran, interrupted, time.perf_counter() - t0)

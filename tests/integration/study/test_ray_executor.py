@@ -28,6 +28,7 @@ from pathlib import Path
 import pytest
 
 from tests.integration.study.test_resume import _rows, _same
+from transfertwin.cli import main
 
 pytest.importorskip("ray")
 
@@ -76,16 +77,54 @@ def _marked(mark: str) -> dict[int, dict[str, str]]:
     return found
 
 
+def _stats() -> dict[int, tuple[int, int]]:
+    """Live process id → (parent id, start time); zombies left out."""
+    stats = {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if fields[0] != "Z":
+                stats[int(entry.name)] = (int(fields[1]), int(fields[19]))
+    return stats
+
+
+def _ours(mark: str) -> set[tuple[int, int]]:
+    """(id, start time) of the processes carrying `mark` and of their descendants (Ray's
+    agents and workers write their title over their environment, so only their parent
+    tells where they belong)."""
+    stats = _stats()
+    ours = set(_marked(mark)) & set(stats)
+    grew = True
+    while grew:
+        new = {pid for pid, (ppid, _) in stats.items() if ppid in ours} - ours
+        ours |= new
+        grew = bool(new)
+    return {(pid, stats[pid][1]) for pid in ours}
+
+
 def _end(mark: str) -> None:
-    """SIGTERM, then SIGKILL, every process carrying `mark`, by id."""
+    """SIGTERM, then SIGKILL, every process carrying `mark` and its descendants, by id (and
+    start time, so a reused id is never hit). The tree is read before anything is killed:
+    a child whose parent died belongs to init."""
+    targets = _ours(mark)
+
+    def alive() -> set[tuple[int, int]]:
+        stats = _stats()
+        return {(pid, t) for pid, t in targets if stats.get(pid, (0, -1))[1] == t}
+
     for sig in (signal.SIGTERM, signal.SIGKILL):
-        for pid in _marked(mark):
+        targets |= _ours(mark)
+        for pid, _ in alive():
             with contextlib.suppress(ProcessLookupError):
                 os.kill(pid, sig)
         deadline = time.monotonic() + 10
-        while _marked(mark) and time.monotonic() < deadline:
+        while alive() and time.monotonic() < deadline:
             time.sleep(0.2)
-    assert not _marked(mark), "Ray processes outlived the test"
+            targets |= _ours(mark)
+    assert not alive(), "Ray processes outlived the test"
 
 
 @contextlib.contextmanager
@@ -142,7 +181,6 @@ def test_missing_ray_is_one_line_exit_2_and_no_db(tmp_path, box_stl):
     assert not db.exists()
 
 
-@pytest.mark.slow
 def test_local_ray_gives_the_rows_of_the_local_executor(tmp_path, box_stl):
     local, ray_db = tmp_path / "local.sqlite", tmp_path / "ray.sqlite"
     with _ray_env() as env:
@@ -151,9 +189,7 @@ def test_local_ray_gives_the_rows_of_the_local_executor(tmp_path, box_stl):
                               capture_output=True, text=True, env=env, timeout=300)  # fmt: skip
         assert done.returncode == 0, done.stderr
         assert "Ray (local Ray, 2 CPUs, 3 per task)" in done.stderr.replace("\n", " ")
-    ref = subprocess.run(_study(local, box_stl, "--workers", "1"), capture_output=True,
-                         text=True, timeout=300)  # fmt: skip
-    assert ref.returncode == 0, ref.stderr
+    assert main([*_study(local, box_stl, "--workers", "1")[3:]]) == 0  # in process: no Ray
     assert len(_rows(ray_db)) == 8
     assert _same(_rows(ray_db), _rows(local))
 
@@ -190,14 +226,21 @@ def test_cluster_on_loopback_survives_a_killed_worker(tmp_path, box_stl):
         proc = subprocess.Popen(study, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                 text=True, env=env)  # fmt: skip
         try:
+            node_raylets = {
+                pid
+                for pid, penv in _marked(env[MARK]).items()
+                if penv.get("TRANSFERTWIN_TEST_NODE") and "raylet" in _cmdline(pid)
+            }
+            assert len(node_raylets) == 1, node_raylets  # fmt: skip
             victim, deadline = None, time.monotonic() + 240
             while victim is None and proc.poll() is None and time.monotonic() < deadline:
-                for pid, penv in _marked(env[MARK]).items():  # a task running on the worker node
-                    if penv.get("TRANSFERTWIN_TEST_NODE") and _cmdline(pid).startswith(
-                        "ray::run_chunk"
-                    ):
-                        victim = pid
-                        break
+                # a Ray worker process of the worker node, running a chunk right now
+                running = [
+                    pid
+                    for pid, (ppid, _) in _stats().items()
+                    if ppid in node_raylets and _cmdline(pid).startswith("ray::run_chunk")
+                ]
+                victim = running[0] if running else None  # fmt: skip
                 time.sleep(0.05)
             assert victim is not None, "no chunk ran on the worker node"
             stored_at_kill = _count(ray_db)

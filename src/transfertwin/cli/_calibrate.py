@@ -429,7 +429,7 @@ def cmd_sensitivity(args: argparse.Namespace) -> int:
     from rich.table import Table
 
     if getattr(args, "executor", "local") != "local":
-        raise InputError("calibrate sensitivity runs on local worker processes only (no --executor)")
+        raise InputError("calibrate sensitivity runs on local worker processes (no --executor)")
 
     from transfertwin.report import (
         figure_png,

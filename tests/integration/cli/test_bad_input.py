@@ -139,6 +139,7 @@ BAD: list[tuple[str, list[str]]] = [
     ("transfer missing profile", [*T, "--profile", "missing.toml"]),
     ("sensitivity one level", [*SENS, "--levels", "1"]),
     ("sensitivity zero runs", [*SENS, "--runs", "0"]),
+    ("sensitivity on ray", [*SENS, "--executor", "ray"]),
     ("sensitivity unknown factor", [*SENS, "--params", "wobble=0:1"]),
     ("sensitivity reversed range", [*SENS, "--params", "mu=0.8:0.3"]),
     ("sensitivity range not numbers", [*SENS, "--params", "mu=a:b"]),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import pytest
@@ -18,10 +19,19 @@ def rows():
     return [r for r in real if r["object_id"] == "o1" and r["face"] == "front"][:3]
 
 
-def test_a_height_step_shows_up_as_stuck_at_gap_failures(rows):
+@pytest.fixture(scope="module")
+def plain(tmp_path_factory) -> dict[str, str]:
+    """o1 mapped to its plain body: the shipped resting features catch by themselves."""
+    path = tmp_path_factory.mktemp("plain") / "o1.proxy.json"
+    path.write_text(json.dumps({"object_id": "o1", "base": "o1", "protrusions": []}))
+    return {"o1": str(path)}
+
+
+def test_a_height_step_shows_up_as_stuck_at_gap_failures(rows, plain):
     factors = parse_factors("tu_height_offset_m=0:0.04", SceneConfig())
     seen = []
     result = one_at_a_time(rows, base=SceneConfig(), factors=factors, levels=2, runs=1,
+                           object_map=plain,
                            on_progress=lambda done, total: seen.append((done, total)))  # fmt: skip
     # The base scene equals the first level: it is simulated once (2 scenes x 3 rows).
     assert seen[-1] == (6, 6)
@@ -37,11 +47,11 @@ def test_a_height_step_shows_up_as_stuck_at_gap_failures(rows):
     assert len(result.csv_rows()) == 3
 
 
-def test_morris_screening_ranks_a_step_above_a_no_op(rows):
+def test_morris_screening_ranks_a_step_above_a_no_op(rows, plain):
     # feature_mu does nothing without a proxy's features: its elementary effects are 0.
     factors = parse_factors("tu_height_offset_m=0:0.04,feature_mu=0.2:1.0", SceneConfig())
     result = morris_screening(rows[:2], base=SceneConfig(), factors=factors, trajectories=2,
-                              levels=2, runs=1)  # fmt: skip
+                              levels=2, runs=1, object_map=plain)  # fmt: skip
     assert result.points.shape == (6, 2)
     share = result.indices["share"]
     assert share["feature_mu"]["mu_star"] == 0.0

@@ -448,6 +448,7 @@ def cmd_sensitivity(args: argparse.Namespace) -> int:
     if args.method == "morris" and (args.levels % 2 or args.trajectories < 2):
         raise InputError("--method morris needs an even --levels and --trajectories >= 2")
     rows, scene, name, calib = _common(args)
+    calib.pop("executor", None)  # its scenes share one local pool (run_tagged)
     factors = parse_factors(args.params, scene)
     if args.method == "morris" and len(factors) < 2:
         raise InputError("--method morris needs at least two --params")

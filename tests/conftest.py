@@ -44,3 +44,13 @@ def box_inertia(mass: float, ext=(0.2, 0.09, 0.08)) -> np.ndarray:
     a, b, c = ext
     m = mass / 12
     return np.diag([m * (b**2 + c**2), m * (a**2 + c**2), m * (a**2 + b**2)])
+
+
+def plain_body_proxy(directory: Path, object_id: str = "o1") -> str:
+    """Path of a proxy of built-in core `object_id` without protrusions: its plain body,
+    for tests whose mechanism the core's shipped resting features would mask."""
+    from transfertwin.objects import ProxySpec, write_proxy
+
+    return str(
+        write_proxy(ProxySpec(object_id, object_id, ()), directory / f"{object_id}.proxy.json")
+    )

@@ -5,13 +5,13 @@ from __future__ import annotations
 import csv
 import json
 
+from tests.conftest import plain_body_proxy
 from transfertwin.cli import main
 
 
 def test_sensitivity_writes_csv_json_png_and_a_table(tmp_path, capsys):
     out = tmp_path / "sens"
-    plain = tmp_path / "o1.proxy.json"  # o1's body: its shipped features catch by themselves
-    plain.write_text(json.dumps({"object_id": "o1", "base": "o1", "protrusions": []}))
+    plain = plain_body_proxy(tmp_path)  # o1's body: its shipped features catch by themselves
     argv = ["calibrate", "sensitivity", "--limit", "2", "--params", "tu_height_offset_m=0:0.04",
             "--levels", "2", "--workers", "1", "--object-map", f"o1={plain}",
             "--out", str(out)]  # fmt: skip

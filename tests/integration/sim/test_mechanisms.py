@@ -14,7 +14,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from tests.conftest import box_hulls, box_inertia
+from tests.conftest import box_hulls, box_inertia, plain_body_proxy
 from transfertwin.sim import DockingError, SceneConfig, VirtualTransferSystem
 from transfertwin.study import ExperimentSpec, run_experiment
 
@@ -37,9 +37,7 @@ _PLAIN: dict[str, str] = {}
 def _plain_o1(tmp_path_factory) -> None:
     """o1's plain body (a proxy without protrusions): its shipped resting features would
     catch at the gap by themselves and hide each mechanism's own effect."""
-    path = tmp_path_factory.mktemp("plain") / "o1.proxy.json"
-    path.write_text(json.dumps({"object_id": "o1", "base": "o1", "protrusions": []}))
-    _PLAIN["o1"] = str(path)
+    _PLAIN["o1"] = plain_body_proxy(tmp_path_factory.mktemp("plain"))
 
 
 def _run(overrides: dict, ref: str | None = None, face: str = "front", conveyor: str = "both"):

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import json
 import math
 
 import pytest
 
+from tests.conftest import plain_body_proxy
 from transfertwin.data import calibration_csv_path
 from transfertwin.sim import SceneConfig
 from transfertwin.store import read_results
@@ -22,9 +22,7 @@ def rows():
 @pytest.fixture(scope="module")
 def plain(tmp_path_factory) -> dict[str, str]:
     """o1 mapped to its plain body: the shipped resting features catch by themselves."""
-    path = tmp_path_factory.mktemp("plain") / "o1.proxy.json"
-    path.write_text(json.dumps({"object_id": "o1", "base": "o1", "protrusions": []}))
-    return {"o1": str(path)}
+    return {"o1": plain_body_proxy(tmp_path_factory.mktemp("plain"))}
 
 
 def test_a_height_step_shows_up_as_stuck_at_gap_failures(rows, plain):

@@ -24,6 +24,7 @@ LAYERS: tuple[str, ...] = (
     "objects",
     "control",
     "sim",
+    "perception",
     "study.docking",
     "study.experiment",
     "study.fullstate",

@@ -32,7 +32,7 @@ class AABB:
         if floor_z is not None:
             lo[2] = min(lo[2], floor_z)
         return cls(tuple(map(float, 0.5 * (lo + hi))), tuple(map(float, 0.5 * (hi - lo))),
-                   int(len(points)))  # fmt: skip
+                   len(points))  # fmt: skip
 
     @property
     def lo(self) -> np.ndarray:

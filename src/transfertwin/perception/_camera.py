@@ -1,6 +1,7 @@
 """The virtual RGB-D camera on the TM's servo: depth rendered from the MuJoCo scene.
 
-`DepthCamera` renders the scene of a `VirtualTransferSystem` with `mujoco.Renderer`'s depth
+`DepthCamera` renders a compiled MuJoCo scene (a `VirtualTransferSystem`'s model and data,
+or the two-object scene of `pair_scene`) with `mujoco.Renderer`'s depth
 mode from the camera pose T_TC(α) (Table 5.1, `camera_pose`), applies the noise model
 (`DepthNoise`) and back-projects the pixels through a pinhole model into a point cloud in
 F_C. Only the geoms are drawn: sites and MuJoCo's rangefinder rays are switched off, so
@@ -22,7 +23,6 @@ import numpy as np
 from transfertwin._errors import InputError
 from transfertwin.perception._frames import ServoRig, camera_pose
 from transfertwin.perception._noise import DepthNoise, apply_depth_noise
-from transfertwin.sim import VirtualTransferSystem
 
 __all__ = ["CameraIntrinsics", "DepthCamera", "View", "depth_to_points"]
 
@@ -90,10 +90,11 @@ def depth_to_points(depth_m: np.ndarray, intrinsics: CameraIntrinsics) -> np.nda
 
 
 class DepthCamera:
-    """A depth camera on the servo of the TM of `system`.
+    """A depth camera on the servo of the TM.
 
     Args:
-        system: The virtual transfer system whose scene is rendered (not modified).
+        model, data: The scene rendered (not modified), e.g. a `VirtualTransferSystem`'s
+            `model` and `data`; world = F_T.
         rig: Servo and camera mounting.
         intrinsics: Image size and field of view.
         noise: Noise and dropout model.
@@ -103,18 +104,17 @@ class DepthCamera:
 
     def __init__(
         self,
-        system: VirtualTransferSystem,
+        model: mujoco.MjModel,
+        data: mujoco.MjData,
         rig: ServoRig | None = None,
         intrinsics: CameraIntrinsics | None = None,
         noise: DepthNoise | None = None,
     ) -> None:
-        self.system = system
+        self.data = data
         self.rig = rig if rig is not None else ServoRig()
         self.intrinsics = intrinsics if intrinsics is not None else CameraIntrinsics()
         self.noise = noise if noise is not None else DepthNoise()
-        self._renderer = mujoco.Renderer(
-            system.model, self.intrinsics.height, self.intrinsics.width
-        )
+        self._renderer = mujoco.Renderer(model, self.intrinsics.height, self.intrinsics.width)
         self._renderer.enable_depth_rendering()
         self._option = mujoco.MjvOption()
         self._option.flags[mujoco.mjtVisFlag.mjVIS_RANGEFINDER] = False
@@ -134,7 +134,7 @@ class DepthCamera:
         """Noise-free depth (H, W) along the optical axis (m) at servo angle α."""
         t_tc = camera_pose(self.rig, alpha_rad)
         renderer = self._renderer
-        renderer.update_scene(self.system.data, scene_option=self._option)
+        renderer.update_scene(self.data, scene_option=self._option)
         top = math.tan(math.radians(self.intrinsics.fovy_deg) / 2.0)
         for cam in renderer.scene.camera:
             cam.pos[:] = t_tc[:3, 3]

@@ -46,8 +46,8 @@ class DetectorConfig:
     plane_max_tilt_deg: float = 15.0
     plane_min_span_m: float = 0.3
     outlier_neighbours: int = 16
-    outlier_std_ratio: float = 3.0
-    cluster_eps_m: float = 0.02
+    outlier_std_ratio: float = 10.0
+    cluster_eps_m: float = 0.03
     cluster_min_points: int = 8
     min_cluster_points: int = 30
     min_height_m: float = 0.01

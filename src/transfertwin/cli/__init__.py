@@ -18,6 +18,7 @@ from transfertwin.cli import (
     _cps,
     _data,
     _docking,
+    _perceive,
     _rehearse,
     _study,
     _transfer,
@@ -37,7 +38,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-v", "--verbose", action="count", default=0,
                         help="-v: progress messages (INFO), -vv: debug logging")  # fmt: skip
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    for group in (_transfer, _study, _calibrate, _cps, _docking, _validate, _rehearse, _data, _web):
+    groups = (_transfer, _study, _calibrate, _cps, _docking, _perceive, _validate, _rehearse)
+    for group in (*groups, _data, _web):
         group.register(sub)
     return parser
 

@@ -14,6 +14,7 @@ from transfertwin.perception._frames import ServoRig, camera_pose, t_ac, t_sa, t
 from transfertwin.perception._noise import DepthNoise, apply_depth_noise
 from transfertwin.perception._pair import PairScene, pair_scene
 from transfertwin.perception._plane import fit_plane, ransac_plane
+from transfertwin.perception._plot import plot_detection
 from transfertwin.perception._scan import SCAN_ANGLES_DEG, Look, look, workspace_scan
 from transfertwin.perception._sensor import PerceptionSensor
 from transfertwin.perception._separation import (
@@ -55,6 +56,7 @@ __all__ = [
     "look",
     "min_separation",
     "pair_scene",
+    "plot_detection",
     "ransac_plane",
     "servo_angle",
     "servo_chain_2d",

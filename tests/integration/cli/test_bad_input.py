@@ -21,6 +21,7 @@ TUNE = ["calibrate", "tune", "--out", "t", "--limit", "6"]
 SENS = ["calibrate", "sensitivity", "--limit", "2", "--out", "sens"]
 REH = ["rehearse", "--plant-seed", "1", "--objects", "o3", "--calibration-experiments", "20",
        "--out", "reh"]  # fmt: skip
+PER = ["perceive", "--object", "o1", "--face", "front", "--conveyor", "both", "--theta", "0"]
 STUDY = ["study", "run", "--db", "s.sqlite", "--objects", "o1", "--theta-step", "180"]
 
 BAD: list[tuple[str, list[str]]] = [
@@ -170,6 +171,16 @@ BAD: list[tuple[str, list[str]]] = [
     ("web db not a store", ["web", "--db", "real.csv"]),
     ("web cps not running", ["web", "--cps", "nowhere"]),
     ("web port busy", ["web", "--port", "BUSY"]),
+    ("perceive unknown object", ["perceive", "--object", "o99", *PER[3:]]),
+    ("perceive unknown face", [*PER[:4], "up", *PER[5:]]),
+    ("perceive unknown conveyor", [*PER[:6], "middle", *PER[7:]]),
+    ("perceive theta out of range", [*PER[:-1], "999"]),
+    ("perceive short docking error", [*PER, "--dock-error", "1,2"]),
+    ("perceive negative seed", [*PER, "--seed", "-1", "--image", "p.png"]),
+    ("perceive size not WxH", [*PER, "--size", "big"]),
+    ("perceive size too small", [*PER, "--size", "4x4"]),
+    ("perceive image not png", [*PER, "--image", "p.jpg"]),
+    ("perceive image in /sys", [*PER, "--image", "/sys/x.png"]),
     ("unknown command", ["frobnicate"]),
 ]
 

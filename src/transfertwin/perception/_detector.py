@@ -12,7 +12,10 @@ Steps, in the study's order:
    inliers span at least `plane_min_span_m` (an object's flat top is smaller than that);
 6. statistical outlier removal on k nearest neighbours (Open3D);
 7. Euclidean cluster extraction (Open3D's DBSCAN);
-8. one AABB per cluster. Clusters with fewer than `min_cluster_points` points or whose top
+8. one AABB per cluster. Clusters whose footprints (x, y boxes) overlap are merged first:
+   two objects cannot share floor space, while one object seen at a grazing angle can fall
+   apart into pieces (a side face sampled row by row, a part under an overhang whose link
+   to the body is hidden). Clusters with fewer than `min_cluster_points` points or whose top
    is less than `min_height_m` above the belt plane are dropped. The plane fit removed an
    object's lowest `plane_distance_m`, and objects rest on the belts: each box therefore
    extends down to the belt plane under it (a choice, docs/perception.md).
@@ -103,6 +106,24 @@ def _height_above(planes: list[np.ndarray], pts: np.ndarray) -> np.ndarray:
     return above.min(axis=0)
 
 
+def _merge_overlapping(pts: np.ndarray, clusters: list[np.ndarray]) -> list[np.ndarray]:
+    """Union of clusters (boolean masks) whose x-y bounding boxes overlap, until none do."""
+    merged = True
+    while merged:
+        merged = False
+        boxes = [(pts[m, :2].min(axis=0), pts[m, :2].max(axis=0)) for m in clusters]
+        for i in range(len(clusters)):
+            for j in range(i + 1, len(clusters)):
+                (lo_i, hi_i), (lo_j, hi_j) = boxes[i], boxes[j]
+                if np.all(lo_i <= hi_j) and np.all(lo_j <= hi_i):
+                    clusters[i] = clusters[i] | clusters.pop(j)
+                    merged = True
+                    break
+            if merged:
+                break
+    return clusters
+
+
 def detect(
     views: Sequence[View], workspace: Workspace, cfg: DetectorConfig | None = None, seed: int = 0
 ) -> Detection:
@@ -135,11 +156,12 @@ def detect(
     counts["no_outliers"] = len(pts)
     labels = np.asarray(_cloud(pts).cluster_dbscan(cfg.cluster_eps_m, cfg.cluster_min_points))
     height = _height_above(planes, pts)
-    clusters = []
-    for k in range(int(labels.max(initial=-1)) + 1):
-        members = labels == k
-        if members.sum() >= cfg.min_cluster_points and height[members].max() >= cfg.min_height_m:
-            clusters.append(members)
+    found = [labels == k for k in range(int(labels.max(initial=-1)) + 1)]
+    clusters = [
+        m
+        for m in _merge_overlapping(pts, found)
+        if m.sum() >= cfg.min_cluster_points and height[m].max() >= cfg.min_height_m
+    ]
     clusters.sort(key=lambda m: -int(m.sum()))
     out_labels = np.full(len(pts), -1)
     boxes = []

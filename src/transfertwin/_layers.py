@@ -26,6 +26,7 @@ LAYERS: tuple[str, ...] = (
     "sim",
     "perception",
     "study.docking",
+    "navigation",
     "study.experiment",
     "study.fullstate",
     "study.adaptive",

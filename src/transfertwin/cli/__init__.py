@@ -17,6 +17,7 @@ from transfertwin.cli import (
     _calibrate,
     _cps,
     _data,
+    _dock,
     _docking,
     _perceive,
     _rehearse,
@@ -38,8 +39,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-v", "--verbose", action="count", default=0,
                         help="-v: progress messages (INFO), -vv: debug logging")  # fmt: skip
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    groups = (_transfer, _study, _calibrate, _cps, _docking, _perceive, _validate, _rehearse)
-    for group in (*groups, _data, _web):
+    groups = (_transfer, _study, _calibrate, _cps, _docking, _dock, _perceive, _validate)
+    for group in (*groups, _rehearse, _data, _web):
         group.register(sub)
     return parser
 

@@ -35,6 +35,7 @@ from transfertwin.report._fidelity_plots import (
 from transfertwin.report._figure import figure_png
 from transfertwin.report._html import REPORT_NAME, format_value, write_report
 from transfertwin.report._interval_plot import IntervalPlot, interval_plot_data, plot_intervals
+from transfertwin.report._navigation_plots import plot_docking_run
 from transfertwin.report._pipeline import analyze_and_report
 from transfertwin.report._polar_full_state import (
     SMOOTH_GRID_DEG,
@@ -96,6 +97,7 @@ __all__ = [
     "plot_binary_polar",
     "plot_correlation_matrices",
     "plot_docking_histograms",
+    "plot_docking_run",
     "plot_fidelity",
     "plot_intervals",
     "plot_morris",

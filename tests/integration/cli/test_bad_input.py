@@ -72,6 +72,14 @@ BAD: list[tuple[str, list[str]]] = [
     ("evaluate one fold", ["calibrate", "evaluate", "--folds", "1", "--out", "e"]),
     ("docking fit missing csv", ["docking", "fit", "missing.csv", "--out", "m.json"]),
     ("docking sample zero", ["docking", "sample", "missing.json", "-n", "0", "--out", "s.csv"]),
+    ("dock unknown station", ["dock", "--station", "E", "--out", "d.csv"]),
+    ("dock empty station list", ["dock", "--station", ",", "--out", "d.csv"]),
+    ("dock zero runs", ["dock", "--runs", "0", "--out", "d.csv"]),
+    ("dock negative seed", ["dock", "--seed", "-1", "--out", "d.csv"]),
+    ("dock out not csv", ["dock", "--out", "d.txt"]),
+    ("dock image not png", ["dock", "--out", "d.csv", "--image", "d.jpg"]),
+    ("dock missing real table", ["dock", "--out", "d.csv", "--real", "missing.csv"]),
+    ("dock real table without units", ["dock", "--out", "d.csv", "--real", "no_units.csv"]),
     (
         "validate missing tables",
         ["validate", "--virtual", "a.csv", "--physical", "b.csv", "--out", "v"],
@@ -191,6 +199,10 @@ def workdir(tmp_path: Path, box_stl: Path, monkeypatch: pytest.MonkeyPatch) -> P
     (tmp_path / "corrupt.stl").write_bytes(b"solid nothing\nendsolid\n")
     (tmp_path / "real.csv").write_text(calibration_csv_path().read_text())
     (tmp_path / "header.csv").write_text(HEADER)
+    real = calibration_csv_path().read_text().splitlines()
+    (tmp_path / "no_units.csv").write_text(
+        "\n".join(",".join(c for i, c in enumerate(line.split(",")) if i != 1) for line in real)
+    )
     first = calibration_csv_path().read_text().splitlines()[1].split(",")
     first[3] = "999"
     (tmp_path / "bad_theta.csv").write_text(HEADER + ",".join(first[:10]) + "\n")

@@ -48,8 +48,10 @@ def _summary(records, real_path) -> Table:
                 "KS D", "KS p"):  # fmt: skip
         table.add_column(col)
     for c in rows:
-        table.add_row(c.transfer_unit, c.column.removeprefix("dock_err_"), str(c.n_sim), f"{c.mean_sim:.2f} ± {c.sd_sim:.2f}",
-                      str(c.n_real), f"{c.mean_real:.2f} ± {c.sd_real:.2f}",
+        sim_stats = f"{c.mean_sim:.2f} ± {c.sd_sim:.2f}"
+        real_stats = f"{c.mean_real:.2f} ± {c.sd_real:.2f}"
+        name = c.column.removeprefix("dock_err_")
+        table.add_row(c.transfer_unit, name, str(c.n_sim), sim_stats, str(c.n_real), real_stats,
                       f"{c.ks_statistic:.2f}", f"{c.ks_pvalue:.3g}")  # fmt: skip
     return table
 

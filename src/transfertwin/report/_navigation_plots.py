@@ -49,8 +49,9 @@ def plot_docking_run(
 ) -> Figure:
     """The whole floor (left) and the docking area (right) of one run."""
     robot = RobotConfig() if robot is None else robot
-    fig = Figure(figsize=(13.0, 5.5), layout="tight") if fig is None else fig
+    fig = Figure(figsize=(13.0, 5.5)) if fig is None else fig
     left, right = fig.subplots(1, 2)
+    fig.subplots_adjust(left=0.06, right=0.98, wspace=0.2)
     _draw(left, floor, run, robot)
     left.set_title(f"station {run.station}, run {run.run}: path and scan")
     left.legend(loc="upper right", fontsize=7)

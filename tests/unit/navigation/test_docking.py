@@ -38,5 +38,5 @@ def test_comparison_of_the_real_rows_with_themselves() -> None:
     assert x.n_sim == x.n_real == len(a_rows) == 58
     assert x.mean_real == pytest.approx(-8.18, abs=0.01)  # Fig. 6.9 data, TU_A
     assert x.ks_statistic == 0.0 and x.ks_pvalue == 1.0
-    shifted = compare_with_real(sim + [30.0, 0, 0], ["TU_A"] * len(sim))[0]
+    shifted = compare_with_real(sim + np.array([30.0, 0, 0]), ["TU_A"] * len(sim))[0]
     assert shifted.ks_statistic == 1.0 and shifted.ks_pvalue < 1e-10

@@ -46,7 +46,6 @@ def test_dubins_straight_ahead_is_the_segment() -> None:
 
 def _footprint_hits(floor, robot: RobotConfig, poses: np.ndarray) -> int:
     """Occupied grid cells inside the true rectangular footprint (not the planner's circles)."""
-    h, w = floor.grid.shape
     ii, jj = np.nonzero(floor.grid)
     cells = np.stack([(jj + 0.5) * floor.resolution_m, (ii + 0.5) * floor.resolution_m], 1)
     hits = 0

@@ -55,7 +55,7 @@ def _mapping_note(mapping: dict[str, str]) -> str:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    """Replay the real experiments R times; write metrics.json."""
+    """Replay the real experiments R times; write metrics.json and predictions.csv."""
     from transfertwin.study.calibration import calibrate
 
     rows, scene, name, calib = _common(args)
@@ -75,6 +75,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         "note": "real objects are replayed with the mapped meshes; the real scans are not public",
     }  # fmt: skip
     write_atomic(out / "metrics.json", json.dumps(_json_safe(payload), indent=2) + "\n")
+    write_atomic(out / "predictions.csv", _csv_text(_prediction_rows(rows, result)))
     print(f"real objects mapped to meshes: {_mapping_note(result.object_map)} "
           "(the real cores' scans are not public)")  # fmt: skip
     for key in ("f05", "precision", "recall", "accuracy"):
@@ -83,6 +84,17 @@ def cmd_run(args: argparse.Namespace) -> int:
         print(f"{key:9s} {metrics[key]['mean']:.3f}{spread}")
     print(out / "metrics.json")
     return 0
+
+
+def _prediction_rows(rows, result) -> list[dict[str, object]]:
+    """predictions.csv: per real row its state, real outcome and each run's virtual one
+    (``pred_run<r>``: 1 success, 0 failure or a result that was not 'ok')."""
+    keys = ("object_id", "face", "conveyor", "theta_deg", "success")
+    return [
+        {"row": i, **{k: row[k] for k in keys},
+         **{f"pred_run{r.run}": r.predicted[i] for r in result.runs}}
+        for i, row in enumerate(rows)
+    ]  # fmt: skip
 
 
 def _parse_values(text: str) -> list[object]:

@@ -59,6 +59,14 @@ def test_calibrate_run_cli_writes_metrics_json(tmp_path, capsys):
     assert {"f05", "precision", "recall", "accuracy"} <= data["mean"].keys()
     assert data["object_map"] == {"o1": "o1"}
     assert "not public" in capsys.readouterr().out
+    with (out / "predictions.csv").open() as f:
+        preds = list(csv.DictReader(f))
+    real = _real_rows(3)
+    assert [int(p["success"]) for p in preds] == [int(r["success"]) for r in real]
+    for r in (0, 1):  # each run's predictions reproduce its confusion matrix
+        tp = sum(p[f"pred_run{r}"] == "1" and p["success"] == "1" for p in preds)
+        fp = sum(p[f"pred_run{r}"] == "1" and p["success"] == "0" for p in preds)
+        assert (tp, fp) == (data["runs"][r]["tp"], data["runs"][r]["fp"])
 
 
 def test_calibrate_run_with_one_run_prints_no_nan_spread(tmp_path, capsys):

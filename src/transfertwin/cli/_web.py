@@ -1,4 +1,5 @@
-"""`transfertwin web`: the web console (live CPS, orders, study progress and results)."""
+"""`transfertwin web`: the web console (live CPS, orders, live transfer, study progress and
+results, calibration)."""
 
 from __future__ import annotations
 
@@ -22,6 +23,7 @@ def cmd_web(args: argparse.Namespace) -> int:
     config = WebConfig(
         cps=Path(args.cps) if args.cps else None,
         dbs=tuple(Path(db) for db in args.db or []),
+        calibrations=tuple(Path(d) for d in args.calibration or []),
         host=args.host,
         port=args.port,
         token=args.token,
@@ -50,6 +52,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--cps", metavar="WORKDIR", help="work folder of a running 'cps up'")
     p.add_argument("--db", action="append", metavar="STUDY.sqlite",
                    help="study store to show (repeat for several)")  # fmt: skip
+    p.add_argument("--calibration", action="append", metavar="DIR",
+                   help="output folder of 'calibrate run' or 'calibrate evaluate' to show "
+                   "(repeat for several)")  # fmt: skip
     p.add_argument("--host", default="127.0.0.1",
                    help="interface to bind (default loopback; others need --token)")  # fmt: skip
     p.add_argument("--port", type=int, default=8765, help="TCP port (default 8765; 0: any)")

@@ -3,7 +3,10 @@
 Routes: ``/`` (the page), ``/static/*`` (its JS/CSS, plotly.js from the installed `plotly`
 package), ``/api/config``, ``/api/assets``, ``/api/assets/{id}/aas``, ``/api/live`` (SSE),
 ``/api/orders`` (GET, POST), ``/api/orders/{id}``, ``/api/studies``,
-``/api/studies/{name}/map``, ``/api/studies/{name}/results.{csv|parquet}``.
+``/api/studies/{name}/map``, ``/api/studies/{name}/analysis?object=ID``,
+``/api/studies/{name}/results.{csv|parquet}``, ``/api/transfer`` (GET; POST starts a
+simulated transfer), ``/api/transfer/live`` (SSE), ``/api/calibrations``,
+``/api/calibrations/{name}``.
 
 Every error is a JSON ``{"error": message}`` with a 4xx status (5xx only for a fault of the
 console itself, without a traceback). Write actions need the token (header
@@ -42,8 +45,10 @@ from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
 from transfertwin._errors import InputError
+from transfertwin.web._calibration import calibration_view
 from transfertwin.web._config import WebConfig
 from transfertwin.web._gateway import CpsGateway
+from transfertwin.web._live import LiveTransfer, TransferBusyError, TransferRequest
 from transfertwin.web._studies import StudyView
 
 __all__ = ["MAX_BODY_BYTES", "create_app", "plotly_js"]
@@ -88,6 +93,8 @@ def _api(fn: Callable[..., Awaitable[Response]]) -> Callable[[Request], Awaitabl
             return _error(404, str(exc.args[0]) if exc.args else "not found")
         except HTTPException as exc:
             return _error(exc.status_code, str(exc.detail))
+        except TransferBusyError as exc:
+            return _error(409, str(exc))
         except (asyncio.CancelledError, KeyboardInterrupt):
             raise
         except Exception as exc:
@@ -127,6 +134,8 @@ class _SecurityHeaders:
 def create_app(config: WebConfig) -> Starlette:
     """The console app for `config` (its CPS sessions open with the app's lifespan)."""
     studies = {p.name: StudyView(p) for p in config.dbs}
+    calibrations = {p.name: p for p in config.calibrations}
+    live = LiveTransfer()
     state: dict[str, CpsGateway | None] = {"cps": None}
     token = config.session_token
 
@@ -152,6 +161,13 @@ def create_app(config: WebConfig) -> Starlette:
         if state["cps"] is None:
             raise HTTPException(404, "no CPS: start the console with --cps WORKDIR")
         return state["cps"]
+
+    def check_write(request: Request, body: dict[str, Any], what: str) -> str:
+        client = request.client.host if request.client else "?"
+        if not (matches(header_token(request)) or matches(body.get("token"))):
+            audit.warning("%s refused: no valid token from %s", what, client)
+            raise HTTPException(401, f"{what} needs the console's token")
+        return client
 
     def study(name: str) -> StudyView:
         if name not in studies:
@@ -180,6 +196,15 @@ def create_app(config: WebConfig) -> Starlette:
             raise HTTPException(400, "the body must be a JSON object")
         return data
 
+    def max_events_of(request: Request) -> int:
+        try:
+            max_events = int(request.query_params.get("max_events", "0"))
+        except ValueError:
+            raise InputError("max_events must be an integer") from None
+        if not 0 <= max_events <= 100000:
+            raise InputError("max_events must be in 0..100000 (0: unlimited)")
+        return max_events
+
     # -- pages ----------------------------------------------------------------------------
     async def index(request: Request) -> Response:
         given = request.query_params.get("token")
@@ -201,6 +226,7 @@ def create_app(config: WebConfig) -> Starlette:
     async def api_config(request: Request) -> Response:
         check_read(request)
         return JSONResponse({"cps": state["cps"] is not None, "studies": list(studies),
+                             "calibrations": list(calibrations),
                              "reads_need_token": config.reads_need_token,
                              "live_period_s": config.live_period_s})  # fmt: skip
 
@@ -221,12 +247,7 @@ def create_app(config: WebConfig) -> Starlette:
     async def api_live(request: Request) -> Response:
         check_read(request)
         gw = gateway()
-        try:
-            max_events = int(request.query_params.get("max_events", "0"))
-        except ValueError:
-            raise InputError("max_events must be an integer") from None
-        if not 0 <= max_events <= 100000:
-            raise InputError("max_events must be in 0..100000 (0: unlimited)")
+        max_events = max_events_of(request)
 
         async def events() -> AsyncIterator[str]:
             n = 0
@@ -248,11 +269,8 @@ def create_app(config: WebConfig) -> Starlette:
         if request.method == "GET":
             check_read(request)
             return JSONResponse({"orders": [o.public() for o in gw.orders.values()]})
-        client = request.client.host if request.client else "?"
         body = await body_of(request)
-        if not (matches(header_token(request)) or matches(body.get("token"))):
-            audit.warning("order refused: no valid token from %s", client)
-            raise HTTPException(401, "placing an order needs the console's token")
+        client = check_write(request, body, "placing an order")
         obj, source, target = await gw.validate_order(body)
         order = await gw.submit(obj, source, target, client)
         return JSONResponse(order.public(), status_code=201)
@@ -280,6 +298,60 @@ def create_app(config: WebConfig) -> Starlette:
         return JSONResponse(await run_in_threadpool(view.success_map))
 
     @_api
+    async def api_study_analysis(request: Request) -> Response:
+        check_read(request)
+        view = study(request.path_params["name"])
+        obj = request.query_params.get("object") or None
+        return JSONResponse(await run_in_threadpool(view.analysis, obj))
+
+    @_api
+    async def api_calibrations(request: Request) -> Response:
+        check_read(request)
+        return JSONResponse({"calibrations": list(calibrations)})
+
+    @_api
+    async def api_calibration(request: Request) -> Response:
+        check_read(request)
+        name = request.path_params["name"]
+        if name not in calibrations:
+            raise HTTPException(
+                404,
+                f"no calibration {name[:80]!r}; calibrations: "
+                f"{', '.join(calibrations) or 'none (--calibration DIR)'}",
+            )
+        return JSONResponse(await run_in_threadpool(calibration_view, calibrations[name]))
+
+    @_api
+    async def api_transfer(request: Request) -> Response:
+        if request.method == "GET":
+            check_read(request)
+            return JSONResponse(live.snapshot())
+        body = await body_of(request)
+        client = check_write(request, body, "starting a transfer")
+        return JSONResponse(live.start(TransferRequest.parse(body), client), status_code=201)
+
+    @_api
+    async def api_transfer_live(request: Request) -> Response:
+        check_read(request)
+        max_events = max_events_of(request)
+
+        async def events() -> AsyncIterator[str]:
+            n, seq, last = 0, -1, 0.0
+            loop = asyncio.get_running_loop()
+            while not max_events or n < max_events:
+                snap = live.snapshot()
+                if snap["seq"] != seq or loop.time() - last >= 1.0:  # >= 1 update/s
+                    seq, last = snap["seq"], loop.time()
+                    yield f"event: transfer\ndata: {json.dumps(snap)}\n\n"
+                    n += 1
+                if await request.is_disconnected():
+                    return
+                await asyncio.sleep(0.1)
+
+        return StreamingResponse(events(), media_type="text/event-stream",
+                                 headers={"X-Accel-Buffering": "no"})  # fmt: skip
+
+    @_api
     async def api_study_export(request: Request) -> Response:
         check_read(request)
         view = study(request.path_params["name"])
@@ -303,6 +375,7 @@ def create_app(config: WebConfig) -> Starlette:
         try:
             yield
         finally:
+            await run_in_threadpool(live.stop)
             if state["cps"] is not None:
                 await state["cps"].stop()
                 state["cps"] = None
@@ -319,7 +392,12 @@ def create_app(config: WebConfig) -> Starlette:
         Route("/api/orders/{oid}", api_order),
         Route("/api/studies", api_studies),
         Route("/api/studies/{name}/map", api_study_map),
+        Route("/api/studies/{name}/analysis", api_study_analysis),
         Route("/api/studies/{name}/results.{fmt}", api_study_export),
+        Route("/api/transfer", api_transfer, methods=["GET", "POST"]),
+        Route("/api/transfer/live", api_transfer_live),
+        Route("/api/calibrations", api_calibrations),
+        Route("/api/calibrations/{name}", api_calibration),
         Route("/{path:path}", not_found),
     ]
     hosts = ["*"] if config.reads_need_token else sorted(

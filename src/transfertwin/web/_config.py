@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from transfertwin._errors import InputError
+from transfertwin.web._calibration import check_calibration_dir
 
 __all__ = ["WebConfig", "is_loopback"]
 
@@ -29,6 +30,8 @@ class WebConfig:
     Attributes:
         cps: Work folder of a running `transfertwin cps up` (holds cps.json), or None.
         dbs: Study result stores (SQLite) whose progress and results are shown.
+        calibrations: Output folders of `calibrate run` / `calibrate evaluate` whose
+            real-vs-virtual comparison is shown.
         host: Interface to bind; loopback unless a token is given.
         port: TCP port.
         token: Secret every write action (and, off loopback, every request) must carry.
@@ -38,6 +41,7 @@ class WebConfig:
 
     cps: Path | None = None
     dbs: tuple[Path, ...] = ()
+    calibrations: tuple[Path, ...] = ()
     host: str = "127.0.0.1"
     port: int = 8765
     token: str | None = None
@@ -67,6 +71,11 @@ class WebConfig:
         names = [db.name for db in self.dbs]
         if len(set(names)) != len(names):
             raise InputError("--db: two stores with the same file name")
+        for folder in self.calibrations:
+            check_calibration_dir(folder)
+        names = [folder.name for folder in self.calibrations]
+        if len(set(names)) != len(names):
+            raise InputError("--calibration: two folders with the same name")
         if not self.session_token:
             object.__setattr__(self, "session_token", self.token or secrets.token_urlsafe(18))
 

@@ -1,5 +1,7 @@
-"""What the console shows of a study store: progress (done/planned, rate, ETA) and the
-success map per core, face and pre-transfer state. Pure reads of the store's public API."""
+"""What the console shows of a study store: progress (done/planned, rate, ETA), the
+success map per core, face and pre-transfer state, and the per-state success shares with
+their Clopper–Pearson intervals and each core's best and worst state (Sec. 6.6–6.7, Alg.
+1–4, as `transfertwin analyze` computes them). Pure reads of the store's public API."""
 
 from __future__ import annotations
 
@@ -16,8 +18,9 @@ from transfertwin.ots import CONVEYORS, FACES
 from transfertwin.report import RING_RADIUS
 from transfertwin.store import SQLiteResultStore, export_results
 from transfertwin.study.experiment import StudyPlan
+from transfertwin.study.fullstate import AnalysisResult, SelectedState, analyze, object_sort_key
 
-__all__ = ["RATE_WINDOW", "StudyView", "progress_of", "success_map"]
+__all__ = ["RATE_WINDOW", "StudyView", "analysis_view", "progress_of", "success_map"]
 
 #: The rate is measured over at most this many of the most recently finished rows.
 RATE_WINDOW = 100
@@ -107,6 +110,48 @@ def success_map(rows: Iterable[Mapping[str, object]]) -> dict[str, object]:
     return {"faces": list(FACES), "objects": objects, "excluded": excluded}
 
 
+def _num(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+
+
+def _selected(st: SelectedState) -> dict[str, object]:
+    return {"face": st.face, "conveyor": st.conveyor, "theta_deg": st.theta_deg,
+            "series": st.series, "y_ma": _num(st.y_ma), "share": _num(st.p_hat), "n": st.n,
+            "k": st.k, "low": _num(st.ci_low), "high": _num(st.ci_high)}  # fmt: skip
+
+
+def analysis_view(result: AnalysisResult | None, object_id: str | None) -> dict[str, object]:
+    """Per-state shares of one core and every core's best/worst state (pure, JSON-ready).
+
+    Args:
+        result: `analyze` of the study's rows; None when no row is 'ok' yet.
+        object_id: The core whose states are listed; None: the first core.
+
+    Returns:
+        ``{"objects": [...], "object": id, "states": [point, ...], "selection": [...]}``:
+        a point has face, conveyor, theta_deg, n, k, share and the 95 % Clopper–Pearson
+        low/high (states with n = 0 are left out); a selection entry has object_id and
+        best/worst with the state, its series, ȳ^MA (Eq. 6.27), share, n, k, low, high.
+    """
+    if result is None:
+        return {"objects": [], "object": None, "states": [], "selection": [],
+                "message": "no experiment with status 'ok' yet"}  # fmt: skip
+    objects = sorted({s.object_id for s in result.states}, key=object_sort_key)
+    if object_id is None:
+        object_id = objects[0]
+    if object_id not in objects:
+        raise LookupError(f"no core {object_id[:40]!r} in this study; cores: {', '.join(objects)}")
+    states = [
+        {"face": s.face, "conveyor": s.conveyor, "theta_deg": s.theta_deg, "n": s.n, "k": s.k,
+         "share": _num(s.y_mean), "low": _num(s.ci_low), "high": _num(s.ci_high)}
+        for s in result.states if s.object_id == object_id and s.n > 0
+    ]  # fmt: skip
+    selection = [{"object_id": sel.object_id, "best": _selected(sel.best),
+                  "worst": _selected(sel.worst)} for sel in result.selections]  # fmt: skip
+    return {"objects": objects, "object": object_id, "states": states, "selection": selection,
+            "skipped": list(result.skipped_objects)}  # fmt: skip
+
+
 @dataclass
 class StudyView:
     """One study store as the console reads it; results are cached until the store grows."""
@@ -119,6 +164,7 @@ class StudyView:
         self._rows: list[dict[str, object]] = []
         self._plan: StudyPlan | None = None
         self._plan_hash: str | None = None
+        self._analysis: tuple[tuple[int, int, float] | None, AnalysisResult | None] = (None, None)
 
     @property
     def name(self) -> str:
@@ -175,6 +221,19 @@ class StudyView:
     def success_map(self) -> dict[str, object]:
         """`success_map` of the store's rows."""
         return success_map(self.rows())
+
+    def analysis(self, object_id: str | None = None) -> dict[str, object]:
+        """`analysis_view` of the store's rows (analysed again only when the store grew)."""
+        with self._lock:
+            self._refresh()
+            rows, key = self._rows, self._cache_key
+            cached_key, result = self._analysis
+        if cached_key != key:
+            ok = any(r.get("status") == "ok" for r in rows)
+            result = analyze(rows) if ok else None
+            with self._lock:
+                self._analysis = (key, result)
+        return analysis_view(result, object_id)
 
     def export(self, fmt: str) -> bytes:
         """The results table as CSV or Parquet bytes."""

@@ -7,7 +7,8 @@ if (params.has("token")) {
   params.delete("token");
   history.replaceState(null, "", location.pathname + (params.toString() ? "?" + params : ""));
 }
-const token = () => sessionStorage.getItem("tt_token") || document.getElementById("order-token").value;
+const token = () => sessionStorage.getItem("tt_token") ||
+  [...document.querySelectorAll(".token-input")].map((i) => i.value).find((v) => v) || "";
 const $ = (id) => document.getElementById(id);
 const el = (tag, attrs = {}, ...children) => {
   const e = document.createElement(tag);
@@ -32,10 +33,13 @@ for (const b of document.querySelectorAll("nav .tab")) {
   b.addEventListener("click", () => {
     for (const o of document.querySelectorAll("nav .tab")) o.classList.toggle("active", o === b);
     for (const p of document.querySelectorAll(".panel")) p.hidden = p.id !== "tab-" + b.dataset.tab;
-    if (b.dataset.tab === "studies") drawMap();
+    if (b.dataset.tab === "studies") { drawMap(); drawAnalysis(); }
+    if (b.dataset.tab === "calibration") drawCalibration();
   });
 }
-if (sessionStorage.getItem("tt_token")) $("token-label").hidden = true;
+if (sessionStorage.getItem("tt_token")) for (const l of document.querySelectorAll(".token-label")) l.hidden = true;
+const pct = (v) => v == null ? "–" : (100 * v).toFixed(1) + " %";
+const tabShown = (name) => !$("tab-" + name).hidden;
 
 // -- assets and live values --------------------------------------------------------------
 let assetIds = [];
@@ -187,7 +191,7 @@ async function loadStudies() {
   for (const s of data.studies) changed[s.name] = (studyObjects[s.name] || []).join() !== s.objects.join() || studyDone[s.name] !== s.done;
   for (const s of data.studies) { studyObjects[s.name] = s.objects; studyDone[s.name] = s.done; }
   fillObjects();
-  if (changed[sel.value] && !$("tab-studies").hidden) drawMap();
+  if (changed[sel.value] && !$("tab-studies").hidden) { drawMap(); drawAnalysis(); }
 }
 const studyDone = {};
 
@@ -200,8 +204,8 @@ function fillObjects() {
     if (objs.includes(keep)) sel.value = keep;
   }
 }
-$("map-study").addEventListener("change", () => { fillObjects(); drawMap(); });
-$("map-object").addEventListener("change", drawMap);
+$("map-study").addEventListener("change", () => { fillObjects(); drawMap(); drawAnalysis(); });
+$("map-object").addEventListener("change", () => { drawMap(); drawAnalysis(); });
 
 const SYMBOL = { left: "triangle-up", both: "circle", right: "triangle-down" };
 async function drawMap() {
@@ -241,6 +245,203 @@ async function drawMap() {
   Plotly.react("polar", traces, layout, { displaylogo: false, responsive: true });
 }
 
+// -- per-state intervals and best/worst states -------------------------------------------
+const stateText = (s) => s.face + " / " + s.conveyor + " / θ = " + s.theta_deg + "°";
+const ciText = (s) => pct(s.share) + " [" + pct(s.low) + ", " + pct(s.high) + "], n = " + s.n;
+const CONVEYOR_DX = { left: -2, both: 0, right: 2 };
+async function drawAnalysis() {
+  const name = $("map-study").value, obj = $("map-object").value;
+  if (!name || !obj || typeof Plotly === "undefined") return;
+  let data;
+  try {
+    data = await api("/api/studies/" + encodeURIComponent(name) + "/analysis?object=" + encodeURIComponent(obj));
+  } catch (e) { $("bestworst").querySelector("tbody").replaceChildren(el("tr", {}, el("td", { class: "error", text: e.message }))); return; }
+  const traces = [];
+  for (const face of ["front", "back"]) {
+    for (const conveyor of ["left", "both", "right"]) {
+      const pts = data.states.filter((p) => p.face === face && p.conveyor === conveyor);
+      if (!pts.length) continue;
+      traces.push({ type: "scatter", mode: "markers", name: face + " / " + conveyor,
+        x: pts.map((p) => p.theta_deg + CONVEYOR_DX[conveyor]), y: pts.map((p) => p.share),
+        error_y: { type: "data", symmetric: false, array: pts.map((p) => p.high - p.share),
+          arrayminus: pts.map((p) => p.share - p.low), thickness: 1, width: 2 },
+        marker: { size: 8, symbol: SYMBOL[conveyor] },
+        customdata: pts.map((p) => [p.theta_deg, p.k, p.n, p.low, p.high]),
+        hovertemplate: obj + " " + face + " / " + conveyor + ", θ = %{customdata[0]}°<br>" +
+          "success %{customdata[1]} of %{customdata[2]} (%{y:.0%}), 95 % CI [%{customdata[3]:.0%}, %{customdata[4]:.0%}]<extra></extra>" });
+    }
+  }
+  Plotly.react("ci-plot", traces, { height: 400, margin: { t: 40, b: 50, l: 60, r: 20 },
+    title: { text: obj + ": success share per state (95 % Clopper–Pearson)", font: { size: 14 } },
+    xaxis: { title: { text: "θ (deg)" }, range: [-185, 185], dtick: 45 },
+    yaxis: { title: { text: "success share" }, range: [-0.03, 1.03], tickformat: ".0%" },
+    legend: { orientation: "h", y: -0.2 } }, { displaylogo: false, responsive: true });
+
+  const sel = data.selection;
+  const bw = ["best", "worst"].map((which) => ({ type: "scatter", mode: "markers", name: which,
+    x: sel.map((s) => s.object_id), y: sel.map((s) => s[which].share),
+    error_y: { type: "data", symmetric: false, array: sel.map((s) => s[which].high - s[which].share),
+      arrayminus: sel.map((s) => s[which].share - s[which].low), thickness: 1.5, width: 4 },
+    marker: { size: 11, color: which === "best" ? "#1a7f37" : "#cf222e",
+      symbol: which === "best" ? "triangle-up" : "triangle-down" },
+    customdata: sel.map((s) => [stateText(s[which]), s[which].k, s[which].n, s[which].low, s[which].high, s[which].y_ma]),
+    hovertemplate: "%{x} " + which + ": %{customdata[0]}<br>success %{customdata[1]} of %{customdata[2]} (%{y:.0%}), " +
+      "95 % CI [%{customdata[3]:.0%}, %{customdata[4]:.0%}]<br>ȳ<sup>MA</sup> = %{customdata[5]:.2f}<extra></extra>" }));
+  Plotly.react("bestworst-plot", bw, { height: 400, margin: { t: 40, b: 50, l: 60, r: 20 },
+    title: { text: "best and worst state per core (" + name + ")", font: { size: 14 } },
+    xaxis: { type: "category", title: { text: "core" } },
+    yaxis: { title: { text: "success share" }, range: [-0.03, 1.03], tickformat: ".0%" },
+    legend: { orientation: "h", y: -0.2 } }, { displaylogo: false, responsive: true });
+  $("bestworst").querySelector("tbody").replaceChildren(...sel.map((s) => el("tr", { id: "bw-" + s.object_id },
+    el("td", { text: s.object_id }), el("td", { class: "best", text: stateText(s.best) }),
+    el("td", { text: ciText(s.best) }), el("td", { class: "worst", text: stateText(s.worst) }),
+    el("td", { text: ciText(s.worst) }))));
+}
+
+// -- calibration -----------------------------------------------------------------------------
+async function drawCalibration() {
+  const name = $("cal-select").value;
+  if (!name || typeof Plotly === "undefined") return;
+  let d;
+  try { d = await api("/api/calibrations/" + encodeURIComponent(name)); } catch (e) {
+    $("cal-summary").replaceChildren(el("p", { class: "error", text: e.message })); return;
+  }
+  const f = d.f05;
+  const interval = f.low == null ? "no interval" : "95 % CI [" + f.low.toFixed(3) + ", " + f.high.toFixed(3) + "]";
+  const rows = [["F0.5", f.value == null ? "–" : f.value.toFixed(3) + "  " + interval + (f.method ? " (" + f.method + ")" : "")]];
+  if (f.cv_mean != null) rows.push(["F0.5, CV mean ± std over repeats", f.cv_mean.toFixed(3) + " ± " + (f.cv_std == null ? "–" : f.cv_std.toFixed(3))]);
+  for (const k of ["precision", "recall", "accuracy"]) if (d.metrics[k] != null) rows.push([k, d.metrics[k].toFixed(3)]);
+  for (const [k, v] of Object.entries(d.figures || {})) rows.push(["F0.5 " + k.replace(/_/g, " "), v.f05 == null ? "–" : v.f05.toFixed(3)]);
+  rows.push(["real rows", String(d.n_real)], ["virtual runs", String(d.runs == null ? "–" : d.runs)],
+    ["profile", String(d.profile)], ["written by", "calibrate " + d.kind]);
+  $("cal-summary").replaceChildren(el("table", { id: "cal-figures" }, ...rows.map(([k, v]) =>
+    el("tr", {}, el("th", { text: k }), el("td", { text: v })))), ...d.notes.map((n) => el("p", { class: "muted", text: n })));
+
+  const c = d.confusion, total = c.tp + c.fp + c.fn + c.tn;
+  const cell = [[c.tp, c.fp], [c.fn, c.tn]], names = [["TP", "FP"], ["FN", "TN"]];
+  Plotly.react("cal-confusion", [{ type: "heatmap", x: ["real success", "real failure"], y: ["twin success", "twin failure"],
+    z: cell, colorscale: [[0, "#f6f8fa"], [1, "#2f81f7"]], showscale: false,
+    text: names.map((r, i) => r.map((n, j) => n + " = " + cell[i][j])), texttemplate: "%{text}", textfont: { size: 16 },
+    customdata: cell.map((r) => r.map((v) => total ? v / total : 0)),
+    hovertemplate: "%{y}, %{x}: %{z} (%{customdata:.1%} of " + total + ")<extra></extra>" }],
+    { height: 380, margin: { t: 50, b: 40, l: 100, r: 20 }, yaxis: { autorange: "reversed" },
+      title: { text: "confusion matrix: " + d.confusion_label, font: { size: 13 } } },
+    { displaylogo: false, responsive: true });
+
+  const sh = d.shares;
+  const bars = [["real", "real", "#57606a"], ["sim", "twin", "#2f81f7"]].map(([key, label, color]) => ({
+    type: "bar", name: label, x: sh.map((s) => s.object_id), y: sh.map((s) => s[key].share), marker: { color },
+    error_y: { type: "data", symmetric: false, array: sh.map((s) => s[key].high - s[key].share),
+      arrayminus: sh.map((s) => s[key].share - s[key].low), thickness: 1.5, width: 5, color: "#1d232a" },
+    customdata: sh.map((s) => [s[key].k, s[key].n, s[key].low, s[key].high]),
+    hovertemplate: "%{x} " + label + ": %{customdata[0]} of %{customdata[1]} (%{y:.0%}), " +
+      "95 % CI [%{customdata[2]:.0%}, %{customdata[3]:.0%}]<extra></extra>" }));
+  Plotly.react("cal-shares", bars, { height: 380, barmode: "group", margin: { t: 50, b: 50, l: 60, r: 20 },
+    title: { text: "success share per core: real vs twin (95 % Clopper–Pearson)", font: { size: 13 } },
+    xaxis: { type: "category", title: { text: "core" } },
+    yaxis: { range: [0, 1.05], tickformat: ".0%", title: { text: "success share" } },
+    legend: { orientation: "h", y: -0.2 } }, { displaylogo: false, responsive: true });
+}
+$("cal-select").addEventListener("change", drawCalibration);
+
+// -- live transfer ---------------------------------------------------------------------------
+const SVG = "http://www.w3.org/2000/svg";
+const svgEl = (tag, attrs = {}, parent = null) => {
+  const e = document.createElementNS(SVG, tag);
+  for (const [k, v] of Object.entries(attrs)) e.setAttribute(k, v);
+  if (parent) parent.append(e);
+  return e;
+};
+const mm = ([x, y]) => (1000 * x).toFixed(1) + "," + (-1000 * y).toFixed(1);  // F_T y up, SVG y down
+let liveRun = null, liveGeometry = null;
+function drawGeometry(g) {
+  const svg = $("schematic");
+  svg.replaceChildren();
+  svgEl("polygon", { class: "gap", points: g.gap.map(mm).join(" ") }, svg);
+  for (const b of g.belts) {
+    svgEl("polygon", { class: "belt", id: "belt-" + b.unit + "-" + b.belt, points: b.polygon.map(mm).join(" ") }, svg);
+    const cx = b.polygon.reduce((a, p) => a + p[0], 0) / 4, cy = b.polygon.reduce((a, p) => a + p[1], 0) / 4;
+    const t = svgEl("text", { class: "belt-label", id: "belt-label-" + b.unit + "-" + b.belt,
+      x: (1000 * cx).toFixed(0), y: (-1000 * cy + 6).toFixed(0), "text-anchor": "middle" }, svg);
+    t.textContent = b.unit.toUpperCase() + " " + b.belt;
+  }
+  svgEl("line", { class: "axis", x1: -700, y1: 0, x2: 600, y2: 0 }, svg);
+  for (const b of g.barriers) {
+    const [p, q] = b.segment;
+    svgEl("line", { class: "barrier", id: "barrier-" + b.unit + "-" + b.which, x1: 1000 * p[0], y1: -1000 * p[1],
+      x2: 1000 * q[0], y2: -1000 * q[1] }, svg);
+  }
+  svgEl("polygon", { class: "object", id: "object" }, svg);
+  svgEl("line", { class: "heading", id: "heading" }, svg);
+  const cap = svgEl("text", { class: "caption", id: "schematic-caption", x: -690, y: -222 }, svg);
+  cap.textContent = "";
+}
+function drawFrame(run, f) {
+  const obj = $("object");
+  if (!obj || !f) return;
+  obj.setAttribute("points", f.polygon.map(mm).join(" "));
+  obj.setAttribute("data-t", f.t_s);
+  const [cx, cy] = f.centre, th = f.theta_deg * Math.PI / 180;
+  const h = $("heading");
+  h.setAttribute("x1", 1000 * cx); h.setAttribute("y1", -1000 * cy);
+  h.setAttribute("x2", 1000 * cx + 60 * Math.cos(th)); h.setAttribute("y2", -1000 * cy - 60 * Math.sin(th));
+  for (const unit of ["tm", "tu"]) {
+    for (const which of ["near", "far"]) {
+      const b = $("barrier-" + unit + "-" + which), on = f.barriers[unit][which];
+      b.classList.toggle("interrupted", on);
+      b.setAttribute("data-interrupted", on ? "1" : "0");
+    }
+    for (const belt of ["left", "right"]) {
+      const v = f.belts[unit][belt], label = $("belt-label-" + unit + "-" + belt);
+      const arrow = v === 0 ? "stopped" : v > 0 ? Math.abs(v).toFixed(2) + " m/s →" : "← " + Math.abs(v).toFixed(2) + " m/s";
+      label.textContent = unit.toUpperCase() + " " + belt + ": " + arrow;
+    }
+  }
+  $("schematic-caption").textContent = run.object + " " + run.face + " / " + run.conveyor + " / θ = " + run.theta_deg +
+    "°   t = " + f.t_s.toFixed(2) + " s   " + f.phase + "   on " + f.possessed_by;
+}
+function showTransfer(snap) {
+  const run = snap.run;
+  if (!run) { $("transfer-info").textContent = "no transfer yet: start one above"; return; }
+  if (snap.geometry && JSON.stringify(snap.geometry) !== liveGeometry) {
+    liveGeometry = JSON.stringify(snap.geometry);
+    drawGeometry(snap.geometry);
+  }
+  drawFrame(run, snap.frame);
+  const o = run.outcome;
+  let text = "transfer " + run.id + ": " + run.state;
+  if (o) text += " — " + o.status + (o.success != null ? ", success = " + o.success + " (y1 = " + o.y1 + ", y2 = " + (o.y2 == null ? "–" : o.y2) + ")" : "") +
+    (o.t_end_s != null ? ", t_end = " + o.t_end_s.toFixed(2) + " s" : "") + (o.message ? " (" + o.message + ")" : "");
+  $("transfer-info").textContent = text;
+  $("transfer-info").setAttribute("data-state", run.state);
+  $("transfer-submit").disabled = run.state === "running";
+  liveRun = run;
+}
+let transferEvents = 0;
+function connectTransfer() {
+  const source = new EventSource("/api/transfer/live");
+  source.addEventListener("transfer", (ev) => {
+    transferEvents += 1;
+    $("schematic").setAttribute("data-events", transferEvents);
+    showTransfer(JSON.parse(ev.data));
+  });
+}
+$("tr-object").replaceChildren(...Array.from({ length: 37 }, (_, i) => el("option", { value: "o" + (i + 1), text: "o" + (i + 1) })));
+$("transfer-form").addEventListener("submit", async (ev) => {
+  ev.preventDefault();
+  const msg = $("transfer-message");
+  const form = new FormData(ev.target);
+  const body = {};
+  for (const k of ["object", "face", "conveyor", "theta_deg", "seed", "speed", "dock_error"]) body[k] = form.get(k);
+  body.dock_error = String(body.dock_error).split(",").map((v) => v.trim());
+  msg.className = ""; msg.textContent = "starting ...";
+  try {
+    const r = await api("/api/transfer", { method: "POST", headers: {
+      "Content-Type": "application/json", Authorization: "Bearer " + token() }, body: JSON.stringify(body) });
+    msg.className = "ok"; msg.textContent = "transfer " + r.id + " started";
+  } catch (e) { msg.className = "error"; msg.textContent = e.message; }
+});
+
 // -- start -----------------------------------------------------------------------------------
 (async () => {
   let config;
@@ -254,11 +455,16 @@ async function drawMap() {
     setInterval(loadAssets, 2000);
     connectLive();
   }
+  connectTransfer();
+  $("no-calibrations").hidden = config.calibrations.length > 0;
+  $("cal-select").replaceChildren(...config.calibrations.map((n) => el("option", { value: n, text: n })));
   if (config.studies.length) {
     await loadStudies();
     setInterval(loadStudies, 2000);
     if (!config.cps) document.querySelector('nav .tab[data-tab="studies"]').click();
   } else {
     $("no-studies").hidden = false;
+    if (!config.cps && config.calibrations.length) document.querySelector('nav .tab[data-tab="calibration"]').click();
+    else if (!config.cps) document.querySelector('nav .tab[data-tab="live"]').click();
   }
 })();

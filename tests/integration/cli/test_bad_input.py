@@ -189,6 +189,8 @@ BAD: list[tuple[str, list[str]]] = [
     ("perceive size too small", [*PER, "--size", "4x4"]),
     ("perceive image not png", [*PER, "--image", "p.jpg"]),
     ("perceive image in /sys", [*PER, "--image", "/sys/x.png"]),
+    ("web calibration missing", ["web", "--calibration", "nowhere"]),
+    ("web calibration not an output folder", ["web", "--calibration", "."]),
     ("unknown command", ["frobnicate"]),
 ]
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import math
 import subprocess
 import sys
@@ -20,8 +21,9 @@ LOOPBACK = "http://127.0.0.1"
 
 @pytest.fixture
 def client(tiny_study):
-    app = create_app(WebConfig(dbs=(tiny_study,)))
-    with TestClient(app, base_url=LOOPBACK, raise_server_exceptions=False) as c:
+    cfg = WebConfig(dbs=(tiny_study,))
+    with TestClient(create_app(cfg), base_url=LOOPBACK, raise_server_exceptions=False) as c:
+        c.app_state_token = cfg.session_token
         yield c
 
 
@@ -86,6 +88,11 @@ def test_csv_and_parquet_downloads(client, tiny_study):
         ("get", "/api/assets", {}, 404),  # no --cps
         ("post", "/api/orders", {"json": {"object": "o1"}}, 404),
         ("delete", "/api/studies", {}, 405),
+        ("get", "/api/studies/tiny.sqlite/analysis?object=o99", {}, 404),
+        ("get", "/api/calibrations/nope", {}, 404),
+        ("post", "/api/transfer", {"json": {"object": "o1"}}, 401),  # no token
+        ("get", "/api/transfer/live?max_events=-1", {}, 422),
+        ("put", "/api/transfer", {}, 405),
     ],
 )  # fmt: skip
 def test_bad_requests_get_4xx_with_a_message(client, method, path, kwargs, status):
@@ -94,6 +101,60 @@ def test_bad_requests_get_4xx_with_a_message(client, method, path, kwargs, statu
     if res.headers.get("content-type", "").startswith("application/json"):
         assert res.json()["error"]
     assert "Traceback" not in res.text and 'File "' not in res.text
+
+
+def test_states_and_best_worst_agree_with_the_rows(client, tiny_study):
+    from scipy.stats import beta
+
+    a = client.get("/api/studies/tiny.sqlite/analysis?object=o1").json()
+    assert a["objects"] == ["o1"] and a["object"] == "o1"
+    ok = [r for r in _rows(tiny_study) if r["status"] == "ok"]
+    assert sum(s["n"] for s in a["states"]) == len(ok)
+    for s in a["states"]:
+        mine = [r for r in ok if (r["face"], r["conveyor"], r["theta_deg"]) ==
+                (s["face"], s["conveyor"], s["theta_deg"])]  # fmt: skip
+        k, n = sum(r["success"] for r in mine), len(mine)
+        assert (s["k"], s["n"]) == (k, n)
+        low = 0.0 if k == 0 else beta.ppf(0.025, k, n - k + 1)
+        high = 1.0 if k == n else beta.ppf(0.975, k + 1, n - k)
+        assert (s["low"], s["high"]) == pytest.approx((low, high))
+    (sel,) = a["selection"]
+    shares = [s["share"] for s in a["states"]]
+    assert sel["best"]["share"] == max(shares) and sel["worst"]["share"] == min(shares)
+    assert client.get("/api/studies/tiny.sqlite/analysis").json() == a  # default: first core
+
+
+def test_calibration_folders_are_listed_and_shown(tiny_study, tmp_path):
+    folder = tmp_path / "cal"
+    folder.mkdir()
+    runs = [{"tp": 2, "fp": 1, "fn": 0, "tn": 1}]
+    (folder / "metrics.json").write_text(json.dumps({"runs": runs, "mean": {
+        "f05": 0.714, "precision": 0.667, "recall": 1.0, "accuracy": 0.75}}))  # fmt: skip
+    (folder / "predictions.csv").write_text("object_id,success,pred_run0\n"
+                                            "o1,1,1\no1,1,1\no2,0,1\no2,0,0\n")  # fmt: skip
+    cfg = WebConfig(dbs=(tiny_study,), calibrations=(folder,))
+    with TestClient(create_app(cfg), base_url=LOOPBACK, raise_server_exceptions=False) as c:
+        assert c.get("/api/config").json()["calibrations"] == ["cal"]
+        assert c.get("/api/calibrations").json() == {"calibrations": ["cal"]}
+        v = c.get("/api/calibrations/cal").json()
+        assert v["confusion"] == runs[0] and [s["object_id"] for s in v["shares"]] == ["o1", "o2"]
+        assert v["shares"][1]["sim"]["k"] == 1 and v["f05"]["low"] is not None
+        (folder / "predictions.csv").write_text("object_id,success,pred_run0\no1,1,7\n")
+        res = c.get("/api/calibrations/cal")  # a folder that went bad: 4xx, no traceback
+        assert res.status_code == 422 and "predictions.csv" in res.json()["error"]
+
+
+def test_transfer_bodies_are_checked(client):
+    token = client.app_state_token
+    auth = {"Authorization": f"Bearer {token}"}
+    for body in ({"object": "../../etc/passwd"}, {"object": "o1", "speed": 100},
+                 {"object": "o1", "theta_deg": "x"}, {"object": "o1", "extra": 1}):  # fmt: skip
+        res = client.post("/api/transfer", json=body, headers=auth)
+        assert res.status_code == 422 and res.json()["error"], body
+    res = client.post("/api/transfer", content=b"object=o1", headers={**auth,
+                      "Content-Type": "text/plain"})  # fmt: skip
+    assert res.status_code == 415
+    assert client.get("/api/transfer").json()["run"] is None  # nothing started
 
 
 def test_a_store_that_is_not_a_store_is_a_4xx(tmp_path):

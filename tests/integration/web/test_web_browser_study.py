@@ -24,6 +24,19 @@ def test_browser_shows_the_polar_map_and_hover_values(tiny_study, console_factor
     hover.first.wait_for()
     text = hover.first.text_content()  # SVG: no innerText
     assert "o1" in text and "θ =" in text and "success" in text
+    page.wait_for_selector("#bw-o1 td.best")
+    assert "front / both / θ = " in page.inner_text("#bw-o1 td.best")
+    assert "n = 1" in page.inner_text("#bw-o1")
+    page.wait_for_selector("#ci-plot .scatterlayer path.point")
+    assert page.locator("#ci-plot .scatterlayer path.point").count() == 6  # one per state
+    best = page.locator("#bestworst-plot .scatterlayer path.point").first
+    best.wait_for()
+    box = best.bounding_box()
+    page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    bw_hover = page.locator("#bestworst-plot .hoverlayer .hovertext")
+    bw_hover.first.wait_for()
+    text = bw_hover.first.text_content()
+    assert "o1 best" in text and "success 1 of 1" in text and "95 % CI" in text
     save_screenshot(page, tmp_path, "web-console-study")
     href = page.get_attribute("#study-tiny\\.sqlite a:text('CSV')", "href")
     assert href == "/api/studies/tiny.sqlite/results.csv"

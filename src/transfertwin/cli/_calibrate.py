@@ -340,6 +340,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if args.folds < 2:
         raise InputError(f"--folds must be at least 2, got {args.folds}")
     positive_int("--repeats", args.repeats)
+    _check_penalties(args)
     rows, scene, name, calib = _common(args)
     out = out_dir(args.out)
     objects = np.array([str(r["object_id"]) for r in rows])
@@ -352,7 +353,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         candidates = {o: p[None, :] for o in sorted(set(objects))}
         groups, runs = objects, len(result.runs)
     ev = evaluate_predictions(rows, candidates, folds=args.folds, repeats=args.repeats,
-                              seed=args.seed, penalty=args.penalty, groups=groups)  # fmt: skip
+                              seed=args.seed, penalty=args.penalty, groups=groups,
+                              shift_penalty=args.mass_penalty)  # fmt: skip
     y = np.array([int(r["success"]) for r in rows])
     r = runs or 1
     sim = {o: (round(float(ev.twin_p[objects == o].sum()) * r), int((objects == o).sum()) * r)
@@ -366,11 +368,13 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         **ev.figures, "per_object": ev.per_object,
         "note": "CV: candidates and thresholds are chosen on training folds only; "
                 "logistic: one-hot state, sin/cos of theta and 2 theta per object and face, "
-                "docking error",
+                "docking error; hybrid (reported beside the twin, not instead): a logistic "
+                "regression on the twin's P_sim and the logistic features, fitted in the "
+                "training folds",
     }  # fmt: skip
     write_atomic(out / "fidelity.png", figure_png(plot_fidelity(plot)))
     write_atomic(out / "evaluation.json", json.dumps(_json_safe(payload), indent=2) + "\n")
-    for key in ("base_rate", "logistic_cv", "twin_in_sample", "twin_cv"):
+    for key in ("base_rate", "logistic_cv", "twin_in_sample", "twin_cv", "hybrid_cv"):
         f = ev.figures[key]
         print(f"{key:15s} f05 {f['f05']:.3f}  precision {f['precision']:.3f}  "
               f"recall {f['recall']:.3f}  brier {f['brier']:.3f}")  # fmt: skip
@@ -378,9 +382,16 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_penalties(args: argparse.Namespace) -> None:
+    for name, value in (("--penalty", args.penalty), ("--mass-penalty", args.mass_penalty)):
+        if not (math.isfinite(value) and value >= 0):
+            raise InputError(f"{name} must be >= 0, got {value}")
+
+
 def cmd_object(args: argparse.Namespace) -> int:
-    """Calibrate a proxy for one real object from its real outcomes (no scan needed)."""
-    from transfertwin.objects import write_proxy
+    """Calibrate a proxy (shape and mass distribution) for one real object from its real
+    outcomes (no scan needed)."""
+    from transfertwin.objects import MAX_COM_SHIFT_M, write_proxy
     from transfertwin.study.calibration import candidates_path, fit_proxy, save_candidates
 
     if args.family != "core":
@@ -388,6 +399,10 @@ def cmd_object(args: argparse.Namespace) -> int:
     depths = [float(v) / 1000 for v in _parse_values(args.depths_mm)]
     if any(d < 0 or d > 0.1 for d in depths):
         raise InputError("--depths-mm must lie in 0..100")
+    shifts = [float(v) / 1000 for v in _parse_values(args.com_shifts_mm)]
+    if any(not abs(v) <= MAX_COM_SHIFT_M for v in shifts):
+        raise InputError(f"--com-shifts-mm must lie in ±{MAX_COM_SHIFT_M * 1000:g}")
+    _check_penalties(args)
     positive_int("--runs", args.runs)
     rows, scene, _, calib = _common(args)
     if args.object not in {str(r["object_id"]) for r in rows}:
@@ -396,18 +411,31 @@ def cmd_object(args: argparse.Namespace) -> int:
     with progress_bar(f"calibrate {args.object}", Console(stderr=True)) as on_progress:
         fit = fit_proxy(rows, args.object, depths_m=depths, work_dir=out / "candidates",
                         scene=scene, runs=args.runs, seed=args.seed, workers=calib["workers"],
-                        penalty=args.penalty, on_progress=on_progress,
-                        executor=calib["executor"])  # fmt: skip
+                        penalty=args.penalty, shifts_m=shifts, shift_penalty=args.mass_penalty,
+                        on_progress=on_progress, executor=calib["executor"])  # fmt: skip
     proxy = write_proxy(fit.spec, out / f"{args.object}.proxy.json")
     save_candidates(fit, candidates_path(out, args.object))
+    j = fit.shift_chosen
     for f in fit.faces:
+        at_shift = f.probabilities[j]
         shares = ", ".join(f"{d * 1000:g} mm {p.mean():.2f}"
-                           for d, p in zip(f.depths_m, f.probabilities, strict=True))  # fmt: skip
+                           for d, p in zip(f.depths_m, at_shift, strict=True))  # fmt: skip
         print(
             f"{args.object} {f.face}: real {f.actual.mean():.2f} (n {len(f.actual)}); "
             f"simulated by depth: {shares}; chosen {f.depths_m[f.chosen] * 1000:g} mm"
         )
-    print(f"{proxy} (a calibrated proxy, not a scan)")
+    n = sum(len(f.actual) for f in fit.faces)
+    by_shift = ", ".join(
+        f"{s * 1000:+g} mm {sum(f.probabilities[i, f.chosen].sum() for f in fit.faces) / n:.2f}"
+        for i, s in sorted(enumerate(fit.shifts_m), key=lambda t: t[1])
+    )
+    real = sum(f.actual.sum() for f in fit.faces) / n
+    print(
+        f"{args.object} mass: real {real:.2f}; simulated at the chosen depths by centre-of-mass "
+        f"shift: {by_shift}; chosen {fit.spec.com_shift_m * 1000:+g} mm along x (front half "
+        f"{fit.front_fraction:.0%} of the mass, uniform {fit.uniform_front_fraction:.0%})"
+    )
+    print(f"{proxy} (a calibrated proxy of shape and mass distribution, not a scan)")
     return 0
 
 
@@ -571,6 +599,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="candidate protrusion depths below a face (0 is always tried)")  # fmt: skip
     p.add_argument("--penalty", type=float, default=0.02,
                    help="Brier penalty at the deepest candidate (towards the prior)")  # fmt: skip
+    p.add_argument("--com-shifts-mm", default="-20,-10,10,20",
+                   help="candidate centre-of-mass shifts along x (0, uniform, is always "
+                   "tried; '0': do not search the mass distribution)")  # fmt: skip
+    p.add_argument("--mass-penalty", type=float, default=0.02,
+                   help="Brier penalty at the largest |centre-of-mass shift|")  # fmt: skip
     p.set_defaults(func=with_executor(cmd_object), runs=2)
     p = csub.add_parser("evaluate", help="twin vs baselines, in-sample and cross-validated")
     _shared(p)
@@ -580,6 +613,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "chosen in the training folds (default: simulate --profile)")  # fmt: skip
     p.add_argument("--penalty", type=float, default=0.02,
                    help="Brier penalty at the deepest proxy candidate")  # fmt: skip
+    p.add_argument("--mass-penalty", type=float, default=0.02,
+                   help="Brier penalty at the largest centre-of-mass shift")  # fmt: skip
     p.set_defaults(func=with_executor(cmd_evaluate))
     p = csub.add_parser("sensitivity", help="which gap mechanism changes the outcomes (OAT/Morris)")
     _shared(p)

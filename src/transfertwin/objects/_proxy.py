@@ -5,12 +5,20 @@ into the gap between the docked belts and catch on the transfer unit's pulley. T
 procedural cores keep such features inside the can's radius, so nothing hangs below their
 contact line. A proxy adds, per face, one `Protrusion`: a convex box whose bottom lies
 `depth_m` below that face's resting plane. It is appended to the base object's convex hulls
-(no CoACD run, deterministic); mass and inertia stay the base object's.
+(no CoACD run, deterministic); the protrusions add no mass.
 
-**A proxy is not a scan.** `transfertwin calibrate object` infers the protrusion depths of one
-real object from its real outcomes; the result reproduces how often the object catches in the
-gap, not its true shape. A proxy is saved as a small JSON file (suffix `.proxy.json`) that
-`load_object` — and so every command that takes a mesh — accepts.
+A proxy may also move the centre of mass along the object's x axis (`ProxySpec.com_shift_m`):
+a real core's motor end (steel can, armature, field) and drive end (aluminium housing, pinion)
+differ in density. The body is then two bodies of uniform density, cut across x at its
+uniform centre of mass (`transfertwin.objects.axial_mass_split`): same mass, centre of mass
+moved by the shift, inertia of the two parts about it. 0, the family prior, is the uniform
+body.
+
+**A proxy is not a scan.** `transfertwin calibrate object` infers the protrusion depths and the
+centre-of-mass shift of one real object from its real outcomes; the result reproduces how often
+the object catches in the gap, not its true shape or mass distribution. A proxy is saved as a
+small JSON file (suffix `.proxy.json`) that `load_object` — and so every command that takes a
+mesh — accepts; files without `com_shift_m` (written before it existed) load as uniform.
 """
 
 from __future__ import annotations
@@ -23,12 +31,25 @@ from pathlib import Path
 import numpy as np
 
 from transfertwin._errors import InputError
+from transfertwin.objects._mass import AxialSplit, axial_mass_split
 from transfertwin.objects._model import ObjectModel
 
-__all__ = ["PROXY_SUFFIX", "Protrusion", "ProxySpec", "proxy_model", "read_proxy", "write_proxy"]
+__all__ = [
+    "MAX_COM_SHIFT_M",
+    "PROXY_SUFFIX",
+    "Protrusion",
+    "ProxySpec",
+    "mass_split",
+    "proxy_model",
+    "read_proxy",
+    "write_proxy",
+]
 
 #: File suffix of a saved proxy object.
 PROXY_SUFFIX = ".proxy.json"
+
+#: Largest centre-of-mass shift a proxy may have (m).
+MAX_COM_SHIFT_M = 0.05
 
 
 @dataclass(frozen=True)
@@ -83,24 +104,48 @@ class Protrusion:
 
 @dataclass(frozen=True)
 class ProxySpec:
-    """A calibrated proxy: its id, base object reference and protrusions."""
+    """A calibrated proxy: its id, base object reference, protrusions and mass distribution.
+
+    Attributes:
+        com_shift_m: Shift of the centre of mass along the object's x axis (+: towards the
+            pinion), as two densities split across x (`axial_mass_split`); 0 (the family
+            prior) keeps the base's mass properties. A nonzero shift replaces the base's mass
+            distribution (it starts from the base mesh at uniform density, same mass).
+    """
 
     object_id: str
     base: str
     protrusions: tuple[Protrusion, ...]
     note: str = "calibrated proxy, not a scan"
+    com_shift_m: float = 0.0
+
+    def __post_init__(self) -> None:
+        shift = self.com_shift_m
+        if not (isinstance(shift, (int, float)) and abs(shift) <= MAX_COM_SHIFT_M):
+            raise InputError(
+                f"com_shift_m must be within ±{MAX_COM_SHIFT_M * 1000:g} mm, got {shift!r}"
+            )
+        object.__setattr__(self, "com_shift_m", float(shift))
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready description."""
         return {"object_id": self.object_id, "base": self.base, "note": self.note,
-                "protrusions": [dataclasses.asdict(p) for p in self.protrusions]}  # fmt: skip
+                "protrusions": [dataclasses.asdict(p) for p in self.protrusions],
+                "com_shift_m": self.com_shift_m}  # fmt: skip
+
+
+def mass_split(base: ObjectModel, spec: ProxySpec) -> AxialSplit:
+    """The two-density body of `spec`'s centre-of-mass shift on `base` (mass kept)."""
+    return axial_mass_split(base.mesh, base.mass.mass_kg, spec.com_shift_m)
 
 
 def proxy_model(base: ObjectModel, spec: ProxySpec) -> ObjectModel:
-    """`base` with one extra box hull per protrusion of positive depth."""
+    """`base` with one extra box hull per protrusion of positive depth and, for a nonzero
+    `com_shift_m`, the two-density mass properties of `mass_split`."""
     extra = tuple(p.hull(base) for p in spec.protrusions if p.depth_m > 0)
+    mass = base.mass if spec.com_shift_m == 0 else mass_split(base, spec).mass
     return dataclasses.replace(
-        base, object_id=spec.object_id, hulls=tuple(base.hulls) + extra,
+        base, object_id=spec.object_id, hulls=tuple(base.hulls) + extra, mass=mass,
         source=f"proxy of {base.source}", spec=None,
         feature_hulls=base.feature_hulls + len(extra),
     )  # fmt: skip
@@ -122,7 +167,8 @@ def read_proxy(path: str | Path) -> ProxySpec:
         desc = json.loads(Path(path).read_text())
         prots = tuple(Protrusion(**p) for p in desc["protrusions"])
         return ProxySpec(str(desc["object_id"]), str(desc["base"]), prots,
-                         str(desc.get("note", "")))  # fmt: skip
+                         str(desc.get("note", "")),
+                         float(desc.get("com_shift_m", 0.0)))  # fmt: skip
     except OSError as exc:
         raise InputError(f"{path}: cannot read: {exc.strerror}") from None
     except (ValueError, KeyError, TypeError) as exc:

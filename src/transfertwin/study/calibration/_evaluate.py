@@ -10,7 +10,8 @@ protocol scores a logistic regression on the state and docking error and the bas
 predictor, on the same repeated stratified folds.
 
 Shapes: `n` real rows; `y` (n,) 0/1 outcomes; probabilities (n,) in [0, 1]; candidate
-predictions per object (k, n), one row per candidate proxy of that object.
+predictions per object (k, n), one row per candidate proxy of that object, or a
+`JointCandidates` (an object whose faces share a centre-of-mass shift: (S, K, n) per face).
 """
 
 from __future__ import annotations
@@ -31,12 +32,16 @@ from transfertwin.study.calibration._metrics import ConfusionMatrix
 
 __all__ = [
     "Evaluation",
+    "JointCandidates",
     "Scores",
     "best_threshold",
     "choose_candidates",
+    "choose_joint",
     "cv_splits",
     "evaluate_predictions",
     "fold_predictions",
+    "hybrid_features",
+    "hybrid_fold_predictions",
     "in_sample",
     "logistic_features",
     "logistic_probabilities",
@@ -126,29 +131,103 @@ def cv_splits(
     return list(rskf.split(np.zeros(len(y)), y))
 
 
+@dataclass(frozen=True, eq=False)
+class JointCandidates:
+    """Candidate proxies of one object: a centre-of-mass shift shared by its faces and a
+    protrusion depth per face, searched jointly.
+
+    Attributes:
+        shifts_m: Candidate shifts (S,), the prior 0 first.
+        depths_m: Face → candidate depths (K,), the prior 0 first.
+        faces: Face → predictions (S, K, n) for all n rows (NaN off that face's rows).
+        masks: Face → that face's rows (n,) bool.
+    """
+
+    shifts_m: np.ndarray
+    depths_m: Mapping[str, np.ndarray]
+    faces: Mapping[str, np.ndarray]
+    masks: Mapping[str, np.ndarray]
+
+    def predictions(self, chosen: Mapping[str, int]) -> np.ndarray:
+        """Predictions (n,) of the chosen candidate (NaN off this object's rows)."""
+        n = len(next(iter(self.masks.values())))
+        p = np.full(n, np.nan)
+        for face, pred in self.faces.items():
+            mask = self.masks[face]
+            p[mask] = pred[chosen["shift"], chosen[face], mask]
+        return p
+
+
+def choose_joint(
+    cands: JointCandidates,
+    y: np.ndarray,
+    rows: np.ndarray,
+    penalty: float = 0.0,
+    shift_penalty: float = 0.0,
+) -> dict[str, int]:
+    """The shift and the depth per face with the lowest penalised Brier score on `rows`.
+
+    The objective of shift s is the sum over faces, weighted by their share of the object's
+    rows among `rows`, of min over depth k of (Brier score of the face's rows +
+    `penalty * k / (K - 1)`), plus `shift_penalty * |s| / max |s|` (regularisation towards
+    the uniform-density prior). For a fixed shift each face's choice is the per-face choice
+    of `choose_candidates`. Ties go to the earlier candidate (the prior first).
+
+    Returns:
+        {'shift': index into `shifts_m`, face: depth index} (all 0 without rows).
+    """
+    y = np.asarray(y, dtype=int)
+    shifts = np.asarray(cands.shifts_m, dtype=float)
+    sizes = {f: int(m[rows].sum()) for f, m in cands.masks.items()}
+    total = sum(sizes.values())
+    if total == 0:
+        return {"shift": 0, **{f: 0 for f in cands.faces}}
+    reach = float(np.abs(shifts).max()) or 1.0
+    objective = shift_penalty * np.abs(shifts) / reach
+    best: dict[str, np.ndarray] = {}
+    for face, pred in cands.faces.items():
+        mine = rows[cands.masks[face][rows]]
+        if len(mine) == 0:
+            best[face] = np.zeros(len(shifts), dtype=int)
+            continue
+        k = pred.shape[1]
+        cost = np.mean((pred[:, :, mine] - y[mine]) ** 2, axis=2)  # (S, K)
+        cost = cost + penalty * np.arange(k) / max(k - 1, 1)
+        best[face] = np.argmin(cost, axis=1)
+        objective = objective + sizes[face] / total * cost.min(axis=1)
+    s = int(np.argmin(objective))
+    return {"shift": s, **{f: int(best[f][s]) for f in cands.faces}}
+
+
 def choose_candidates(
-    candidates: Mapping[str, np.ndarray],
+    candidates: Mapping[str, np.ndarray | JointCandidates],
     objects: np.ndarray,
     y: np.ndarray,
     rows: np.ndarray,
     penalty: float = 0.0,
-) -> dict[str, int]:
+    shift_penalty: float = 0.0,
+) -> dict[str, int | dict[str, int]]:
     """Per object, the candidate proxy with the lowest Brier score on `rows` of that object.
 
     Args:
         candidates: Object id → predictions (k, n) of its k candidate proxies for all rows;
-            candidate 0 is the family prior, later ones move away from it.
+            candidate 0 is the family prior, later ones move away from it. Or a
+            `JointCandidates` (chosen by `choose_joint`).
         objects: Object id per row (n,).
         y: Real outcomes (n,).
         rows: The row indices the choice may look at (a training fold).
         penalty: Regularisation towards the prior: `penalty * k / (K - 1)` is added to
             candidate k's Brier score (0: none).
+        shift_penalty: Regularisation of a joint candidate's centre-of-mass shift.
 
     Returns:
-        Object id → chosen candidate index.
+        Object id → chosen candidate index (a `choose_joint` dict for joint candidates).
     """
-    chosen = {}
+    chosen: dict[str, int | dict[str, int]] = {}
     for obj, pred in candidates.items():
+        if isinstance(pred, JointCandidates):
+            chosen[obj] = choose_joint(pred, y, rows, penalty, shift_penalty)
+            continue
         mine = rows[objects[rows] == obj]
         if len(mine) == 0:
             chosen[obj] = 0
@@ -161,12 +240,19 @@ def choose_candidates(
 
 
 def _assemble(
-    candidates: Mapping[str, np.ndarray], objects: np.ndarray, chosen: Mapping[str, int]
+    candidates: Mapping[str, np.ndarray | JointCandidates],
+    objects: np.ndarray,
+    chosen: Mapping[str, int | dict[str, int]],
 ) -> np.ndarray:
     p = np.full(len(objects), np.nan)
     for obj, k in chosen.items():
+        cands = candidates[obj]
+        if isinstance(cands, JointCandidates):
+            q = cands.predictions(k)
+            p[~np.isnan(q)] = q[~np.isnan(q)]
+            continue
         mask = objects == obj
-        p[mask] = candidates[obj][k, mask]
+        p[mask] = cands[k, mask]
     if np.isnan(p).any():
         missing = sorted(set(objects[np.isnan(p)]))
         raise InputError(f"no twin predictions for object(s) {', '.join(missing)}")
@@ -174,28 +260,33 @@ def _assemble(
 
 
 def fold_predictions(
-    candidates: Mapping[str, np.ndarray],
+    candidates: Mapping[str, np.ndarray | JointCandidates],
     objects: np.ndarray,
     y: np.ndarray,
     splits: Sequence[tuple[np.ndarray, np.ndarray]],
     penalty: float = 0.0,
-) -> list[tuple[np.ndarray, np.ndarray, float, dict[str, int]]]:
+    shift_penalty: float = 0.0,
+) -> list[tuple[np.ndarray, np.ndarray, float, dict[str, int | dict[str, int]]]]:
     """Per split: (test rows, their predictions, threshold, chosen candidates), where the
     candidates and the threshold are chosen on the training rows only."""
     out = []
     for train, test in splits:
-        chosen = choose_candidates(candidates, objects, y, train, penalty)
+        chosen = choose_candidates(candidates, objects, y, train, penalty, shift_penalty)
         p = shrink(_assemble(candidates, objects, chosen), y, train)
         out.append((test, p[test], best_threshold(p[train], y[train]), chosen))
     return out
 
 
 def in_sample(
-    candidates: Mapping[str, np.ndarray], objects: np.ndarray, y: np.ndarray, penalty: float
-) -> tuple[np.ndarray, float, dict[str, int]]:
+    candidates: Mapping[str, np.ndarray | JointCandidates],
+    objects: np.ndarray,
+    y: np.ndarray,
+    penalty: float,
+    shift_penalty: float = 0.0,
+) -> tuple[np.ndarray, float, dict[str, int | dict[str, int]]]:
     """Predictions, threshold and candidates chosen on all rows (the optimistic figure)."""
     rows = np.arange(len(y))
-    chosen = choose_candidates(candidates, objects, y, rows, penalty)
+    chosen = choose_candidates(candidates, objects, y, rows, penalty, shift_penalty)
     p = shrink(_assemble(candidates, objects, chosen), y, rows)
     return p, best_threshold(p, y), chosen
 
@@ -231,6 +322,39 @@ def logistic_probabilities(
     return model.predict_proba(X)[:, 1]
 
 
+def hybrid_features(p_sim: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """Features of the hybrid: the twin's simulated success share per row beside the
+    logistic baseline's features, (n, 1 + d)."""
+    return np.column_stack([np.asarray(p_sim, dtype=float), X])
+
+
+def hybrid_fold_predictions(
+    candidates: Mapping[str, np.ndarray | JointCandidates],
+    objects: np.ndarray,
+    y: np.ndarray,
+    X: np.ndarray,
+    splits: Sequence[tuple[np.ndarray, np.ndarray]],
+    penalty: float = 0.0,
+    shift_penalty: float = 0.0,
+) -> list[tuple[np.ndarray, np.ndarray, float]]:
+    """Per split: (test rows, their predictions, threshold) of the hybrid, a residual
+    classifier — a logistic regression on the twin's output (P_sim, the simulated share of
+    the candidate proxies chosen on the training rows) and the baseline's features `X`.
+
+    Everything is fitted on the training rows only: the candidate choice, the regression
+    and the threshold. (The training rows' P_sim comes from candidates chosen on those same
+    rows, which makes it look a little better there than on the test rows; the held-out
+    score stays honest.)
+    """
+    out = []
+    for train, test in splits:
+        chosen = choose_candidates(candidates, objects, y, train, penalty, shift_penalty)
+        Z = hybrid_features(_assemble(candidates, objects, chosen), X)
+        q = logistic_probabilities(Z, y, train)
+        out.append((test, q[test], best_threshold(q[train], y[train])))
+    return out
+
+
 def _pooled(
     parts: Sequence[tuple[np.ndarray, np.ndarray, float]], y: np.ndarray, n: int
 ) -> tuple[dict[str, float], np.ndarray, np.ndarray]:
@@ -261,11 +385,12 @@ class Evaluation:
 
     Attributes:
         figures: 'base_rate', 'logistic_in_sample', 'logistic_cv', 'twin_in_sample',
-            'twin_cv': metric → value ('*_std' over repeats for the CV figures).
+            'twin_cv', and beside them (never instead) 'hybrid_cv' and 'hybrid_in_sample':
+            metric → value ('*_std' over repeats for the CV figures).
         per_object: Object id → confusion matrices (in-sample and first-repeat CV) and
             counts.
-        twin_p, twin_oof, logistic_oof: Predictions (n,): the twin in-sample and both
-            models out-of-fold in the first repeat.
+        twin_p, twin_oof, logistic_oof, hybrid_oof: Predictions (n,): the twin in-sample and
+            the models out-of-fold in the first repeat.
         chosen: The candidates chosen on all rows (in-sample).
     """
 
@@ -278,7 +403,8 @@ class Evaluation:
     twin_p: np.ndarray
     twin_oof: np.ndarray
     logistic_oof: np.ndarray
-    chosen: dict[str, int]
+    chosen: dict[str, int | dict[str, int]]
+    hybrid_oof: np.ndarray
 
 
 def evaluate_predictions(
@@ -290,9 +416,11 @@ def evaluate_predictions(
     seed: int = 0,
     penalty: float = 0.0,
     groups: np.ndarray | None = None,
+    shift_penalty: float = 0.0,
 ) -> Evaluation:
     """Score the twin (from candidate predictions per group) against the base-rate and
-    logistic baselines, in-sample and in repeated stratified K-fold cross-validation.
+    logistic baselines, in-sample and in repeated stratified K-fold cross-validation, and
+    beside it the hybrid (`hybrid_fold_predictions`).
 
     In every fold the twin's candidates, its threshold and the logistic model and its
     threshold are fitted on the training rows only. `groups` (n,) names the candidate set
@@ -303,23 +431,30 @@ def evaluate_predictions(
     units = objects if groups is None else np.asarray(groups)
     splits = cv_splits(y, folds, repeats, seed)
     X = logistic_features(rows)
-    twin_parts = [(test, p, thr) for test, p, thr, _ in
-                  fold_predictions(candidates, units, y, splits, penalty)]  # fmt: skip
+    folded = fold_predictions(candidates, units, y, splits, penalty, shift_penalty)
+    twin_parts = [(test, p, thr) for test, p, thr, _ in folded]
+    hybrid_parts = hybrid_fold_predictions(candidates, units, y, X, splits, penalty,
+                                           shift_penalty)  # fmt: skip
     logit_parts = []
     for train, test in splits:
         q = logistic_probabilities(X, y, train)
         logit_parts.append((test, q[test], best_threshold(q[train], y[train])))
-    twin_rep, logit_rep, oof = [], [], {}
+    twin_rep, logit_rep, hybrid_rep, oof = [], [], [], {}
     for r in range(repeats):
         block = slice(r * folds, (r + 1) * folds)
         m, p_t, b_t = _pooled(twin_parts[block], y, len(y))
         twin_rep.append(m)
         m2, p_l, _ = _pooled(logit_parts[block], y, len(y))
         logit_rep.append(m2)
+        m3, p_h, _ = _pooled(hybrid_parts[block], y, len(y))
+        hybrid_rep.append(m3)
         if r == 0:
-            oof = {"twin": p_t, "twin_bits": b_t, "logistic": p_l}
-    p_in, thr_in, chosen_in = in_sample(candidates, units, y, penalty)
+            oof = {"twin": p_t, "twin_bits": b_t, "logistic": p_l, "hybrid": p_h}
+    p_in, thr_in, chosen_in = in_sample(candidates, units, y, penalty, shift_penalty)
     q_in = logistic_probabilities(X, y, np.arange(len(y)))
+    h_in = logistic_probabilities(
+        hybrid_features(_assemble(candidates, units, chosen_in), X), y, np.arange(len(y))
+    )
     base = np.full(len(y), y.mean())
     figures = {
         "base_rate": score(base, y, best_threshold(base, y)).to_dict(),
@@ -327,6 +462,8 @@ def evaluate_predictions(
         "logistic_cv": _mean_std(logit_rep),
         "twin_in_sample": score(p_in, y, thr_in).to_dict(),
         "twin_cv": _mean_std(twin_rep),
+        "hybrid_in_sample": score(h_in, y, best_threshold(h_in, y)).to_dict(),
+        "hybrid_cv": _mean_std(hybrid_rep),
     }
     per_object = {}
     for obj in sorted(set(objects)):
@@ -340,4 +477,4 @@ def evaluate_predictions(
                                                    y[mask].astype(bool)).to_dict(),
         }  # fmt: skip
     return Evaluation(len(y), int(y.sum()), folds, repeats, figures, per_object, p_in,
-                      oof["twin"], oof["logistic"], chosen_in)  # fmt: skip
+                      oof["twin"], oof["logistic"], chosen_in, oof["hybrid"])  # fmt: skip

@@ -1,16 +1,19 @@
-"""Object calibration without a scan: a proxy's protrusion depth per face from real outcomes.
+"""Object calibration without a scan: a proxy's shape and mass distribution from real outcomes.
 
-For one real object, every face it was tried on gets a grid of candidate proxies: the base
-object (the family prior, no protrusion) and the base object with a protrusion of increasing
-depth below that face's resting plane (`transfertwin.objects.Protrusion`). Each candidate
-replays that face's real rows R times with the same seeds (common random numbers), which
-gives P(success) per row and candidate. The chosen depth per face minimises the Brier score
-plus a penalty that grows with the distance from the prior (`choose_candidates`). The
+For one real object the search space is the procedural core family's two free parameters:
+a protrusion depth below each face's resting plane (`transfertwin.objects.Protrusion`, its
+shape) and a centre-of-mass shift along the object's x axis shared by both faces
+(`ProxySpec.com_shift_m`, two densities split across x: its mass distribution). The family
+prior is the plain body of uniform density (depth 0, shift 0). Every face it was tried on gets
+the grid of candidates shift × depth; each candidate replays that face's real rows R times
+with the same seeds (common random numbers), which gives P(success) per row and candidate.
+The chosen shift and depths minimise the Brier score plus penalties that grow with the
+distance from the prior (`choose_joint`: jointly, as the shift couples the faces). The
 candidates' predictions are kept, so that `calibrate evaluate` can repeat the choice inside
 each cross-validation training fold without simulating again.
 
 The result is a proxy: it reproduces how often the object catches in the gap between the
-docked belts, not the real object's shape.
+docked belts, not the real object's shape or mass distribution.
 """
 
 from __future__ import annotations
@@ -22,9 +25,18 @@ from pathlib import Path
 import numpy as np
 
 from transfertwin._errors import InputError
-from transfertwin.objects import PROXY_SUFFIX, Protrusion, ProxySpec, write_proxy
+from transfertwin.objects import (
+    PROXY_SUFFIX,
+    Protrusion,
+    ProxySpec,
+    is_builtin_id,
+    load_builtin,
+    load_object,
+    mass_split,
+    write_proxy,
+)
 from transfertwin.sim import SceneConfig
-from transfertwin.study.calibration._evaluate import choose_candidates
+from transfertwin.study.calibration._evaluate import JointCandidates, choose_joint
 from transfertwin.study.calibration._replay import check_real_rows, replay_specs
 from transfertwin.study.experiment import Executor, run_rows
 
@@ -41,8 +53,9 @@ __all__ = [
 
 @dataclass(frozen=True)
 class FaceFit:
-    """Candidates of one face: depths (k,) m, P(success) (k, n_face), the real rows'
-    experiment ids (n_face,), their outcomes and the chosen candidate index."""
+    """Candidates of one face: depths (K,) m, P(success) (S, K, n_face) per shift and depth,
+    the real rows' experiment ids (n_face,), their outcomes and the chosen depth index (at
+    the chosen shift)."""
 
     face: str
     depths_m: np.ndarray
@@ -54,19 +67,44 @@ class FaceFit:
 
 @dataclass(frozen=True)
 class ProxyFit:
-    """The calibrated proxy of one real object and the evidence behind it."""
+    """The calibrated proxy of one real object and the evidence behind it.
+
+    Attributes:
+        shifts_m: Candidate centre-of-mass shifts (S,), 0 first.
+        shift_chosen: Index of the chosen shift.
+        front_fraction: Share of the mass in the object's front (+x, pinion) half at the
+            chosen shift; uniform_front_fraction: the same at uniform density.
+    """
 
     spec: ProxySpec
     faces: tuple[FaceFit, ...]
+    shifts_m: np.ndarray
+    shift_chosen: int
+    front_fraction: float
+    uniform_front_fraction: float
 
 
 def _candidate(
-    work_dir: Path, object_id: str, base: str, face: str, depth_m: float
+    work_dir: Path, object_id: str, base: str, face: str, depth_m: float, shift_m: float
 ) -> tuple[str, str]:
-    """(object id, file) of one candidate proxy: `base` with a protrusion on `face`."""
+    """(object id, file) of one candidate proxy: `base` with a protrusion on `face` and its
+    centre of mass shifted by `shift_m`."""
     name = f"{object_id}~{face}{round(depth_m * 1000, 2):g}"
-    spec = ProxySpec(name, base, (Protrusion(face, depth_m),))
+    if shift_m != 0:
+        name += f"~com{round(shift_m * 1000, 2):+g}"
+    spec = ProxySpec(name, base, (Protrusion(face, depth_m),), com_shift_m=shift_m)
     return name, str(write_proxy(spec, work_dir / f"{name}{PROXY_SUFFIX}"))
+
+
+def _base_model(base: str):
+    """The base body of a proxy built on `base` (the plain body for a built-in id)."""
+    return load_builtin(base, features=False) if is_builtin_id(base) else load_object(base)
+
+
+def _shift_grid(shifts_m: Sequence[float]) -> np.ndarray:
+    """Distinct shifts, the prior 0 first, then by distance from it (negative first)."""
+    values = {0.0, *(float(v) for v in shifts_m)}
+    return np.array(sorted(values, key=lambda v: (abs(v), v)))
 
 
 def fit_proxy(
@@ -81,10 +119,13 @@ def fit_proxy(
     seed: int = 0,
     workers: int = 1,
     penalty: float = 0.02,
+    shifts_m: Sequence[float] = (),
+    shift_penalty: float = 0.02,
     on_progress: Callable[[int, int], None] | None = None,
     executor: Executor | None = None,
 ) -> ProxyFit:
-    """Fit the protrusion depth of each face of `object_id` to its real rows.
+    """Fit the centre-of-mass shift and the protrusion depth of each face of `object_id` to
+    its real rows, jointly.
 
     Args:
         rows: Real result rows (any objects; those of `object_id` are used). Each needs an
@@ -98,6 +139,9 @@ def fit_proxy(
         seed: Master seed.
         workers: Worker processes.
         penalty: Brier-score penalty at the deepest candidate (linear in the grid index).
+        shifts_m: Candidate centre-of-mass shifts along x (m); 0 (uniform density, the
+            prior) is added. Empty: the mass distribution is not searched.
+        shift_penalty: Brier-score penalty at the largest |shift| (linear in |shift|).
         on_progress: Called with (done, total) experiments.
         executor: Runs the experiments instead of `workers` local processes (e.g. a
             started `RayExecutor`; candidate files in `work_dir` must then be readable
@@ -112,38 +156,53 @@ def fit_proxy(
     if runs < 1:
         raise InputError(f"runs must be at least 1, got {runs}")
     depths = np.unique(np.r_[0.0, np.asarray(depths_m, dtype=float)])
+    shifts = _shift_grid(shifts_m)
     base = base or object_id
+    body = _base_model(base)
+    for shift in shifts[1:]:  # InputError now, not in a worker, if the body cannot carry it
+        mass_split(body, ProxySpec(object_id, base, (), com_shift_m=float(shift)))
     work_dir.mkdir(parents=True, exist_ok=True)
     faces = sorted({str(r["face"]) for r in mine})
+    face_rows = {f: [r for r in mine if r["face"] == f] for f in faces}
     specs, where = [], {}
     for face in faces:
-        face_rows = [r for r in mine if r["face"] == face]
-        for k, depth in enumerate(depths):
-            name, ref = _candidate(work_dir, object_id, base, face, float(depth))
-            for run in range(runs):
-                batch = replay_specs(face_rows, scene=scene, object_map={object_id: ref},
-                                     run=run, seed=seed)  # fmt: skip
-                for i, s in enumerate(batch):
-                    where[(name, s.run, s.seed)] = (face, k, i)
-                specs += batch
-    wins = {f: np.zeros((len(depths), sum(r["face"] == f for r in mine))) for f in faces}
+        for j, shift in enumerate(shifts):
+            for k, depth in enumerate(depths):
+                name, ref = _candidate(work_dir, object_id, base, face, float(depth),
+                                       float(shift))  # fmt: skip
+                for run in range(runs):
+                    batch = replay_specs(face_rows[face], scene=scene, run=run, seed=seed,
+                                         object_map={object_id: ref})  # fmt: skip
+                    for i, s in enumerate(batch):
+                        where[(name, s.run, s.seed)] = (face, j, k, i)
+                    specs += batch
+    wins = {f: np.zeros((len(shifts), len(depths), len(face_rows[f]))) for f in faces}
     for done, row in enumerate(run_rows(specs, workers, executor), start=1):
-        face, k, i = where[(str(row["object_id"]), int(row["run"]), int(row["seed"]))]
-        wins[face][k, i] += 1 if row["status"] == "ok" and row["success"] == 1 else 0
+        face, j, k, i = where[(str(row["object_id"]), int(row["run"]), int(row["seed"]))]
+        wins[face][j, k, i] += 1 if row["status"] == "ok" and row["success"] == 1 else 0
         if on_progress is not None:
             on_progress(done, len(specs))
-    fits, protrusions = [], []
+    masks, preds, start = {}, {}, 0
+    for face in faces:  # the object's rows, face by face
+        n_face = len(face_rows[face])
+        masks[face] = np.zeros(len(mine), dtype=bool)
+        masks[face][start : start + n_face] = True
+        preds[face] = np.full((len(shifts), len(depths), len(mine)), np.nan)
+        preds[face][:, :, masks[face]] = wins[face] / runs
+        start += n_face
+    y = np.array([int(r["success"]) for f in faces for r in face_rows[f]])
+    joint = JointCandidates(shifts, {f: depths for f in faces}, preds, masks)
+    chosen = choose_joint(joint, y, np.arange(len(y)), penalty, shift_penalty)
+    fits = []
     for face in faces:
-        face_rows = [r for r in mine if r["face"] == face]
-        p = wins[face] / runs
-        y = np.array([int(r["success"]) for r in face_rows])
-        groups = np.array([face] * len(face_rows))
-        chosen = choose_candidates({face: p}, groups, y, np.arange(len(y)), penalty)[face]
-        ids = np.array([int(r["experiment_id"]) for r in face_rows])
-        fits.append(FaceFit(face, depths, p, ids, y, chosen))
-        protrusions.append(Protrusion(face, float(depths[chosen])))
-    spec = ProxySpec(object_id, base, tuple(protrusions))
-    return ProxyFit(spec, tuple(fits))
+        ids = np.array([int(r["experiment_id"]) for r in face_rows[face]])
+        fits.append(FaceFit(face, depths, wins[face] / runs, ids, y[masks[face]], chosen[face]))
+    shift = float(shifts[chosen["shift"]])
+    protrusions = tuple(Protrusion(f.face, float(depths[f.chosen])) for f in fits)
+    spec = ProxySpec(object_id, base, protrusions, com_shift_m=shift)
+    split = mass_split(body, spec)
+    return ProxyFit(spec, tuple(fits), shifts, chosen["shift"], split.front_fraction,
+                    split.uniform_front_fraction)  # fmt: skip
 
 
 def candidates_path(folder: Path, object_id: str) -> Path:
@@ -152,8 +211,10 @@ def candidates_path(folder: Path, object_id: str) -> Path:
 
 
 def save_candidates(fit: ProxyFit, path: Path) -> Path:
-    """The candidates' predictions as .npz (read back by `load_candidates`)."""
-    arrays = {}
+    """The candidates' predictions as .npz (read back by `load_candidates`): per face the
+    depths, P (S, K, n_face), the experiment ids and the chosen depth; the shifts (S,) and the
+    chosen shift."""
+    arrays = {"shifts_m": fit.shifts_m, "shift_chosen": np.array(fit.shift_chosen)}
     for f in fit.faces:
         arrays[f"{f.face}_depths_m"] = f.depths_m
         arrays[f"{f.face}_p"] = f.probabilities
@@ -165,42 +226,62 @@ def save_candidates(fit: ProxyFit, path: Path) -> Path:
 
 def load_candidates(
     path: Path, experiment_ids: np.ndarray
-) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """Group 'object:face' → (candidate predictions (k, n) aligned with `experiment_ids`,
-    NaN on other rows; row mask (n,)). InputError if a fitted row is missing."""
+) -> dict[str, tuple[np.ndarray | JointCandidates, np.ndarray]]:
+    """Candidates aligned with `experiment_ids` (n,), and the rows they cover (n,) bool.
+
+    A file with a shift grid (`calibrate object` since it searches the mass distribution)
+    gives one entry, the object id → `JointCandidates`. An older file (depths only) gives
+    'object:face' → candidate predictions (k, n), NaN on other rows. InputError if a fitted
+    row is missing.
+    """
     pos = {int(e): j for j, e in enumerate(experiment_ids)}
+    n = len(experiment_ids)
     with np.load(path) as data:
         obj = str(data["object_id"])
-        out = {}
+        joint = "shifts_m" in data
+        out: dict[str, tuple[np.ndarray | JointCandidates, np.ndarray]] = {}
+        preds, masks, depths = {}, {}, {}
         for face in ("front", "back"):
             if f"{face}_p" not in data:
                 continue
             p, ids = data[f"{face}_p"], data[f"{face}_ids"]
             if any(int(e) not in pos for e in ids):
                 raise InputError(f"{path}: fitted rows missing from the real table")
-            full = np.full((p.shape[0], len(experiment_ids)), np.nan)
             cols = [pos[int(e)] for e in ids]
-            full[:, cols] = p
-            mask = np.zeros(len(experiment_ids), dtype=bool)
+            full = np.full((*p.shape[:-1], n), np.nan)
+            full[..., cols] = p
+            mask = np.zeros(n, dtype=bool)
             mask[cols] = True
-            out[f"{obj}:{face}"] = (full, mask)
+            preds[face], masks[face], depths[face] = full, mask, data[f"{face}_depths_m"]
+            if not joint:
+                out[f"{obj}:{face}"] = (full, mask)
+        if joint and preds:
+            cover = np.any(np.vstack(list(masks.values())), axis=0)
+            out[obj] = (JointCandidates(np.asarray(data["shifts_m"]), depths, preds, masks), cover)
     return out
 
 
 def fitted_candidates(
     folder: Path, rows: Sequence[Mapping[str, object]]
-) -> tuple[dict[str, np.ndarray], np.ndarray]:
-    """Candidate predictions per 'object:face' group for `rows` from the `calibrate object`
-    outputs in `folder`, and each row's group (n,). InputError if anything is missing."""
+) -> tuple[dict[str, np.ndarray | JointCandidates], np.ndarray]:
+    """Candidate predictions per group for `rows` from the `calibrate object` outputs in
+    `folder`, and each row's group (n,): the object id for an object fitted with its mass
+    distribution (`JointCandidates`), 'object:face' for older per-face fits. InputError if
+    anything is missing."""
     ids = np.array([int(r["experiment_id"]) for r in rows])
-    candidates = {}
+    candidates: dict[str, np.ndarray | JointCandidates] = {}
+    covered = np.zeros(len(rows), dtype=bool)
     for obj in sorted({str(r["object_id"]) for r in rows}):
         path = candidates_path(folder, obj)
         if not path.is_file():
             raise InputError(f"{path}: missing; run 'transfertwin calibrate object --object {obj}'")
-        candidates |= {group: pred for group, (pred, _) in load_candidates(path, ids).items()}
-    groups = np.array([f"{r['object_id']}:{r['face']}" for r in rows])
-    missing = sorted(set(groups) - set(candidates))
+        for group, (pred, mask) in load_candidates(path, ids).items():
+            candidates[group] = pred
+            covered |= mask
+    objects = np.array([str(r["object_id"]) for r in rows])
+    faces = np.array([f"{r['object_id']}:{r['face']}" for r in rows])
+    groups = np.where(np.isin(objects, list(candidates)), objects, faces)
+    missing = sorted(set(faces[~covered]))
     if missing:
         raise InputError(f"{folder}: no fitted candidates for {', '.join(missing)}")
     return candidates, groups

@@ -70,6 +70,9 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=2)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--penalty", type=float, default=0.02)
+    parser.add_argument("--mass-penalty", type=float, default=0.02)
+    parser.add_argument("--com-shifts-mm", default="",
+                        help="centre-of-mass shifts to search in fits (default: none)")  # fmt: skip
     parser.add_argument("--study", help="a finished study store to check the grid targets on")
     args = parser.parse_args()
     if args.study:
@@ -77,21 +80,30 @@ def main() -> None:
     rows = read_results(calibration_csv_path())
     _gap_fit(rows)
     folder = Path(args.objects)
+    shifts = [float(v) / 1000 for v in args.com_shifts_mm.split(",") if v.strip()]
     for obj in sorted({str(r["object_id"]) for r in rows}, key=lambda o: int(o[1:])):
         if not candidates_path(folder, obj).is_file():
             fit = fit_proxy(rows, obj, depths_m=DEPTHS_M, work_dir=folder / "candidates",
                             scene=SceneConfig(), runs=args.runs, workers=args.workers,
-                            penalty=args.penalty)  # fmt: skip
+                            penalty=args.penalty, shifts_m=shifts,
+                            shift_penalty=args.mass_penalty)  # fmt: skip
             write_proxy(fit.spec, folder / f"{obj}.proxy.json")
             save_candidates(fit, candidates_path(folder, obj))
     candidates, groups = fitted_candidates(folder, rows)
     ev = evaluate_predictions(rows, candidates, folds=5, repeats=5, seed=0,
-                              penalty=args.penalty, groups=groups)  # fmt: skip
+                              penalty=args.penalty, groups=groups,
+                              shift_penalty=args.mass_penalty)  # fmt: skip
     print(f"{'predictor':20s} {'F0.5':>6s} {'prec':>6s} {'recall':>6s} {'brier':>6s}")
-    for key in ("base_rate", "logistic_in_sample", "logistic_cv", "twin_in_sample", "twin_cv"):
+    keys = ("base_rate", "logistic_in_sample", "logistic_cv", "twin_in_sample", "twin_cv",
+            "hybrid_in_sample", "hybrid_cv")  # fmt: skip
+    for key in keys:
         f = ev.figures[key]
         print(f"{key:20s} {f['f05']:6.3f} {f['precision']:6.3f} {f['recall']:6.3f} "
               f"{f['brier']:6.3f}")  # fmt: skip
+    hcv = ev.figures["hybrid_cv"]
+    print(f"hybrid CV (beside the twin, not instead): F0.5 {hcv['f05']:.3f} "
+          f"± {hcv['f05_std']:.3f} vs twin {ev.figures['twin_cv']['f05']:.3f} "
+          f"± {ev.figures['twin_cv']['f05_std']:.3f}")  # fmt: skip
     tin, tcv, lcv = ev.figures["twin_in_sample"], ev.figures["twin_cv"], ev.figures["logistic_cv"]
     print(
         f"target in-sample F0.5 >= 0.84 and recall <= 0.95: "

@@ -392,7 +392,12 @@ def cmd_object(args: argparse.Namespace) -> int:
     """Calibrate a proxy (shape and mass distribution) for one real object from its real
     outcomes (no scan needed)."""
     from transfertwin.objects import MAX_COM_SHIFT_M, write_proxy
-    from transfertwin.study.calibration import candidates_path, fit_proxy, save_candidates
+    from transfertwin.study.calibration import (
+        candidates_path,
+        check_shifts,
+        fit_proxy,
+        save_candidates,
+    )
 
     if args.family != "core":
         raise InputError(f"--family {args.family!r}: only 'core' (procedural cores) is known")
@@ -407,6 +412,7 @@ def cmd_object(args: argparse.Namespace) -> int:
     rows, scene, _, calib = _common(args)
     if args.object not in {str(r["object_id"]) for r in rows}:
         raise InputError(f"{args.real}: no rows of object {args.object!r}")
+    check_shifts(args.object, shifts)
     out = out_dir(args.out)
     with progress_bar(f"calibrate {args.object}", Console(stderr=True)) as on_progress:
         fit = fit_proxy(rows, args.object, depths_m=depths, work_dir=out / "candidates",

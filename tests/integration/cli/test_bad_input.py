@@ -126,6 +126,22 @@ BAD: list[tuple[str, list[str]]] = [
         ["calibrate", "object", "--object", "o1", "--family", "x", "--out", "o"],
     ),
     ("calibrate object unknown id", ["calibrate", "object", "--object", "o99", "--out", "o"]),
+    (
+        "calibrate object shift beyond 50 mm",
+        ["calibrate", "object", "--object", "o1", "--com-shifts-mm", "-80,10", "--out", "o"],
+    ),
+    (
+        "calibrate object shift the body cannot carry",
+        ["calibrate", "object", "--object", "o1", "--com-shifts-mm", "48", "--out", "o"],
+    ),
+    (
+        "calibrate object negative mass penalty",
+        ["calibrate", "object", "--object", "o1", "--mass-penalty", "-1", "--out", "o"],
+    ),
+    (
+        "calibrate evaluate negative mass penalty",
+        ["calibrate", "evaluate", "--mass-penalty", "-0.1", "--out", "o"],
+    ),
     ("tune unknown space setting", [*TUNE, "--space", "friction=0:1"]),
     ("tune space low above high", [*TUNE, "--space", "mu=0.8:0.3"]),
     ("tune space not a range", [*TUNE, "--space", "mu=0.3"]),

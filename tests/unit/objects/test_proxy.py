@@ -6,8 +6,8 @@ import json
 
 import numpy as np
 import pytest
-
 from tests.conftest import plain_body_proxy
+
 from transfertwin._errors import InputError
 from transfertwin.objects import (
     Protrusion,

@@ -8,11 +8,15 @@ import pytest
 from transfertwin.data import calibration_csv_path
 from transfertwin.store import read_results
 from transfertwin.study.calibration import (
+    JointCandidates,
     best_threshold,
     choose_candidates,
+    choose_joint,
     cv_splits,
     evaluate_predictions,
     fold_predictions,
+    hybrid_fold_predictions,
+    logistic_features,
     score,
     shrink,
 )
@@ -106,10 +110,84 @@ def test_evaluation_reports_every_figure_beside_the_baselines(real_rows) -> None
         share = np.where(objects == o, y[objects == o].mean(), 0.5)
         cands[str(o)] = np.vstack([np.full(len(y), 0.2), share])
     ev = evaluate_predictions(real_rows, cands, folds=5, repeats=2, seed=0)
-    for key in ("base_rate", "logistic_in_sample", "logistic_cv", "twin_in_sample", "twin_cv"):
+    for key in (
+        "base_rate",
+        "logistic_in_sample",
+        "logistic_cv",
+        "twin_in_sample",
+        "twin_cv",
+        "hybrid_in_sample",
+        "hybrid_cv",
+    ):
         assert {"f05", "precision", "recall", "brier"} <= set(ev.figures[key])
     assert ev.figures["base_rate"]["f05"] == pytest.approx(0.7175, abs=5e-5)
     assert ev.figures["logistic_cv"]["f05"] > ev.figures["base_rate"]["f05"]
     assert set(ev.per_object) == {"o1", "o18", "o23", "o32"}
     assert sum(v["n"] for v in ev.per_object.values()) == 191
     assert ev.chosen == {o: 1 for o in cands}
+
+
+def _joint(rng: np.random.Generator, n: int, shifts=(0.0, -0.01, 0.01)) -> JointCandidates:
+    """Random joint candidates over n rows: even rows 'front', odd rows 'back', 3 depths."""
+    masks = {"front": np.arange(n) % 2 == 0, "back": np.arange(n) % 2 == 1}
+    faces = {}
+    for face, mask in masks.items():
+        p = np.full((len(shifts), 3, n), np.nan)
+        p[:, :, mask] = rng.random((len(shifts), 3, int(mask.sum())))
+        faces[face] = p
+    depths = {f: np.array([0.0, 0.01, 0.02]) for f in masks}
+    return JointCandidates(np.array(shifts), depths, faces, masks)
+
+
+def test_joint_choice_shares_the_shift_between_faces() -> None:
+    y = np.array([1, 0, 1, 0])  # rows 0, 2 front; 1, 3 back
+    masks = {"front": np.array([1, 0, 1, 0], bool), "back": np.array([0, 1, 0, 1], bool)}
+    nan = np.nan
+    # front is perfect only at shift 1 (depth 0); back is perfect only at shift 0 (depth 1)
+    # and good at shift 1 (depth 0): jointly shift 1 wins although back alone prefers 0
+    front = np.array([[[0.5, nan, 0.5, nan], [0.5, nan, 0.5, nan]],
+                      [[1.0, nan, 1.0, nan], [0.5, nan, 0.5, nan]]])  # fmt: skip
+    back = np.array([[[nan, 0.5, nan, 0.5], [nan, 0.0, nan, 0.0]],
+                     [[nan, 0.1, nan, 0.1], [nan, 0.5, nan, 0.5]]])  # fmt: skip
+    cands = JointCandidates(np.array([0.0, 0.01]), {"front": np.array([0, 0.01]),
+                            "back": np.array([0, 0.01])}, {"front": front, "back": back},
+                            masks)  # fmt: skip
+    rows = np.arange(4)
+    assert choose_joint(cands, y, rows) == {"shift": 1, "front": 0, "back": 0}
+    # towards uniform density: a strong shift penalty keeps the prior shift
+    assert choose_joint(cands, y, rows, shift_penalty=1.0) == {"shift": 0, "front": 0, "back": 1}
+    # only the back rows: its own best
+    assert choose_joint(cands, y, np.array([1, 3])) == {"shift": 0, "front": 0, "back": 1}
+    p = choose_candidates({"o1": cands}, np.array(["o1"] * 4), y, rows)
+    assert p == {"o1": {"shift": 1, "front": 0, "back": 0}}
+    assert np.allclose(cands.predictions(p["o1"]), [1.0, 0.1, 1.0, 0.1])
+
+
+def test_joint_and_hybrid_fold_hygiene_nothing_is_fitted_on_the_test_fold(real_rows) -> None:
+    rows = real_rows[:120]
+    n = len(rows)
+    rng = np.random.default_rng(7)
+    y = np.array([int(r["success"]) for r in rows])
+    objects = np.array([str(r["object_id"]) for r in rows])
+    cands = {"o1": _joint(rng, n), "rest": rng.random((3, n))}
+    groups = np.where(objects == "o1", "o1", "rest")
+    for face, mask in cands["o1"].masks.items():  # o1 rows only
+        cands["o1"].faces[face][:, :, objects != "o1"] = np.nan
+        cands["o1"].masks[face][:] = mask & (objects == "o1")
+    X = logistic_features(rows)
+    splits = cv_splits(y, folds=3, repeats=1, seed=2)
+    for train, test in splits:
+        poisoned = y.copy()
+        poisoned[test] = 1 - poisoned[test]
+        ((_, p1, t1, c1),) = fold_predictions(cands, groups, y, [(train, test)], 0.02, 0.02)
+        ((_, p2, t2, c2),) = fold_predictions(cands, groups, poisoned, [(train, test)], 0.02,
+                                              0.02)  # fmt: skip
+        assert (c1, t1) == (c2, t2) and np.array_equal(p1, p2)
+        ((_, h1, u1),) = hybrid_fold_predictions(cands, groups, y, X, [(train, test)])
+        ((_, h2, u2),) = hybrid_fold_predictions(cands, groups, poisoned, X, [(train, test)])
+        assert u1 == u2 and np.array_equal(h1, h2)
+        # but the hybrid does learn from the training rows
+        flipped = y.copy()
+        flipped[train] = 1 - flipped[train]
+        ((_, h3, _),) = hybrid_fold_predictions(cands, groups, flipped, X, [(train, test)])
+        assert not np.allclose(h1, h3)

@@ -44,6 +44,7 @@ __all__ = [
     "FaceFit",
     "ProxyFit",
     "candidates_path",
+    "check_shifts",
     "fit_proxy",
     "fitted_candidates",
     "load_candidates",
@@ -99,6 +100,14 @@ def _candidate(
 def _base_model(base: str):
     """The base body of a proxy built on `base` (the plain body for a built-in id)."""
     return load_builtin(base, features=False) if is_builtin_id(base) else load_object(base)
+
+
+def check_shifts(base: str, shifts_m: Sequence[float]) -> None:
+    """InputError unless the body of `base` can carry every centre-of-mass shift (two
+    positive densities, `transfertwin.objects.axial_mass_split`)."""
+    body = _base_model(base)
+    for shift in sorted({float(v) for v in shifts_m} - {0.0}):
+        mass_split(body, ProxySpec(base, base, (), com_shift_m=shift))
 
 
 def _shift_grid(shifts_m: Sequence[float]) -> np.ndarray:
@@ -158,9 +167,8 @@ def fit_proxy(
     depths = np.unique(np.r_[0.0, np.asarray(depths_m, dtype=float)])
     shifts = _shift_grid(shifts_m)
     base = base or object_id
+    check_shifts(base, shifts)  # InputError now, not in a worker
     body = _base_model(base)
-    for shift in shifts[1:]:  # InputError now, not in a worker, if the body cannot carry it
-        mass_split(body, ProxySpec(object_id, base, (), com_shift_m=float(shift)))
     work_dir.mkdir(parents=True, exist_ok=True)
     faces = sorted({str(r["face"]) for r in mine})
     face_rows = {f: [r for r in mine if r["face"] == f] for f in faces}

@@ -1,6 +1,7 @@
 """Calibration of the virtual models against real experiments (Sec. 6.5)."""
 
 from transfertwin.study.calibration._evaluate import (
+    HYBRID_CS,
     Evaluation,
     JointCandidates,
     Scores,
@@ -12,6 +13,7 @@ from transfertwin.study.calibration._evaluate import (
     fold_predictions,
     hybrid_features,
     hybrid_fold_predictions,
+    hybrid_probabilities,
     in_sample,
     logistic_features,
     logistic_probabilities,
@@ -89,6 +91,7 @@ __all__ = [
     "FACTORS",
     "FALL_DEPTH_M",
     "GAP_ZONE_M",
+    "HYBRID_CS",
     "METRICS",
     "RUN_METRICS",
     "SIM_PARAMETER_SETS",
@@ -129,6 +132,7 @@ __all__ = [
     "higher_is_better",
     "hybrid_features",
     "hybrid_fold_predictions",
+    "hybrid_probabilities",
     "in_sample",
     "load_candidates",
     "logistic_features",

@@ -22,7 +22,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 from sklearn.linear_model import LogisticRegression
-from sklearn.model_selection import RepeatedStratifiedKFold
+from sklearn.model_selection import RepeatedStratifiedKFold, StratifiedKFold
 from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
 
@@ -31,6 +31,7 @@ from transfertwin.store import DOCKING_ERROR_COLUMNS
 from transfertwin.study.calibration._metrics import ConfusionMatrix
 
 __all__ = [
+    "HYBRID_CS",
     "Evaluation",
     "JointCandidates",
     "Scores",
@@ -42,6 +43,7 @@ __all__ = [
     "fold_predictions",
     "hybrid_features",
     "hybrid_fold_predictions",
+    "hybrid_probabilities",
     "in_sample",
     "logistic_features",
     "logistic_probabilities",
@@ -328,6 +330,31 @@ def hybrid_features(p_sim: np.ndarray, X: np.ndarray) -> np.ndarray:
     return np.column_stack([np.asarray(p_sim, dtype=float), X])
 
 
+#: L2 strengths C the hybrid chooses from (inner cross-validation on the training rows).
+HYBRID_CS = (0.03, 0.1, 0.3, 1.0)
+
+
+def hybrid_probabilities(Z: np.ndarray, y: np.ndarray, train: np.ndarray) -> np.ndarray:
+    """P(success) of every row from the hybrid's logistic regression on `train` rows, its
+    L2 strength C chosen from `HYBRID_CS` by the log-loss of a 3-fold stratified inner
+    cross-validation on those rows only (the hybrid has one more feature than the baseline
+    and overfits at C = 1)."""
+    y_train = y[train]
+    folds = min(3, int(np.bincount(y_train, minlength=2).min()))
+    best_c = 1.0
+    if folds >= 2:
+        inner = StratifiedKFold(n_splits=folds, shuffle=True, random_state=0)
+        losses = []
+        for c in HYBRID_CS:
+            loss = 0.0
+            for fit, val in inner.split(np.zeros(len(train)), y_train):
+                q = logistic_probabilities(Z[train], y_train, fit, C=c)[val]
+                loss += _probability_scores(q, y_train[val])[1] * len(val)
+            losses.append(loss)
+        best_c = HYBRID_CS[int(np.argmin(losses))]
+    return logistic_probabilities(Z, y, train, C=best_c)
+
+
 def hybrid_fold_predictions(
     candidates: Mapping[str, np.ndarray | JointCandidates],
     objects: np.ndarray,
@@ -342,15 +369,15 @@ def hybrid_fold_predictions(
     the candidate proxies chosen on the training rows) and the baseline's features `X`.
 
     Everything is fitted on the training rows only: the candidate choice, the regression
-    and the threshold. (The training rows' P_sim comes from candidates chosen on those same
-    rows, which makes it look a little better there than on the test rows; the held-out
-    score stays honest.)
+    with its regularisation (`hybrid_probabilities`) and the threshold. (The training rows'
+    P_sim comes from candidates chosen on those same rows, which makes it look a little
+    better there than on the test rows; the held-out score stays honest.)
     """
     out = []
     for train, test in splits:
         chosen = choose_candidates(candidates, objects, y, train, penalty, shift_penalty)
         Z = hybrid_features(_assemble(candidates, objects, chosen), X)
-        q = logistic_probabilities(Z, y, train)
+        q = hybrid_probabilities(Z, y, train)
         out.append((test, q[test], best_threshold(q[train], y[train])))
     return out
 
@@ -452,7 +479,7 @@ def evaluate_predictions(
             oof = {"twin": p_t, "twin_bits": b_t, "logistic": p_l, "hybrid": p_h}
     p_in, thr_in, chosen_in = in_sample(candidates, units, y, penalty, shift_penalty)
     q_in = logistic_probabilities(X, y, np.arange(len(y)))
-    h_in = logistic_probabilities(
+    h_in = hybrid_probabilities(
         hybrid_features(_assemble(candidates, units, chosen_in), X), y, np.arange(len(y))
     )
     base = np.full(len(y), y.mean())

@@ -200,6 +200,10 @@ def _check_object_dims(space, rows) -> None:
         if d.object_face not in present:
             oid, face = d.object_face
             raise InputError(f"--space: {d.name}: the real rows hold no {oid} on face {face}")
+    objects = {oid for oid, _ in present}
+    for d in space.shift_dims():
+        if d.shifted_object not in objects:
+            raise InputError(f"--space: {d.name}: the real rows hold no {d.shifted_object}")
 
 
 def cmd_tune(args: argparse.Namespace) -> int:

@@ -23,7 +23,7 @@ from transfertwin.study.calibration import (
     tune_tpe,
 )
 
-SPACE = "mu=0.3:0.8,gap_mm=8:16,object.o1.front_depth_mm=0:30"
+SPACE = "mu=0.3:0.8,gap_mm=8:16,object.o1.front_depth_mm=0:30,object.o1.com_shift_mm=-15:15"
 
 
 def _tune(out, *extra: str) -> int:
@@ -152,6 +152,8 @@ def test_best_trial_is_saved_as_a_profile_with_proxies_that_other_commands_accep
     assert read_proxy(proxy).protrusions[0].depth_m == pytest.approx(depth / 1000)
     back = [p.depth_m for p in builtin_features("o1") if p.face == "back"]  # kept: not tuned
     assert [p.depth_m for p in read_proxy(proxy).protrusions[1:]] == back
+    shift = best["params"]["object.o1.com_shift_mm"]
+    assert read_proxy(proxy).com_shift_m == pytest.approx(shift / 1000)
     assert len(load_object(str(proxy)).hulls) == len(load_builtin("o1", features=False).hulls) + (
         depth > 0) + sum(d > 0 for d in back)  # fmt: skip
     assert not (out / "trials").exists()

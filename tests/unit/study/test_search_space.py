@@ -52,6 +52,22 @@ def test_depth_penalty_weights_each_face_by_its_share_of_rows():
     assert space.depth_penalty(zero, rows) == 0.0
 
 
+def test_a_shift_dimension_moves_the_proxys_centre_of_mass_and_is_penalised():
+    space = parse_space("object.o18.com_shift_mm=-20:10,mu=0.3:0.8", SceneConfig())
+    dim = next(d for d in space.dims if d.name == "object.o18.com_shift_mm")
+    assert dim.shifted_object == "o18" and dim.object_face is None
+    assert space.object_ids() == ["o18"] and space.object_dims() == []
+    params = {"mu": 0.5, "object.o18.com_shift_mm": -10.0}
+    assert scene_with(SceneConfig(), params).mu == 0.5  # the shift is no scene setting
+    spec = trial_proxies(params, {"o18": "o18"})["o18"]
+    assert spec.com_shift_m == pytest.approx(-0.010)
+    # o18 keeps its shipped feature (back 25 mm) when only its mass is tuned
+    assert [(p.face, p.depth_m) for p in spec.protrusions] == [("front", 0.0), ("back", 0.025)]
+    rows = [{"object_id": "o18", "face": "front"}] * 3 + [{"object_id": "o1", "face": "back"}]
+    assert space.depth_penalty(params, rows) == pytest.approx(0.75 * 10.0 / 20.0)
+    assert space.depth_penalty({**params, "object.o18.com_shift_mm": 0.0}, rows) == 0.0
+
+
 @pytest.mark.parametrize(
     ("text", "needle"),
     [
@@ -75,6 +91,9 @@ def test_depth_penalty_weights_each_face_by_its_share_of_rows():
         ("gap_mm=5:10,gap_m=0.01:0.02", "twice"),
         ("object.o1.side_depth_mm=0:10", "front_depth_mm"),
         ("object.o1.front_depth_mm=0:200", "0..100"),
+        ("object.o1.com_shift_mm=-60:10", "-50..50"),
+        ("object.o1.com_shift_mm=1:10:log", "no log"),
+        ("object.o1.mass_mm=0:1", "com_shift_mm"),
         ("", "empty"),
     ],
 )

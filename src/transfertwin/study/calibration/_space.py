@@ -3,7 +3,7 @@
 A space is written as ``NAME=LO:HI[:log],...``, e.g.::
 
     mu=0.3:0.8,gap_mm=8:16,layout.pulley_radius_m=0.010:0.025,physics.solref[0]=0.002:0.02:log,
-    object.o1.front_depth_mm=0:30
+    object.o1.front_depth_mm=0:30,object.o1.com_shift_mm=-20:20
 
 Names:
 
@@ -15,6 +15,9 @@ Names:
   or 'back' of the real object ``<id>`` (a `transfertwin.objects.Protrusion`; 0 is the family
   prior, the base object without protrusion). All depths of one object form one proxy of its
   base object (the object map's reference, by default the built-in core of the same id).
+- ``object.<id>.com_shift_mm``: the shift (mm, -50..50) of that proxy's centre of mass along
+  the object's x axis (`transfertwin.objects.ProxySpec.com_shift_m`, a two-density body of
+  the same mass; 0 is the family prior, uniform density).
 
 ``:log`` samples log-uniformly (LO > 0). Everything is checked up front: an unknown name,
 ``LO >= HI``, a value the scene refuses at either end (integers: at every value) is an
@@ -31,7 +34,13 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 
 from transfertwin._errors import InputError
-from transfertwin.objects import Protrusion, ProxySpec, builtin_features, builtin_ids
+from transfertwin.objects import (
+    MAX_COM_SHIFT_M,
+    Protrusion,
+    ProxySpec,
+    builtin_features,
+    builtin_ids,
+)
 from transfertwin.sim import SceneConfig
 
 __all__ = [
@@ -45,6 +54,7 @@ __all__ = [
 
 _SECTIONS = ("physics", "layout", "placement")
 _OBJECT = re.compile(r"^object\.([A-Za-z0-9_\-]+)\.(front|back)_depth_mm$")
+_SHIFT = re.compile(r"^object\.([A-Za-z0-9_\-]+)\.com_shift_mm$")
 _INDEX = re.compile(r"^(.+)\[(\d+)\]$")
 _MAX_DEPTH_MM = 100.0
 
@@ -64,6 +74,12 @@ class Dimension:
         """(object id, face) of a proxy depth, None for a scene setting."""
         m = _OBJECT.match(self.name)
         return (m.group(1), m.group(2)) if m else None
+
+    @property
+    def shifted_object(self) -> str | None:
+        """The object id of a proxy's centre-of-mass shift, None otherwise."""
+        m = _SHIFT.match(self.name)
+        return m.group(1) if m else None
 
     def text(self) -> str:
         """``name=lo:hi[:log]`` (canonical: repr of the bounds)."""
@@ -92,9 +108,14 @@ class SearchSpace:
         """Proxy depth dimensions."""
         return [d for d in self.dims if d.object_face is not None]
 
+    def shift_dims(self) -> list[Dimension]:
+        """Proxy centre-of-mass shift dimensions."""
+        return [d for d in self.dims if d.shifted_object is not None]
+
     def object_ids(self) -> list[str]:
         """Real object ids with a tuned proxy, sorted."""
-        return sorted({d.object_face[0] for d in self.object_dims()})
+        ids = {d.object_face[0] for d in self.object_dims()}
+        return sorted(ids | {d.shifted_object for d in self.shift_dims()})
 
     def depth_penalty(
         self, params: Mapping[str, object], rows: Sequence[Mapping[str, object]]
@@ -102,13 +123,17 @@ class SearchSpace:
         """Regularisation towards the family prior (no protrusion): for every proxy depth,
         its depth as a fraction of its upper bound, weighted by the share of `rows` on that
         object and face, summed. Multiply by the penalty weight (the weight is then the
-        objective's cost of the deepest protrusion on every row)."""
+        objective's cost of the deepest protrusion on every row). A centre-of-mass shift
+        adds its size as a fraction of its largest bound, weighted by the object's share."""
         n = len(rows)
         total = 0.0
         for d in self.object_dims():
             oid, face = d.object_face
             share = sum(str(r["object_id"]) == oid and str(r["face"]) == face for r in rows) / n
             total += share * float(params[d.name]) / d.high
+        for d in self.shift_dims():
+            share = sum(str(r["object_id"]) == d.shifted_object for r in rows) / n
+            total += share * abs(float(params[d.name])) / max(abs(d.low), abs(d.high))
         return total
 
 
@@ -165,7 +190,7 @@ def scene_with(base: SceneConfig, params: Mapping[str, object]) -> SceneConfig:
     changes: dict[str, object] = {}
     elements: dict[str, dict[int, object]] = {}
     for key, value in params.items():
-        if _OBJECT.match(key):
+        if _OBJECT.match(key) or _SHIFT.match(key):
             continue
         m = _INDEX.match(key)
         if m:
@@ -230,10 +255,18 @@ def parse_space(text: str, base: SceneConfig) -> SearchSpace:
                 raise InputError(f"--space entry {entry!r}: depths lie in 0..100 mm")
             dim = Dimension(name, lo, hi, log)
             setting = name
+        elif _SHIFT.match(name):
+            limit = MAX_COM_SHIFT_M * 1000.0
+            if log or lo < -limit or hi > limit:
+                raise InputError(
+                    f"--space entry {entry!r}: shifts lie in -{limit:g}..{limit:g} mm (no log)"
+                )
+            dim = Dimension(name, lo, hi)
+            setting = name
         elif name.startswith("object."):
             raise InputError(
-                f"--space: unknown object parameter {name!r}; use object.<id>.front_depth_mm "
-                "or object.<id>.back_depth_mm"
+                f"--space: unknown object parameter {name!r}; use object.<id>.front_depth_mm, "
+                "object.<id>.back_depth_mm or object.<id>.com_shift_mm"
             )
         else:
             integer = _scene_kind(name, base) == "int"
@@ -264,12 +297,17 @@ def trial_proxies(
     """Real object id → the proxy described by the ``object.*`` depths in `params`: the
     object's reference in `object_map` (a built-in id, or a file, stored as an absolute
     path) with one protrusion per tuned face, faces in order front, back; a face that is not
-    tuned keeps a built-in core's shipped feature (`transfertwin.objects.builtin_features`)."""
+    tuned keeps a built-in core's shipped feature (`transfertwin.objects.builtin_features`);
+    ``object.<id>.com_shift_mm`` sets the proxy's centre-of-mass shift (default 0)."""
     depths: dict[str, dict[str, float]] = {}
+    shifts: dict[str, float] = {}
     for key, value in params.items():
         m = _OBJECT.match(key)
         if m:
             depths.setdefault(m.group(1), {})[m.group(2)] = float(value) / 1000.0
+        elif m := _SHIFT.match(key):
+            shifts[m.group(1)] = float(value) / 1000.0
+            depths.setdefault(m.group(1), {})
     proxies = {}
     known = set(builtin_ids())
     for oid, faces in sorted(depths.items()):
@@ -281,5 +319,6 @@ def trial_proxies(
             for face in ("front", "back")
             if face in faces or face in shipped
         )
-        proxies[oid] = ProxySpec(oid, base, prots, note="tuned proxy (calibrate tune), not a scan")
+        proxies[oid] = ProxySpec(oid, base, prots, note="tuned proxy (calibrate tune), not a scan",
+                                 com_shift_m=shifts.get(oid, 0.0))  # fmt: skip
     return proxies

@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from transfertwin._errors import InputError
-from transfertwin.objects._mass import AxialSplit, axial_mass_split
+from transfertwin.objects._mass import AxialSplit, MassProperties, axial_mass_split
 from transfertwin.objects._model import ObjectModel
 
 __all__ = [
@@ -111,6 +111,10 @@ class ProxySpec:
             pinion), as two densities split across x (`axial_mass_split`); 0 (the family
             prior) keeps the base's mass properties. A nonzero shift replaces the base's mass
             distribution (it starts from the base mesh at uniform density, same mass).
+        mass_kg, com_m: *Measured* mass properties (a scale and a balance: a real core's mass
+            is not spread uniformly over its shape). Set, they replace the mass and centre of
+            mass (F_O, m); the inertia is scaled with the mass. A measured centre of mass and a
+            calibrated shift exclude each other.
     """
 
     object_id: str
@@ -118,6 +122,8 @@ class ProxySpec:
     protrusions: tuple[Protrusion, ...]
     note: str = "calibrated proxy, not a scan"
     com_shift_m: float = 0.0
+    mass_kg: float | None = None
+    com_m: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
         shift = self.com_shift_m
@@ -126,12 +132,28 @@ class ProxySpec:
                 f"com_shift_m must be within ±{MAX_COM_SHIFT_M * 1000:g} mm, got {shift!r}"
             )
         object.__setattr__(self, "com_shift_m", float(shift))
+        if self.mass_kg is not None and not (0 < self.mass_kg < 1000):
+            raise InputError(f"proxy mass must be in (0, 1000) kg, got {self.mass_kg!r}")
+        if self.com_m is not None:
+            com = tuple(float(v) for v in self.com_m)
+            if len(com) != 3 or not all(abs(v) < 1.0 for v in com):
+                raise InputError(f"proxy com_m must be 3 coordinates within 1 m, got {com!r}")
+            if self.com_shift_m != 0:
+                raise InputError("a proxy has either a measured com_m or a com_shift_m, not both")
+            object.__setattr__(self, "com_m", com)
 
     def to_dict(self) -> dict[str, object]:
-        """JSON-ready description."""
-        return {"object_id": self.object_id, "base": self.base, "note": self.note,
-                "protrusions": [dataclasses.asdict(p) for p in self.protrusions],
-                "com_shift_m": self.com_shift_m}  # fmt: skip
+        """JSON-ready description (measured mass fields only when measured)."""
+        prots = [dataclasses.asdict(p) for p in self.protrusions]
+        out: dict[str, object] = {
+            "object_id": self.object_id, "base": self.base, "note": self.note, "protrusions": prots,
+            "com_shift_m": self.com_shift_m,
+        }  # fmt: skip
+        if self.mass_kg is not None:
+            out["mass_kg"] = self.mass_kg
+        if self.com_m is not None:
+            out["com_m"] = list(self.com_m)
+        return out
 
 
 def mass_split(base: ObjectModel, spec: ProxySpec) -> AxialSplit:
@@ -140,10 +162,15 @@ def mass_split(base: ObjectModel, spec: ProxySpec) -> AxialSplit:
 
 
 def proxy_model(base: ObjectModel, spec: ProxySpec) -> ObjectModel:
-    """`base` with one extra box hull per protrusion of positive depth and, for a nonzero
-    `com_shift_m`, the two-density mass properties of `mass_split`."""
+    """`base` with one extra box hull per protrusion of positive depth; for a nonzero
+    `com_shift_m`, the two-density mass properties of `mass_split`; and the measured mass
+    properties of `spec` where it has them."""
     extra = tuple(p.hull(base) for p in spec.protrusions if p.depth_m > 0)
     mass = base.mass if spec.com_shift_m == 0 else mass_split(base, spec).mass
+    if spec.mass_kg is not None or spec.com_m is not None:
+        kg = mass.mass_kg if spec.mass_kg is None else spec.mass_kg
+        com = mass.com_m if spec.com_m is None else np.asarray(spec.com_m, dtype=float)
+        mass = MassProperties(kg, com, np.asarray(mass.inertia_kg_m2) * (kg / mass.mass_kg))
     return dataclasses.replace(
         base, object_id=spec.object_id, hulls=tuple(base.hulls) + extra, mass=mass,
         source=f"proxy of {base.source}", spec=None,
@@ -166,9 +193,11 @@ def read_proxy(path: str | Path) -> ProxySpec:
     try:
         desc = json.loads(Path(path).read_text())
         prots = tuple(Protrusion(**p) for p in desc["protrusions"])
+        com = desc.get("com_m")
         return ProxySpec(str(desc["object_id"]), str(desc["base"]), prots,
                          str(desc.get("note", "")),
-                         float(desc.get("com_shift_m", 0.0)))  # fmt: skip
+                         float(desc.get("com_shift_m", 0.0)), mass_kg=desc.get("mass_kg"),
+                         com_m=None if com is None else tuple(com))  # fmt: skip
     except OSError as exc:
         raise InputError(f"{path}: cannot read: {exc.strerror}") from None
     except (ValueError, KeyError, TypeError) as exc:

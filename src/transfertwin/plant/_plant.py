@@ -18,6 +18,7 @@ from __future__ import annotations
 import hashlib
 import math
 import multiprocessing as mp
+import zlib
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
@@ -47,7 +48,7 @@ from transfertwin.sim import (
 )
 from transfertwin.study.experiment import ExperimentSpec, run_experiment
 
-__all__ = ["PLANT_COLUMNS", "EmulatedPlant", "PlantRequest"]
+__all__ = ["PLANT_COLUMNS", "EmulatedPlant", "MassReading", "PlantRequest"]
 
 #: Columns of a plant row: those of the real calibration table.
 PLANT_COLUMNS = (
@@ -62,12 +63,15 @@ _ATTEMPTS = 3
 
 @dataclass(frozen=True)
 class PlantRequest:
-    """One experiment asked of the plant: an object and a pre-transfer state."""
+    """One experiment asked of the plant: an object and a pre-transfer state, and optionally
+    the transfer unit (station) the transport module docks at (None: as the plant's
+    schedule has it, the stations in their logged shares)."""
 
     object_id: str
     face: str
     conveyor: str
     theta_deg: int
+    station: str | None = None
 
     def __post_init__(self) -> None:
         state_index(self.face, self.conveyor, self.theta_deg)  # an experiment state (Eq. 6.7)
@@ -97,18 +101,31 @@ class _PlantSystem(VirtualTransferSystem):
     height step and pitch are scene settings, see `_scene_config`)."""
 
     def __init__(self, obj: ObjectTruth, scene: SceneTruth, cfg: SceneConfig) -> None:
-        base = load_builtin(obj.object_id, features=False)
-        model = proxy_model(base, ProxySpec(obj.object_id, obj.object_id, obj.protrusions))
+        model = _object_model(obj)
         mass = model.mass
         com = np.asarray(mass.com_m) + np.asarray(obj.com_offset_m)
         inertia = np.asarray(mass.inertia_kg_m2) * obj.mass_scale
-        super().__init__(model.hulls, mass.mass_kg * obj.mass_scale, com, inertia, cfg)
+        super().__init__(model.hulls, mass.mass_kg * obj.mass_scale, com, inertia, cfg,
+                         feature_hulls=model.feature_hulls)  # fmt: skip
         self.tm = _SlippingHAL(self, "tm", scene.belt_speed_scale)
         self.tu = _SlippingHAL(self, "tu", scene.belt_speed_scale)
 
 
-def _scene_config(scene: SceneTruth) -> SceneConfig:
+def _object_model(obj: ObjectTruth):
+    base = load_builtin(obj.object_id, features=False)
+    return proxy_model(base, ProxySpec(obj.object_id, obj.object_id, obj.protrusions))
+
+
+def _scene_config(scene: SceneTruth, obj: ObjectTruth, refine: int = 0) -> SceneConfig:
+    """The plant's scene for one object. Its physics is trusted only where it is plausible:
+    the guard is on, and a run it marks 'unstable' is run again at half, then a quarter of
+    the timestep (`refine`)."""
+    physics = SceneConfig().physics
     return SceneConfig().with_overrides(**{
+        "physics.feature_solref": obj.feature_solref,
+        "physics.guard": True,
+        "physics.guard_retry_timestep_factor": None,
+        "physics.timestep_s": physics.timestep_s / 2**refine,
         "mu": scene.mu,
         "gap_m": scene.gap_m,
         "layout.tu_height_offset_m": scene.step_z_m,
@@ -116,6 +133,17 @@ def _scene_config(scene: SceneTruth) -> SceneConfig:
         "placement.sigma_xy_m": scene.sigma_xy_m,
         "placement.sigma_theta_deg": scene.sigma_theta_deg,
     })  # fmt: skip
+
+
+@dataclass(frozen=True)
+class MassReading:
+    """What weighing and balancing a plant object shows: its mass (a scale, 1 g resolution,
+    0.2 % error) and its centre of mass in F_O (three knife-edge balances, about 1 mm error
+    per axis). A measurement, not the hidden value: the twin's mass counter-measure."""
+
+    object_id: str
+    mass_kg: float
+    com_m: tuple[float, float, float]
 
 
 @dataclass(frozen=True)
@@ -132,30 +160,38 @@ class _Job:
     flip_u: float
 
 
-_SYSTEMS: dict[tuple[ObjectTruth, SceneTruth], _PlantSystem] = {}
+_SYSTEMS: dict[tuple[ObjectTruth, SceneTruth, int], _PlantSystem] = {}
+
+#: Timestep halvings tried when the plant's guard marks a run implausible.
+_REFINE = 2
 
 
-def _system(obj: ObjectTruth, scene: SceneTruth) -> _PlantSystem:
-    key = (obj, scene)
+def _system(obj: ObjectTruth, scene: SceneTruth, refine: int = 0) -> _PlantSystem:
+    key = (obj, scene, refine)
     if key not in _SYSTEMS:
         if len(_SYSTEMS) >= 4:
             _SYSTEMS.clear()
-        _SYSTEMS[key] = _PlantSystem(obj, scene, _scene_config(scene))
+        _SYSTEMS[key] = _PlantSystem(obj, scene, _scene_config(scene, obj, refine))
     return _SYSTEMS[key]
 
 
-def _run_job(job: _Job) -> dict[str, object]:
-    """One E^P: simulate in the hidden scene (placing again if needed), record, maybe flip."""
-    req, cfg = job.request, _scene_config(job.scene)
+def _run_job(job: _Job) -> tuple[dict[str, object], float]:
+    """One E^P: simulate in the hidden scene (at finer steps after an implausible event,
+    placing again if needed), record, maybe flip."""
+    req = job.request
     error = DockingError.from_mm_deg(*job.error_mm_deg)
-    system = _system(job.obj, job.scene)
-    success = 0
+    success, t_end = 0, math.nan
     for seed in job.seeds:
-        spec = ExperimentSpec(req.object_id, req.face, req.conveyor, req.theta_deg,
-                              docking_error=error, scene=cfg, seed=seed)  # fmt: skip
-        result = run_experiment(spec, system=system)
+        for refine in range(_REFINE + 1):
+            spec = ExperimentSpec(req.object_id, req.face, req.conveyor, req.theta_deg,
+                                  docking_error=error,
+                                  scene=_scene_config(job.scene, job.obj, refine),
+                                  seed=seed)  # fmt: skip
+            result = run_experiment(spec, system=_system(job.obj, job.scene, refine))
+            if result.status != "unstable":
+                break
         if result.status == "ok":
-            success = int(result.success or 0)
+            success, t_end = int(result.success or 0), float(result.t_end_s)
             break
     if job.flip_u < job.scene.flip_p:
         success = 1 - success
@@ -166,14 +202,15 @@ def _run_job(job: _Job) -> dict[str, object]:
         "object_id": req.object_id, "theta_deg": req.theta_deg, "face": req.face,
         "conveyor": req.conveyor, "success": success, "dock_err_x_mm": x, "dock_err_y_mm": y,
         "dock_err_theta_deg": t, "gap_area_cm2": round(gap, 2),
-    }  # fmt: skip
+    }, t_end  # fmt: skip
 
 
 class EmulatedPlant:
     """A transfer system with hidden ground truth, drawn from `seed`.
 
-    Only `seed`, `stations`, `experiments_run`, `fingerprint` and `run` are public; the
-    hidden parameters cannot be read through them.
+    Only `seed`, `stations`, `experiments_run`, `fingerprint`, `run` and `weigh` (a noisy
+    measurement, like a scale's) are public; the hidden parameters cannot be read through
+    them.
 
     Args:
         seed: Plant seed (non-negative integer): draws every hidden parameter.
@@ -217,6 +254,17 @@ class EmulatedPlant:
         parts += [asdict(draw_object(self.__seed, o)) for o in object_ids]
         return hashlib.sha256(repr(parts).encode()).hexdigest()
 
+    def weigh(self, object_id: str) -> MassReading:
+        """Weigh and balance plant object `object_id` (the same reading every time)."""
+        if object_id not in set(builtin_ids()):
+            raise InputError(f"the plant has no object {object_id} (it holds o1..o37)")
+        obj = draw_object(self.__seed, object_id)
+        mass = _object_model(obj).mass
+        rng = np.random.default_rng([PLANT_TAG, self.__seed, 5, zlib.crc32(object_id.encode())])
+        kg = mass.mass_kg * obj.mass_scale * (1 + rng.normal(0.0, 0.002))
+        com = np.asarray(mass.com_m) + np.asarray(obj.com_offset_m) + rng.normal(0, 0.001, 3)
+        return MassReading(object_id, round(float(kg), 3), tuple(round(float(v), 4) for v in com))  # type: ignore[arg-type]
+
     def _jobs(self, requests: Sequence[PlantRequest]) -> list[_Job]:
         known = set(builtin_ids())
         bad = sorted({r.object_id for r in requests} - known)
@@ -229,7 +277,13 @@ class EmulatedPlant:
             self.__next_id += 1
             ss = np.random.SeedSequence([PLANT_TAG, self.__seed, 4, eid])
             words = [int(w) for w in ss.generate_state(2 + _ATTEMPTS)]
-            raw, units = copula.sample_with_units(1, words[0])
+            if req.station is None:
+                raw, units = copula.sample_with_units(1, words[0])
+            elif req.station in dock.stations:
+                raw, units = copula.by_unit[req.station].sample_n(1, words[0]), (req.station,)
+            else:
+                raise InputError(f"the plant has no station {req.station!r} "
+                                 f"({', '.join(dock.stations)})")  # fmt: skip
             k = dock.stations.index(units[0])
             err = np.asarray(dock.shift[k]) + np.asarray(dock.scale[k]) * raw[0]
             err = np.clip(err, [-150.0, -150.0, -25.0], [150.0, 150.0, 25.0])
@@ -253,20 +307,42 @@ class EmulatedPlant:
         (station, docking error, placement, outcome noise) follow from the plant seed and
         its id, so the same sequence of calls gives the same rows.
         """
+        return [row for row, _ in self._run(requests, workers, on_progress)]
+
+    def operate(
+        self,
+        requests: Sequence[PlantRequest],
+        *,
+        workers: int = 1,
+        on_progress: Callable[[int, int], None] | None = None,
+    ) -> list[dict[str, object]]:
+        """Run requests as operations: `run`'s rows plus ``transfer_time_s``, the time the
+        transfer there and back took as the plant's clock shows it (NaN when the object
+        never reached a valid pre-transfer state). Same ids and draws as `run`."""
+        return [
+            {**row, "transfer_time_s": t} for row, t in self._run(requests, workers, on_progress)
+        ]
+
+    def _run(
+        self,
+        requests: Sequence[PlantRequest],
+        workers: int,
+        on_progress: Callable[[int, int], None] | None,
+    ) -> list[tuple[dict[str, object], float]]:
         if workers < 1:
             raise InputError(f"workers must be at least 1, got {workers}")
         jobs = self._jobs(list(requests))
         report = on_progress or (lambda done, total: None)
         report(0, len(jobs))
-        rows: list[dict[str, object]] = []
+        out: list[tuple[dict[str, object], float]] = []
         if workers == 1 or len(jobs) <= 1:
             for job in jobs:
-                rows.append(_run_job(job))
-                report(len(rows), len(jobs))
-            return rows
+                out.append(_run_job(job))
+                report(len(out), len(jobs))
+            return out
         ctx = mp.get_context("spawn")
         with ProcessPoolExecutor(min(workers, len(jobs)), mp_context=ctx) as pool:
-            for row in pool.map(_run_job, jobs):
-                rows.append(row)
-                report(len(rows), len(jobs))
-        return rows
+            for item in pool.map(_run_job, jobs):
+                out.append(item)
+                report(len(out), len(jobs))
+        return out

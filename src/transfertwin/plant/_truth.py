@@ -4,7 +4,8 @@ Everything here is private to `transfertwin.plant`: the twin sees a plant only t
 `EmulatedPlant.run` (requests in, outcome rows out). The priors are deliberately wider than
 the twin's: the built-in cores' shipped features are depths 0, 6, 24 and 26 mm under the
 face's centre; a plant object's feature may lie anywhere under the face, with any depth in
-0..32 mm, and its mass is not uniform.
+0..32 mm, its mass is not uniform, and its features are compliant (a contact time constant
+of 30-80 ms against the body's 20 ms: cable housings, clips and rubber yield under load).
 """
 
 from __future__ import annotations
@@ -27,12 +28,14 @@ PLANT_TAG = 0x504C4E54  # "PLNT"
 
 @dataclass(frozen=True)
 class ObjectTruth:
-    """One plant object: resting features, centre-of-mass offset (F_O, m), mass factor."""
+    """One plant object: resting features, centre-of-mass offset (F_O, m), mass factor, and
+    the compliance of its features (contact time constant s, damping ratio)."""
 
     object_id: str
     protrusions: tuple[Protrusion, ...]
     com_offset_m: tuple[float, float, float]
     mass_scale: float
+    feature_solref: tuple[float, float] = (0.02, 1.0)
 
 
 @dataclass(frozen=True)
@@ -85,7 +88,10 @@ def draw_object(seed: int, object_id: str) -> ObjectTruth:
         float(np.clip(rng.normal(0.0, 0.002), -0.005, 0.005)),
         float(np.clip(rng.normal(0.0, 0.002), -0.005, 0.005)),
     )
-    return ObjectTruth(object_id, tuple(prots), com, float(rng.uniform(0.9, 1.1)))
+    scale = float(rng.uniform(0.9, 1.1))
+    # Drawn last, so that the earlier draws of a plant do not depend on it.
+    solref = (round(float(rng.uniform(0.03, 0.08)), 4), round(float(rng.uniform(0.5, 1.0)), 3))
+    return ObjectTruth(object_id, tuple(prots), com, scale, solref)
 
 
 def draw_scene(seed: int) -> SceneTruth:

@@ -1,23 +1,49 @@
 """Rehearsal of the whole calibrate → predict → validate loop on an emulated plant (issue 12).
 
 `rehearse` drives an `transfertwin.plant.EmulatedPlant` (the physical side) and the twin
-(`transfertwin.study`): the twin's only input from the plant is the rows of its experiments.
+(`transfertwin.study`): the twin's inputs from the plant are the rows of its experiments and
+its mass readings (`EmulatedPlant.weigh`, the mass counter-measure). `run_operations`
+measures the twin's predictions in operation (Sec. 7.2).
 """
 
+from transfertwin.rehearsal._operations import (
+    HANDLING_S,
+    POLICIES,
+    RECOVERY_S,
+    best_station,
+    docking_record,
+    operation_summary,
+    run_operations,
+)
 from transfertwin.rehearsal._rehearse import (
+    COUNTER_MEASURES,
     REHEARSAL_KEYS,
+    TWIN_FEATURE_SOLREF,
     RehearsalConfig,
     calibration_design,
     holdout_split,
+    parse_ablations,
     parse_object_list,
     rehearse,
+    twin_scene,
 )
 
 __all__ = [
+    "COUNTER_MEASURES",
+    "HANDLING_S",
+    "POLICIES",
+    "RECOVERY_S",
     "REHEARSAL_KEYS",
+    "TWIN_FEATURE_SOLREF",
     "RehearsalConfig",
+    "best_station",
     "calibration_design",
+    "docking_record",
     "holdout_split",
+    "operation_summary",
+    "parse_ablations",
     "parse_object_list",
     "rehearse",
+    "run_operations",
+    "twin_scene",
 ]

@@ -27,7 +27,7 @@ import json
 import logging
 import math
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -35,9 +35,10 @@ import numpy as np
 
 from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
-from transfertwin.objects import PROXY_SUFFIX, builtin_ids, write_proxy
+from transfertwin.objects import PROXY_SUFFIX, ProxySpec, builtin_ids, write_proxy
 from transfertwin.ots import FACES, THETA_SINGLE, experiment_states, filter_theta_step
 from transfertwin.plant import PLANT_COLUMNS, EmulatedPlant, PlantRequest
+from transfertwin.rehearsal._operations import run_operations
 from transfertwin.sim import DockingError, SceneConfig
 from transfertwin.store import DOCKING_ERROR_COLUMNS
 from transfertwin.study.calibration import (
@@ -59,12 +60,16 @@ from transfertwin.study.fullstate import analyze
 from transfertwin.study.validation import compare
 
 __all__ = [
+    "COUNTER_MEASURES",
     "REHEARSAL_KEYS",
+    "TWIN_FEATURE_SOLREF",
     "RehearsalConfig",
     "calibration_design",
     "holdout_split",
+    "parse_ablations",
     "parse_object_list",
     "rehearse",
+    "twin_scene",
 ]
 
 log = logging.getLogger(__name__)
@@ -75,11 +80,50 @@ REHEARSAL_KEYS = (
     "plant_experiments", "virtual_experiments",
 )  # fmt: skip
 
+#: The twin's counter-measures against the study's three causes of its sim-to-real gap:
+#: measured mass (a scale and a balance, instead of uniform density), the implausible-event
+#: guard (launches, energy jumps, deep penetration, NaN: the run is marked 'unstable' and
+#: re-run once at half the timestep), compliant features (a proxy's protrusions yield).
+COUNTER_MEASURES = ("mass", "stability", "compliance")
+
+#: Contact time constant and damping ratio the twin gives a proxy's features when they are
+#: marked compliant: nominal values of a soft part (the middle of the emulated plant's prior,
+#: 30-80 ms and 0.5-1.0), not fitted.
+TWIN_FEATURE_SOLREF = (0.05, 0.75)
+
 #: Marginal families of the twin's docking model (fast; see `transfertwin.plant`).
 _FAMILIES = ("normal", "truncnorm", "kde")
 
 Stage = Callable[[str], None]
 Progress = Callable[[int, int], None]
+
+
+def parse_ablations(values: Sequence[str]) -> tuple[str, ...]:
+    """``['mass', 'stability,compliance']`` → ('mass', 'stability', 'compliance')."""
+    out: list[str] = []
+    for value in values:
+        for part in (p.strip().lower() for p in value.split(",")):
+            if not part:
+                continue
+            if part not in COUNTER_MEASURES:
+                known = ", ".join(COUNTER_MEASURES)
+                raise InputError(f"--ablate: unknown counter-measure {part!r} (one of {known})")
+            if part not in out:
+                out.append(part)
+    return tuple(out)
+
+
+def twin_scene(base: SceneConfig, measures: Iterable[str]) -> SceneConfig:
+    """The twin's scene with counter-measures on: 'stability' turns the implausible-event
+    guard on (re-run at half the timestep), 'compliance' makes features compliant
+    (`TWIN_FEATURE_SOLREF`). 'mass' changes the objects, not the scene."""
+    measures = set(measures)
+    changes: dict[str, object] = {}
+    if "stability" in measures:
+        changes["physics.guard"] = True
+    if "compliance" in measures:
+        changes["physics.feature_solref"] = TWIN_FEATURE_SOLREF
+    return base.with_overrides(**changes) if changes else base
 
 
 def parse_object_list(text: str) -> tuple[str, ...]:
@@ -113,6 +157,11 @@ class RehearsalConfig:
         tune_trials: TPE trials over μ and the gap (0: object calibration only).
         seed: Master seed of the twin's side (design, split, simulations).
         workers: Worker processes.
+        scene: The twin's starting scene (profile), before counter-measures.
+        ablate: Counter-measures (`COUNTER_MEASURES`) to switch off, one at a time, in
+            extra twin variants that reuse the plant's calibration rows.
+        operations: Orders per policy in the operational comparison (0: none), see
+            `run_operations`.
     """
 
     plant_seed: int
@@ -127,8 +176,13 @@ class RehearsalConfig:
     seed: int = 0
     workers: int = 1
     scene: SceneConfig = field(default_factory=SceneConfig)
+    ablate: tuple[str, ...] = ()
+    operations: int = 0
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "ablate", parse_ablations(self.ablate))
+        if self.operations < 0:
+            raise InputError("--operations must be >= 0")
         for name in ("plant_seed", "seed"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 0:
@@ -239,94 +293,109 @@ def _virtual_specs(
     return specs
 
 
-def rehearse(
-    config: RehearsalConfig,
-    out: Path,
-    *,
-    on_stage: Stage | None = None,
-    on_progress: Progress | None = None,
-) -> dict[str, object]:
-    """Run one rehearsal and write its outputs into `out` (created if needed).
+@dataclass
+class _Run:
+    """What one rehearsal shares between its twin variants."""
 
-    Writes ``rehearsal.json``, ``plant_calibration.csv``, ``plant_validation.csv``,
-    ``virtual_validation.csv``, ``fullstate.csv`` and ``objects/<id>.proxy.json``.
+    cfg: RehearsalConfig
+    plant: EmulatedPlant
+    plant_rows: list[dict[str, object]]
+    train: list[Mapping[str, object]]
+    test: list[Mapping[str, object]]
+    stage: Stage
+    progress: Progress
+    virtual: int = 0
+    plant_validation: int = 0
 
-    Returns:
-        The ``rehearsal.json`` document (keys `REHEARSAL_KEYS` and more).
-    """
-    stage = on_stage or (lambda name: None)
-    progress = on_progress or (lambda done, total: None)
-    cfg, t0 = config, time.perf_counter()
-    plant = EmulatedPlant(cfg.plant_seed)
-    out.mkdir(parents=True, exist_ok=True)
-    calib = {"runs": cfg.runs, "seed": cfg.seed, "workers": cfg.workers}
-    virtual = 0
+    @property
+    def calib(self) -> dict[str, int]:
+        return {"runs": self.cfg.runs, "seed": self.cfg.seed, "workers": self.cfg.workers}
 
-    stage(f"plant: {cfg.calibration_experiments} calibration experiments")
-    design = calibration_design(cfg.objects, cfg.calibration_experiments, cfg.seed)
-    plant_rows = plant.run(design, workers=cfg.workers, on_progress=progress)
-    train, test = holdout_split(plant_rows, cfg.holdout, cfg.seed)
-    y_test = [int(r["success"]) for r in test]
-
-    def replay(rows, scene, object_map=None):
-        nonlocal virtual
-        total, done = len(rows) * cfg.runs, [0]
+    def replay(self, rows, scene: SceneConfig, object_map=None) -> CalibrationResult:
+        total, done = len(rows) * self.cfg.runs, [0]
 
         def tick() -> None:
             done[0] += 1
-            progress(done[0], total)
+            self.progress(done[0], total)
 
-        virtual += total
-        return calibrate(rows, scene=scene, object_map=object_map, on_result=tick, **calib)
+        self.virtual += total
+        return calibrate(rows, scene=scene, object_map=object_map, on_result=tick, **self.calib)
 
-    stage("twin before calibration: replay of the held-out experiments")
-    before = _scores(replay(test, cfg.scene))
 
-    obj_dir = out / "objects"
+def _calibrate_objects(
+    run: _Run, measures: frozenset[str], scene: SceneConfig, out: Path
+) -> tuple[dict[str, str], dict[str, dict[str, object]]]:
+    """Object calibration of every object: (object map, what was fitted per object)."""
+    cfg, obj_dir = run.cfg, out / "objects"
     object_map: dict[str, str] = {}
     fits: dict[str, dict[str, object]] = {}
     for oid in cfg.objects:
-        if not any(r["object_id"] == oid for r in train):
-            object_map[oid] = oid
-            fits[oid] = {"calibrated": False, "reason": "no training rows"}
+        fit_info: dict[str, object] = {}
+        base, mass = None, None
+        if "mass" in measures:  # the counter-measure: weigh and balance the part
+            mass = run.plant.weigh(oid)
+            fit_info["measured_mass_kg"] = mass.mass_kg
+            fit_info["measured_com_mm"] = [round(v * 1000, 1) for v in mass.com_m]
+            spec = ProxySpec(oid, oid, (), note="measured mass, plain body",
+                             mass_kg=mass.mass_kg, com_m=mass.com_m)  # fmt: skip
+            base = str(write_proxy(spec, obj_dir / f"{oid}.mass{PROXY_SUFFIX}").resolve())
+        if not any(r["object_id"] == oid for r in run.train):
+            object_map[oid] = base or oid
+            fits[oid] = {"calibrated": False, "reason": "no training rows", **fit_info}
             continue
-        stage(f"object calibration of {oid}")
+        run.stage(f"object calibration of {oid}")
         fit = fit_proxy(
-            train, oid, depths_m=[d / 1000 for d in cfg.depths_mm],
-            work_dir=obj_dir / "candidates", scene=cfg.scene, on_progress=progress, **calib,
+            run.train, oid, depths_m=[d / 1000 for d in cfg.depths_mm], base=base,
+            work_dir=obj_dir / "candidates", scene=scene, on_progress=run.progress, **run.calib,
         )  # fmt: skip
-        virtual += sum(f.probabilities.size for f in fit.faces) * cfg.runs
-        path = write_proxy(fit.spec, obj_dir / f"{oid}{PROXY_SUFFIX}")
+        run.virtual += sum(f.probabilities.size for f in fit.faces) * cfg.runs
+        spec = ProxySpec(oid, oid, fit.spec.protrusions,
+                         mass_kg=mass.mass_kg if mass else None,
+                         com_m=mass.com_m if mass else None)  # fmt: skip
+        path = write_proxy(spec, obj_dir / f"{oid}{PROXY_SUFFIX}")
         object_map[oid] = str(path)
         fits[oid] = {
             "calibrated": True,
             "proxy": str(path.relative_to(out)),
             "depth_mm": {p.face: round(p.depth_m * 1000, 3) for p in fit.spec.protrusions},
+            **fit_info,
         }
+    return object_map, fits
 
-    scene, tuned = cfg.scene, None
+
+def _twin(run: _Run, measures: frozenset[str], out: Path) -> dict[str, object]:
+    """Calibrate, predict and validate one twin variant (`measures` switched on); writes its
+    rows and proxies into `out` and returns its part of ``rehearsal.json`` (and, under
+    private keys, its rows)."""
+    cfg = run.cfg
+    out.mkdir(parents=True, exist_ok=True)
+    virtual0 = run.virtual
+    scene = twin_scene(cfg.scene, measures)
+    object_map, fits = _calibrate_objects(run, measures, scene, out)
+
+    tuned = None
     if cfg.tune_trials:
-        stage(f"scene tuning: {cfg.tune_trials} TPE trials over mu and gap")
+        run.stage(f"scene tuning: {cfg.tune_trials} TPE trials over mu and gap")
         trials = tune_tpe(
-            train, {"mu": (0.3, 0.7), "gap_mm": (8.0, 18.0)}, base=cfg.scene,
-            n_trials=cfg.tune_trials, object_map=object_map, **calib,
+            run.train, {"mu": (0.3, 0.7), "gap_mm": (8.0, 18.0)}, base=scene,
+            n_trials=cfg.tune_trials, object_map=object_map, **run.calib,
         )  # fmt: skip
-        virtual += cfg.tune_trials * len(train) * cfg.runs
+        run.virtual += cfg.tune_trials * len(run.train) * cfg.runs
         best = best_trial(trials)
-        scene, tuned = scene_with(cfg.scene, best.params), {**best.params, "f05": best.score}
+        scene, tuned = scene_with(scene, best.params), {**best.params, "f05": best.score}
 
-    stage("calibrated twin: replay of the held-out experiments")
-    after = _scores(replay(test, scene, object_map))
+    run.stage("calibrated twin: replay of the held-out experiments")
+    after = _scores(run.replay(run.test, scene, object_map))
 
-    stage("full-state prediction")
-    docking = _docking_model(plant_rows)
+    run.stage("full-state prediction")
+    docking = _docking_model(run.plant_rows)
     grid = [(o, *s) for o in cfg.objects for s in _state_grid(cfg.theta_step)]
     specs = _virtual_specs(object_map, grid, cfg.runs, docking, scene, cfg.seed)
-    full_rows = _collect(run_rows(specs, cfg.workers), len(specs), progress)
-    virtual += len(specs)
+    full_rows = _collect(run_rows(specs, cfg.workers), len(specs), run.progress)
+    run.virtual += len(specs)
     analysis = analyze(full_rows)
 
-    stage(f"validation: {cfg.validation_runs} plant and virtual runs per best/worst state")
+    run.stage(f"validation: {cfg.validation_runs} plant and virtual runs per best/worst state")
     chosen: list[tuple[str, str, str, int]] = []
     picks: dict[str, dict[str, tuple[str, str, str, int]]] = {}
     for sel in analysis.selections:
@@ -337,14 +406,15 @@ def rehearse(
             if key not in chosen:
                 chosen.append(key)
     val_requests = [PlantRequest(*k) for k in chosen for _ in range(cfg.validation_runs)]
-    plant_val = plant.run(val_requests, workers=cfg.workers, on_progress=progress)
+    plant_val = run.plant.run(val_requests, workers=cfg.workers, on_progress=run.progress)
+    run.plant_validation += len(plant_val)
     vspecs = _virtual_specs(object_map, chosen, cfg.validation_runs, docking, scene, cfg.seed + 1)
-    virtual_val = _collect(run_rows(vspecs, cfg.workers), len(vspecs), progress)
-    virtual += len(vspecs)
+    virtual_val = _collect(run_rows(vspecs, cfg.workers), len(vspecs), run.progress)
+    run.virtual += len(vspecs)
     by_state = {c.key: c for c in compare(virtual_val, plant_val)}
 
     objects: dict[str, object] = {}
-    significant = {"best": [], "worst": []}
+    significant: dict[str, list[str]] = {"best": [], "worst": []}
     for oid in cfg.objects:
         entry: dict[str, object] = {"calibration": fits[oid]}
         for kind, key in picks.get(oid, {}).items():
@@ -359,43 +429,122 @@ def rehearse(
             }  # fmt: skip
             if c.significant:
                 significant[kind].append(oid)
-        n_obj = sum(r["object_id"] == oid for r in plant_rows)
-        k_obj = sum(int(r["success"]) for r in plant_rows if r["object_id"] == oid)
+        n_obj = sum(r["object_id"] == oid for r in run.plant_rows)
+        k_obj = sum(int(r["success"]) for r in run.plant_rows if r["object_id"] == oid)
         entry["plant_calibration_share"] = k_obj / n_obj if n_obj else math.nan
         objects[oid] = entry
 
-    doc: dict[str, object] = {
-        "f05_before": before["f05"],
+    twin_rows = full_rows + virtual_val
+    columns = list(PLANT_COLUMNS)
+    write_atomic(out / "plant_validation.csv", _csv_text(plant_val, columns))
+    vcols = ["object_id", "face", "conveyor", "theta_deg", "run", "seed", "status", "success",
+             *DOCKING_ERROR_COLUMNS, "message"]  # fmt: skip
+    write_atomic(out / "virtual_validation.csv", _csv_text(virtual_val, vcols))
+    write_atomic(out / "fullstate.csv", _csv_text(full_rows, vcols))
+    return {
+        "counter_measures": [m for m in COUNTER_MEASURES if m in measures],
         "f05_after": after["f05"],
         "significant_best": len(significant["best"]),
         "significant_worst": len(significant["worst"]),
         "significant_best_objects": significant["best"],
         "significant_worst_objects": significant["worst"],
-        "objects": objects,
-        "plant_experiments": len(plant_rows) + len(plant_val),
-        "virtual_experiments": virtual,
-        "scores_before": before,
         "scores_after": after,
+        "objects": objects,
+        "tuned_scene": tuned,
+        "virtual_unstable": sum(r["status"] == "unstable" for r in twin_rows),
+        "virtual_rerun": sum(str(r.get("message", "")).startswith("re-run") for r in twin_rows),
+        "variant_virtual_experiments": run.virtual - virtual0,
+        "_analysis": analysis,
+        "_object_map": object_map,
+        "_scene": scene,
+    }
+
+
+def rehearse(
+    config: RehearsalConfig,
+    out: Path,
+    *,
+    on_stage: Stage | None = None,
+    on_progress: Progress | None = None,
+) -> dict[str, object]:
+    """Run one rehearsal and write its outputs into `out` (created if needed).
+
+    Writes ``rehearsal.json``, ``plant_calibration.csv``, ``plant_validation.csv``,
+    ``virtual_validation.csv``, ``fullstate.csv`` and ``objects/<id>.proxy.json``; with
+    ``config.ablate`` one folder ``ablate-<measure>/`` per switched-off counter-measure
+    (the same files of that twin), and with ``config.operations`` ``operations.json``.
+
+    Returns:
+        The ``rehearsal.json`` document (keys `REHEARSAL_KEYS` and more).
+    """
+    stage = on_stage or (lambda name: None)
+    progress = on_progress or (lambda done, total: None)
+    cfg, t0 = config, time.perf_counter()
+    plant = EmulatedPlant(cfg.plant_seed)
+    out.mkdir(parents=True, exist_ok=True)
+
+    stage(f"plant: {cfg.calibration_experiments} calibration experiments")
+    design = calibration_design(cfg.objects, cfg.calibration_experiments, cfg.seed)
+    plant_rows = plant.run(design, workers=cfg.workers, on_progress=progress)
+    train, test = holdout_split(plant_rows, cfg.holdout, cfg.seed)
+    y_test = [int(r["success"]) for r in test]
+    run = _Run(cfg, plant, plant_rows, train, test, stage, progress)
+
+    stage("twin before calibration: replay of the held-out experiments")
+    before = _scores(run.replay(test, cfg.scene))
+
+    measures = frozenset(COUNTER_MEASURES)
+    main = _twin(run, measures, out)
+    ablations: dict[str, dict[str, object]] = {}
+    for m in cfg.ablate:
+        stage(f"ablation: twin without the {m} counter-measure")
+        var = _twin(run, measures - {m}, out / f"ablate-{m}")
+        ablations[m] = {
+            "dir": f"ablate-{m}",
+            **{k: var[k] for k in ("counter_measures", "f05_after", "significant_best",
+                                   "significant_worst", "significant_best_objects",
+                                   "significant_worst_objects", "scores_after",
+                                   "virtual_unstable", "virtual_rerun")},
+            "delta_f05_after": var["f05_after"] - main["f05_after"],
+            "delta_significant_best": var["significant_best"] - main["significant_best"],
+            "delta_significant_worst": var["significant_worst"] - main["significant_worst"],
+        }  # fmt: skip
+
+    operations = None
+    if cfg.operations:
+        stage(f"operations: {cfg.operations} orders with predictions and with random placement")
+        operations = run_operations(
+            plant, main["_analysis"], run.plant_rows, cfg.operations, seed=cfg.seed,
+            workers=cfg.workers, on_progress=progress,
+        )  # fmt: skip
+        write_atomic(out / "operations.json", json.dumps(operations, indent=2) + "\n")
+
+    doc: dict[str, object] = {
+        "f05_before": before["f05"],
+        **{k: v for k, v in main.items() if not k.startswith("_")},
+        "plant_experiments": len(plant_rows)
+        + run.plant_validation
+        + (operations["plant_experiments"] if operations else 0),
+        "virtual_experiments": run.virtual,
+        "scores_before": before,
         "f05_base_rate": _base_rate_f05(y_test),
         "held_out": len(test),
         "training": len(train),
-        "tuned_scene": tuned,
+        "ablations": ablations,
+        "operations": operations,
         "config": {k: v for k, v in asdict(cfg).items() if k != "scene"},
         "seconds": round(time.perf_counter() - t0, 1),
         "note": (
             "f05_* are mean per-run F0.5 of the twin's replay of held-out plant experiments "
             "(never used in calibration); significant_* count objects whose best/worst state "
             "differs between twin and plant (Newcombe hybrid score interval of p_V - p_P "
-            "excludes 0, alpha 0.05)."
+            "excludes 0, alpha 0.05). The twin runs with the counter-measures "
+            "'counter_measures'; 'ablations' repeats calibration, prediction and validation "
+            "with one of them switched off (delta_* = without - with)."
         ),
     }
-    columns = list(PLANT_COLUMNS)
-    write_atomic(out / "plant_calibration.csv", _csv_text(plant_rows, columns))
-    write_atomic(out / "plant_validation.csv", _csv_text(plant_val, columns))
-    vcols = ["object_id", "face", "conveyor", "theta_deg", "run", "seed", "status", "success",
-             *DOCKING_ERROR_COLUMNS]  # fmt: skip
-    write_atomic(out / "virtual_validation.csv", _csv_text(virtual_val, vcols))
-    write_atomic(out / "fullstate.csv", _csv_text(full_rows, vcols))
+    doc.pop("variant_virtual_experiments", None)
+    write_atomic(out / "plant_calibration.csv", _csv_text(plant_rows, list(PLANT_COLUMNS)))
     write_atomic(out / "rehearsal.json", json.dumps(doc, indent=2, default=_json) + "\n")
     return doc
 

@@ -67,6 +67,24 @@ class PhysicsConfig:
         solref: Contact stiffness/damping time constants (s, -) of object–belt contacts;
             MuJoCo raises a time constant below 2 timesteps to 2 timesteps.
         solimp: Contact impedance (d0, dwidth, width, midpoint, power).
+        feature_solref: Compliant features: contact time constant and damping ratio of an
+            object's feature hulls (a calibrated proxy's protrusions: cable housings, plastic
+            clips, rubber that yield under load) against the belts; the feature geoms then
+            carry priority 2, so theirs govern (friction stays `SceneConfig.feature_mu` or
+            `mu`). None: features are as rigid as the body (the belts' solref).
+        guard: Detect implausible events (a counter-measure against contact simulation that
+            launches objects): the object faster than `guard_speed_factor` x belt speed plus
+            what a free fall from its highest point since the reset explains; a rise in its
+            mechanical energy (kinetic + potential) above `guard_energy_j_per_kg` x mass
+            between two checks (every `VirtualTransferSystem.step` call, i.e. every camera
+            sample); a contact penetrating deeper than `guard_penetration_m`; a non-finite
+            state (always checked). Any of them raises `SimulationUnstable`.
+        guard_speed_factor, guard_energy_j_per_kg, guard_penetration_m: Guard limits. In
+            60 ordinary runs of random cores (fast profile) the largest values seen were
+            1.4 x belt speed, 0.09 J/kg and 8 mm (an edge on a pulley): the limits leave
+            a margin of 3-5x (docs/design-choices.md, rehearsal).
+        guard_retry_timestep_factor: With `guard` on, a run marked 'unstable' is run once
+            more with the timestep times this factor (None: no re-run).
 
     The contact settings are set on the belt geoms *and* the object's: the belts carry
     contact priority 1, and MuJoCo takes every contact parameter from the geom of higher
@@ -88,6 +106,12 @@ class PhysicsConfig:
     condim: int = 3
     solref: tuple[float, float] = (0.02, 1.0)
     solimp: tuple[float, float, float, float, float] = (0.9, 0.95, 0.001, 0.5, 2.0)
+    feature_solref: tuple[float, float] | None = None
+    guard: bool = False
+    guard_speed_factor: float = 5.0
+    guard_energy_j_per_kg: float = 0.5
+    guard_penetration_m: float = 0.015
+    guard_retry_timestep_factor: float | None = 0.5
 
     def __post_init__(self) -> None:
         _positive(
@@ -95,7 +119,19 @@ class PhysicsConfig:
             timestep_s=self.timestep_s,
             tolerance=self.tolerance,
             impratio=self.impratio,
+            guard_speed_factor=self.guard_speed_factor,
+            guard_energy_j_per_kg=self.guard_energy_j_per_kg,
+            guard_penetration_m=self.guard_penetration_m,
         )
+        if self.feature_solref is not None:
+            if len(self.feature_solref) != 2:
+                raise InputError("PhysicsConfig.feature_solref must be (timeconst, dampratio)")
+            _positive("PhysicsConfig", feature_solref=min(self.feature_solref))
+        f = self.guard_retry_timestep_factor
+        if f is not None and not (isinstance(f, (int, float)) and 0 < f < 1):
+            raise InputError(
+                f"PhysicsConfig.guard_retry_timestep_factor must be in (0, 1) or none, got {f!r}"
+            )
         if self.solver not in _SOLVERS:
             raise InputError(f"PhysicsConfig.solver must be one of {_SOLVERS}, got {self.solver!r}")
         if self.cone not in _CONES:

@@ -198,6 +198,7 @@ def add_object(
     physics: PhysicsConfig,
     feature_hulls: int = 0,
     feature_mu: float | None = None,
+    mu: float = 0.489,
 ) -> None:
     """Add the free-floating object body ``object`` built from convex hulls.
 
@@ -211,6 +212,9 @@ def add_object(
         feature_hulls: How many of the last hulls are features (a proxy's protrusions).
         feature_mu: Friction of the feature hulls; None leaves them to the belts' μ. Set,
             the feature geoms get priority 2 (above the belts' 1), so theirs governs.
+        mu: The belts' friction, which priority-2 features keep when `feature_mu` is None
+            and only `physics.feature_solref` (compliant features) raised their priority.
+            Priority-2 features take condim and solimp from `physics` as the belts do.
     """
     first_feature = len(hulls) - max(0, min(feature_hulls, len(hulls)))
     body = spec.worldbody.add_body(name=OBJECT_BODY, pos=[0, 0, 0.5])
@@ -236,9 +240,11 @@ def add_object(
         geom.contype = 1
         geom.conaffinity = 1
         geom.mass = 0.0
-        if feature_mu is not None and k >= first_feature:
+        if k >= first_feature and (feature_mu is not None or physics.feature_solref):
             geom.priority = 2
-            geom.friction = [feature_mu, 0.005, 0.0001]
+            geom.friction = [feature_mu if feature_mu is not None else mu, 0.005, 0.0001]
+            if physics.feature_solref is not None:  # a compliant part
+                geom.solref = np.asarray(physics.feature_solref, dtype=float)
 
 
 def build_spec(
@@ -270,5 +276,5 @@ def build_spec(
     add_unit(spec, "tm", cfg.layout, cfg.mu, cfg.physics)
     add_unit(spec, "tu", cfg.layout, cfg.mu, cfg.physics)
     add_object(spec, hulls, mass_kg, com_m, inertia_kg_m2, cfg.physics,
-               feature_hulls=feature_hulls, feature_mu=cfg.feature_mu)  # fmt: skip
+               feature_hulls=feature_hulls, feature_mu=cfg.feature_mu, mu=cfg.mu)  # fmt: skip
     return spec

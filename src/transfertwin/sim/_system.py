@@ -58,7 +58,9 @@ def tu_quat(yaw_rad: float, pitch_rad: float = 0.0, roll_rad: float = 0.0) -> np
 
 
 class SimulationUnstable(RuntimeError):  # noqa: N818 - names a state, not an error kind
-    """The physics diverged (non-finite state or solver warnings)."""
+    """The physics diverged (non-finite state or solver warnings), or, with the scene's
+    `PhysicsConfig.guard` on, did something implausible (launch, energy jump, deep
+    penetration)."""
 
 
 def object_quat(face: str, theta_rad: float) -> np.ndarray:
@@ -200,6 +202,18 @@ class VirtualTransferSystem:
         self.engine_seconds = 0.0
         # Called after every clock wait: lets a live CPS publish sensor values (barriers).
         self.step_listeners: list[Callable[[], None]] = []
+        # Implausible-event guard (PhysicsConfig.guard): highest COM height and mechanical
+        # energy at the last check, cleared whenever the object is placed or the TU moves.
+        self._guard = bool(cfg.physics.guard)
+        self._vel6 = np.zeros(6)
+        self._inertia = self.model.body_inertia[self._body].copy()
+        self._mass = float(self.model.body_mass[self._body])
+        self._g = float(-self.model.opt.gravity[2])
+        self._guard_reset()
+
+    def _guard_reset(self) -> None:
+        self._z_top = -math.inf
+        self._energy: float | None = None
 
     # -- set-up ---------------------------------------------------------------------------
     def reset(self, docking_error: DockingError) -> None:
@@ -226,6 +240,7 @@ class VirtualTransferSystem:
             yaw, math.radians(layout.tu_pitch_deg), math.radians(layout.tu_roll_deg)
         )
         mujoco.mj_forward(self.model, self.data)
+        self._guard_reset()
 
     def place(self, face: str, theta_rad: float, x_m: float, y_m: float) -> None:
         """Put the object with its AABB centre at (x, y), yaw θ on `face`, just above the belt."""
@@ -242,6 +257,7 @@ class VirtualTransferSystem:
         q[self._qadr + 3 : self._qadr + 7] = quat
         self.data.qvel[self._vadr : self._vadr + 6] = 0.0
         mujoco.mj_forward(self.model, self.data)
+        self._guard_reset()
 
     # -- stepping -------------------------------------------------------------------------
     def step(self, n: int) -> None:
@@ -255,6 +271,40 @@ class VirtualTransferSystem:
         # A non-finite coordinate makes the sum non-finite (cheaper than np.isfinite().all()).
         if bad or not math.isfinite(float(self.data.qpos[self._qadr : self._qadr + 7].sum())):
             raise SimulationUnstable(f"physics diverged at t={self.data.time:.3f} s")
+        if self._guard:
+            self._check_plausible()
+
+    def _check_plausible(self) -> None:
+        """Raise `SimulationUnstable` on an implausible event (`PhysicsConfig.guard`)."""
+        ph, d = self.cfg.physics, self.data
+        mujoco.mj_objectVelocity(
+            self.model, d, mujoco.mjtObj.mjOBJ_BODY, self._body, self._vel6, 1
+        )  # at the COM, in the principal axes
+        w, v = self._vel6[:3], self._vel6[3:]
+        speed = math.sqrt(float(v @ v))
+        z = float(d.xipos[self._body, 2])
+        self._z_top = max(self._z_top, z)
+        fall = math.sqrt(2 * self._g * (self._z_top - z))
+        limit = ph.guard_speed_factor * self.cfg.layout.belt_speed_m_s + fall
+        t = f"t={d.time:.3f} s"
+        if speed > limit:
+            raise SimulationUnstable(
+                f"implausible: object speed {speed:.2f} m/s above {limit:.2f} m/s at {t}"
+            )
+        energy = 0.5 * self._mass * speed**2 + 0.5 * float(self._inertia @ (w * w))
+        energy += self._mass * self._g * z
+        if self._energy is not None:
+            rise = energy - self._energy
+            if rise > ph.guard_energy_j_per_kg * self._mass:
+                raise SimulationUnstable(f"implausible: energy jump {rise:.3f} J at {t}")
+        self._energy = energy
+        if d.ncon:
+            dist = d.contact.dist[: d.ncon]
+            k = int(np.argmin(dist))
+            if -dist[k] > ph.guard_penetration_m:
+                raise SimulationUnstable(
+                    f"implausible: contact penetration {-dist[k] * 1000:.1f} mm at {t}"
+                )
 
     # -- readout --------------------------------------------------------------------------
     def object_pose(self) -> tuple[np.ndarray, np.ndarray]:

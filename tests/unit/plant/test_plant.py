@@ -47,7 +47,8 @@ def test_hidden_draws_depend_on_the_seed_and_differ_from_the_twin() -> None:
 def test_the_plant_exposes_no_hidden_parameter() -> None:
     plant = EmulatedPlant(3)
     public = {n for n in dir(plant) if not n.startswith("_")}
-    assert public == {"seed", "stations", "experiments_run", "fingerprint", "run"}
+    assert public == {"seed", "stations", "experiments_run", "fingerprint", "run", "operate",
+                      "weigh"}  # fmt: skip
     assert not hasattr(plant, "__dict__")  # slots only: no stray attributes
     assert repr(plant) == "EmulatedPlant(seed=3)"
     with pytest.raises(TypeError):
@@ -72,15 +73,49 @@ def test_no_twin_layer_can_import_the_plant() -> None:
     assert all(LAYERS.index(name) < LAYERS.index("plant") for name in twin)
 
 
-def test_the_rehearsal_uses_the_plant_only_through_run() -> None:
-    from transfertwin.rehearsal import _rehearse
+def test_the_rehearsal_uses_the_plant_only_through_run_operate_and_weigh() -> None:
+    from transfertwin.rehearsal import _operations, _rehearse
 
-    tree = ast.parse(inspect.getsource(_rehearse))
-    used = {
-        node.attr
-        for node in ast.walk(tree)
-        if isinstance(node, ast.Attribute)
-        and isinstance(node.value, ast.Name)
-        and node.value.id == "plant"
-    }
-    assert used == {"run"}
+    def named_plant(node: ast.AST) -> bool:
+        return (isinstance(node, ast.Name) and node.id == "plant") or (
+            isinstance(node, ast.Attribute) and node.attr == "plant"
+        )
+
+    used = set()
+    for module in (_rehearse, _operations):
+        tree = ast.parse(inspect.getsource(module))
+        used |= {
+            node.attr
+            for node in ast.walk(tree)
+            if isinstance(node, ast.Attribute) and named_plant(node.value)
+        }
+    assert used == {"run", "operate", "weigh"}
+
+
+def test_weighing_is_a_noisy_reproducible_measurement_not_the_hidden_value() -> None:
+    from transfertwin.plant._plant import _object_model
+
+    a, b = EmulatedPlant(4).weigh("o3"), EmulatedPlant(4).weigh("o3")
+    assert a == b  # the same reading for the same plant
+    obj = draw_object(4, "o3")
+    mass = _object_model(obj).mass
+    true_kg = mass.mass_kg * obj.mass_scale
+    true_com = [c + o for c, o in zip(mass.com_m, obj.com_offset_m, strict=True)]
+    assert a.mass_kg != true_kg and abs(a.mass_kg - true_kg) < 0.02 * true_kg
+    assert a.com_m != tuple(true_com)
+    assert max(abs(x - y) for x, y in zip(a.com_m, true_com, strict=True)) < 0.005
+    with pytest.raises(InputError, match="no object"):
+        EmulatedPlant(4).weigh("o99")
+
+
+def test_plant_features_are_compliant_and_a_named_station_is_used() -> None:
+    assert all(0.03 <= draw_object(s, "o3").feature_solref[0] <= 0.08 for s in range(5))
+    plant = EmulatedPlant(1)
+    station = plant.stations[-1]
+    req = PlantRequest("o3", "back", "both", 90, station)
+    rows = plant.operate([req, req])
+    assert [r["transfer_unit"] for r in rows] == [station, station]
+    assert all(r["transfer_time_s"] > 0 for r in rows)
+    assert set(rows[0]) == {*PLANT_COLUMNS, "transfer_time_s"}
+    with pytest.raises(InputError, match="no station"):
+        plant.run([PlantRequest("o3", "back", "both", 90, "TU_Z")])

@@ -7,6 +7,7 @@ a result with status 'unstable', any other crash one with status 'error'.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import json
 import logging
@@ -215,7 +216,10 @@ def run_experiment(
     """Run E^V (Eq. 6.18): settle, check P_pre, transfer TM → TU, and back if y1 = 1.
 
     Never raises for a simulation problem: the result's status says what happened
-    ('ok', 'invalid', 'unstable', 'error').
+    ('ok', 'invalid', 'unstable', 'error'). With the scene's implausible-event guard on
+    (`PhysicsConfig.guard`) and a retry factor set, a run marked 'unstable' is run once more
+    at the timestep times that factor (its result says so in `message`); a run in a given
+    `system` is not re-run (the caller owns that system).
 
     Args:
         spec: The experiment.
@@ -226,6 +230,35 @@ def run_experiment(
             `spec.scene` describe (an emulated plant's hidden object and scene); the
             result's object id is then `spec.object_ref`.
     """
+    own_system = system is None
+    if system is None:
+        system = system_for(spec.object_ref, spec.units, spec.scene)
+        object_id = _object(spec.object_ref, spec.units).object_id
+    else:
+        object_id = spec.object_ref
+    result = _run(spec, system, object_id, tu_hal)
+    physics = spec.scene.physics
+    factor = physics.guard_retry_timestep_factor
+    retry_ok = own_system and tu_hal is None  # a given system or HAL is the caller's
+    if result.status == "unstable" and physics.guard and factor is not None and retry_ok:
+        finer = physics.timestep_s * factor
+        scene = spec.scene.with_overrides(**{
+            "physics.timestep_s": finer, "physics.guard_retry_timestep_factor": None,
+        })  # fmt: skip
+        again = dataclasses.replace(spec, scene=scene)
+        retry = _run(again, system_for(spec.object_ref, spec.units, scene), object_id, tu_hal)
+        note = f"re-run at {finer * 1000:g} ms after: {result.message}"
+        result = dataclasses.replace(retry, message=f"{note}; {retry.message}".rstrip("; "))
+    return result
+
+
+def _run(
+    spec: ExperimentSpec,
+    system: VirtualTransferSystem,
+    object_id: str,
+    tu_hal: UnitHAL | None,
+) -> ExperimentResult:
+    """One E^V in `system` (see `run_experiment`)."""
     base = {
         "face": spec.face,
         "conveyor": spec.conveyor,
@@ -234,11 +267,6 @@ def run_experiment(
         "seed": spec.seed,
     }
     base.update(zip(DOCKING_ERROR_COLUMNS, spec.docking_error.as_mm_deg(), strict=True))
-    if system is None:
-        system = system_for(spec.object_ref, spec.units, spec.scene)
-        object_id = _object(spec.object_ref, spec.units).object_id
-    else:
-        object_id = spec.object_ref
     frames: list[Frame] = []
     phase, offset = ["there"], [0.0]
 

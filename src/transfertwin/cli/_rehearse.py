@@ -1,8 +1,11 @@
 """`transfertwin rehearse`: the whole calibrate → predict → validate loop on an emulated plant.
 
 Writes ``rehearsal.json``, ``report.html`` and the plant's and twin's rows into ``--out``.
-With several ``--calibration-experiments`` (``25,50,100``) each K gets ``--out/K<k>/`` and
-``--out/curve.json`` collects F0.5 and the significant differences against K.
+With several ``--calibration-experiments`` (``25,50,100``) each K gets ``--out/K<k>/``;
+``--out/rehearsal.json`` (and ``curve.json``) collect F0.5 and the significant differences
+against K, and ``--out/report.html`` plots them. ``--ablate mass|stability|compliance``
+(repeatable or a comma list) adds twin variants with one counter-measure switched off;
+``--operations N`` serves N orders with the twin's predictions and N with random placement.
 """
 
 from __future__ import annotations
@@ -42,8 +45,8 @@ def _depths(text: str) -> tuple[float, ...]:
 
 def cmd_rehearse(args: argparse.Namespace) -> int:
     """Rehearse the study's procedure against an emulated plant."""
-    from transfertwin.rehearsal import RehearsalConfig, parse_object_list, rehearse
-    from transfertwin.report import write_rehearsal_report
+    from transfertwin.rehearsal import RehearsalConfig, curve_document, parse_object_list, rehearse
+    from transfertwin.report import write_rehearsal_curve_report, write_rehearsal_report
     from transfertwin.sim import SceneConfig
     from transfertwin.study.experiment import load_profile
 
@@ -55,13 +58,13 @@ def cmd_rehearse(args: argparse.Namespace) -> int:
             calibration_experiments=k, runs=args.runs, validation_runs=args.validation_runs,
             theta_step=args.theta_step, holdout=args.holdout, depths_mm=_depths(args.depths_mm),
             tune_trials=args.tune_trials, seed=args.seed, workers=worker_count(args.workers),
-            scene=scene,
+            scene=scene, ablate=tuple(args.ablate or ()), operations=args.operations,
         )
         for k in ks
     ]  # fmt: skip
     out = out_dir(args.out)
     console = Console(stderr=True)
-    curve = []
+    docs = []
     for cfg in configs:
         where = out if len(configs) == 1 else out / f"K{cfg.calibration_experiments}"
         with progress_bar("rehearse", console) as update:
@@ -71,11 +74,7 @@ def cmd_rehearse(args: argparse.Namespace) -> int:
 
             doc = rehearse(cfg, where, on_stage=stage, on_progress=update)
         write_rehearsal_report(doc, where)
-        curve.append({
-            "calibration_experiments": cfg.calibration_experiments,
-            **{k: doc[k] for k in ("f05_before", "f05_after", "f05_base_rate",
-                                   "significant_best", "significant_worst")},
-        })  # fmt: skip
+        docs.append(doc)
         print(
             f"K={cfg.calibration_experiments}: F0.5 held-out before {doc['f05_before']:.3f}, "
             f"after {doc['f05_after']:.3f} (always-success {doc['f05_base_rate']:.3f}); "
@@ -84,8 +83,27 @@ def cmd_rehearse(args: argparse.Namespace) -> int:
             f"and {doc['virtual_experiments']} virtual experiments in {doc['seconds']} s "
             f"-> {where / 'rehearsal.json'}"
         )
+        for m, ab in doc["ablations"].items():
+            print(
+                f"  without {m}: F0.5 after {ab['f05_after']:.3f} "
+                f"({ab['delta_f05_after']:+.3f}), significant best {ab['significant_best']} "
+                f"({ab['delta_significant_best']:+d}), worst {ab['significant_worst']} "
+                f"({ab['delta_significant_worst']:+d})"
+            )
+        ops = doc["operations"]
+        if ops:
+            t, r = ops["twin"], ops["random"]
+            print(
+                f"  operations: success {t['k']}/{t['n']} with predictions vs {r['k']}/{r['n']} "
+                f"random (diff {ops['success_diff']:+.2f}, 95 % CI [{ops['success_diff_low']:.2f},"
+                f" {ops['success_diff_high']:.2f}]); {t['ops_per_hour']:.1f} vs "
+                f"{r['ops_per_hour']:.1f} completed operations/h"
+            )
     if len(configs) > 1:
-        write_atomic(out / "curve.json", json.dumps(curve, indent=2) + "\n")
+        curve = curve_document(docs)
+        write_atomic(out / "curve.json", json.dumps(curve["curve"], indent=2) + "\n")
+        write_atomic(out / "rehearsal.json", json.dumps(curve, indent=2) + "\n")
+        write_rehearsal_curve_report(curve, out)
     return 0
 
 
@@ -138,6 +156,20 @@ def register(sub: argparse._SubParsersAction) -> None:
         type=int,
         default=0,
         help="TPE trials over mu and gap after the object calibration (default 0)",
+    )
+    p.add_argument(
+        "--ablate",
+        action="append",
+        metavar="MEASURE",
+        help="switch one counter-measure off in an extra twin variant: mass, stability, "
+        "compliance (repeatable or a comma list)",
+    )
+    p.add_argument(
+        "--operations",
+        type=int,
+        default=0,
+        metavar="N",
+        help="serve N orders with the twin's predictions and N with random placement (default 0)",
     )
     p.add_argument("--profile", metavar="TOML", help="the twin's starting profile")
     p.add_argument("--seed", type=int, default=0, help="master seed of the twin's side")

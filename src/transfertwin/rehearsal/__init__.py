@@ -17,10 +17,12 @@ from transfertwin.rehearsal._operations import (
 )
 from transfertwin.rehearsal._rehearse import (
     COUNTER_MEASURES,
+    CURVE_KEYS,
     REHEARSAL_KEYS,
     TWIN_FEATURE_SOLREF,
     RehearsalConfig,
     calibration_design,
+    curve_document,
     holdout_split,
     parse_ablations,
     parse_object_list,
@@ -30,6 +32,7 @@ from transfertwin.rehearsal._rehearse import (
 
 __all__ = [
     "COUNTER_MEASURES",
+    "CURVE_KEYS",
     "HANDLING_S",
     "POLICIES",
     "RECOVERY_S",
@@ -38,6 +41,7 @@ __all__ = [
     "RehearsalConfig",
     "best_station",
     "calibration_design",
+    "curve_document",
     "docking_record",
     "holdout_split",
     "operation_summary",

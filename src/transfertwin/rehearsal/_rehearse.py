@@ -61,10 +61,12 @@ from transfertwin.study.validation import compare
 
 __all__ = [
     "COUNTER_MEASURES",
+    "CURVE_KEYS",
     "REHEARSAL_KEYS",
     "TWIN_FEATURE_SOLREF",
     "RehearsalConfig",
     "calibration_design",
+    "curve_document",
     "holdout_split",
     "parse_ablations",
     "parse_object_list",
@@ -547,6 +549,35 @@ def rehearse(
     write_atomic(out / "plant_calibration.csv", _csv_text(plant_rows, list(PLANT_COLUMNS)))
     write_atomic(out / "rehearsal.json", json.dumps(doc, indent=2, default=_json) + "\n")
     return doc
+
+
+#: Keys of one point of the experiments-needed curve.
+CURVE_KEYS = (
+    "calibration_experiments", "f05_before", "f05_after", "f05_base_rate", "significant_best",
+    "significant_worst", "held_out", "plant_experiments",
+)  # fmt: skip
+
+
+def curve_document(docs: Sequence[Mapping[str, object]]) -> dict[str, object]:
+    """The ``rehearsal.json`` of several K: one curve point per rehearsal (`CURVE_KEYS`),
+    ordered by K, and each K's folder."""
+    points = []
+    for doc in docs:
+        k = int(doc["config"]["calibration_experiments"])  # type: ignore[index]
+        points.append({"calibration_experiments": k,
+                       **{key: doc[key] for key in CURVE_KEYS[1:]}})  # fmt: skip
+    points.sort(key=lambda p: p["calibration_experiments"])
+    objects = docs[0]["config"]["objects"] if docs else ()  # type: ignore[index]
+    return {
+        "calibration_experiments": [p["calibration_experiments"] for p in points],
+        "curve": points,
+        "objects": list(objects),
+        "folders": {
+            str(p["calibration_experiments"]): f"K{p['calibration_experiments']}" for p in points
+        },
+        "note": "F0.5 on held-out plant experiments and objects with a significantly different "
+        "best/worst state, against the number K of plant calibration experiments.",
+    }
 
 
 def _json(value: object) -> object:

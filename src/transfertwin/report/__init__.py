@@ -47,7 +47,12 @@ from transfertwin.report._polar_full_state import (
     plot_polar_full_state,
     polar_full_state_data,
 )
-from transfertwin.report._rehearsal_html import REHEARSAL_REPORT_NAME, write_rehearsal_report
+from transfertwin.report._rehearsal_html import (
+    REHEARSAL_REPORT_NAME,
+    plot_rehearsal_curve,
+    write_rehearsal_curve_report,
+    write_rehearsal_report,
+)
 from transfertwin.report._sensitivity_plots import (
     MorrisBar,
     SensitivityPanel,
@@ -102,6 +107,7 @@ __all__ = [
     "plot_intervals",
     "plot_morris",
     "plot_polar_full_state",
+    "plot_rehearsal_curve",
     "plot_score_distribution",
     "plot_sensitivity",
     "plot_validation",
@@ -110,6 +116,7 @@ __all__ = [
     "sensitivity_plot_data",
     "validate_and_report",
     "validation_plot_data",
+    "write_rehearsal_curve_report",
     "write_rehearsal_report",
     "write_report",
 ]

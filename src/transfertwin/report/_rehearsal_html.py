@@ -2,13 +2,20 @@
 
 from __future__ import annotations
 
+import base64
 import html
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from transfertwin._atomic import write_atomic
+from transfertwin.report._figure import figure_png, new_figure
 
-__all__ = ["REHEARSAL_REPORT_NAME", "write_rehearsal_report"]
+__all__ = [
+    "REHEARSAL_REPORT_NAME",
+    "plot_rehearsal_curve",
+    "write_rehearsal_curve_report",
+    "write_rehearsal_report",
+]
 
 REHEARSAL_REPORT_NAME = "report.html"
 _STYLE = (
@@ -29,6 +36,121 @@ def _table(head: tuple[str, ...], rows: list[list[object]]) -> str:
     th = "".join(f"<th>{html.escape(h)}</th>" for h in head)
     body = "".join("<tr>" + "".join(f"<td>{_cell(c)}</td>" for c in r) + "</tr>" for r in rows)
     return f"<table><tr>{th}</tr>{body}</table>"
+
+
+def _ablation_section(doc: Mapping[str, object]) -> str:
+    ablations: Mapping[str, Mapping[str, object]] = doc.get("ablations") or {}  # type: ignore[assignment]
+    measures = ", ".join(doc.get("counter_measures", [])) or "none"  # type: ignore[arg-type]
+    out = f"<h2>Counter-measures</h2><p>The twin runs with: {html.escape(measures)}.</p>"
+    if not ablations:
+        return out
+    rows: list[list[object]] = [
+        ["all on", doc["f05_after"], "", doc["significant_best"], "", doc["significant_worst"],
+         "", doc.get("virtual_unstable", ""), doc.get("virtual_rerun", "")],
+    ]  # fmt: skip
+    for m, ab in ablations.items():
+        rows.append([
+            f"without {m}", ab["f05_after"], f"{ab['delta_f05_after']:+.3f}",
+            ab["significant_best"], f"{ab['delta_significant_best']:+d}",
+            ab["significant_worst"], f"{ab['delta_significant_worst']:+d}",
+            ab["virtual_unstable"], ab["virtual_rerun"],
+        ])  # fmt: skip
+    head = ("twin", "F0.5 after", "Δ", "significant best", "Δ", "significant worst", "Δ",
+            "unstable runs", "re-run runs")  # fmt: skip
+    return (
+        out + "<p>Each ablation repeats calibration, prediction and validation with one "
+        "counter-measure switched off (Δ = without − with).</p>" + _table(head, rows)
+    )
+
+
+def _operations_section(doc: Mapping[str, object]) -> str:
+    ops: Mapping[str, object] | None = doc.get("operations")  # type: ignore[assignment]
+    if not ops:
+        return ""
+    rows = []
+    for policy, label in (("twin", "twin's recommendation"), ("random", "random placement")):
+        p: Mapping[str, float] = ops[policy]  # type: ignore[assignment]
+        rows.append([
+            label, f"{p['k']}/{p['n']}",
+            f"{p['success_rate']:.2f} [{p['success_low']:.2f}, {p['success_high']:.2f}]",
+            f"{p['ops_per_hour']:.1f} [{p['ops_per_hour_low']:.1f}, {p['ops_per_hour_high']:.1f}]",
+        ])  # fmt: skip
+    return (
+        "<h2>Predictions in operation (Sec. 7.2)</h2>"
+        f"<p>{ops['orders']} orders per policy; the twin docks at "
+        f"{html.escape(str(ops['station']))}"
+        " (smallest mean gap area in the plant's log). Success-rate difference "
+        f"{ops['success_diff']:+.2f}, Newcombe 95 % CI [{ops['success_diff_low']:.2f}, "
+        f"{ops['success_diff_high']:.2f}]; operations/h ratio {ops['ops_per_hour_ratio']:.2f}. "
+        f"An operation takes {ops['handling_s']:g} s handling + the transfer time "
+        f"(+ {ops['recovery_s']:g} s recovery after a failure).</p>"
+        + _table(
+            (
+                "policy",
+                "successes",
+                "success rate [Wilson 95 %]",
+                "completed operations/h [bootstrap 95 %]",
+            ),
+            rows,
+        )
+    )
+
+
+def plot_rehearsal_curve(curve: Sequence[Mapping[str, object]]):
+    """F0.5 (before/after, always-success) and significant differences against K."""
+    fig = new_figure(9, 3.6)
+    ax1, ax2 = fig.subplots(1, 2)
+    ks = [int(p["calibration_experiments"]) for p in curve]  # type: ignore[call-overload]
+    for key, label, style in (("f05_after", "after calibration", "o-"),
+                              ("f05_before", "before calibration", "s--"),
+                              ("f05_base_rate", "always 'success'", ":")):  # fmt: skip
+        ax1.plot(ks, [p[key] for p in curve], style, label=label)
+    ax1.axhline(0.9, color="grey", lw=0.8)
+    ax1.set_xlabel("plant calibration experiments K")
+    ax1.set_ylabel("F0.5 (held-out plant experiments)")
+    ax1.set_ylim(0, 1.02)
+    ax1.legend(fontsize=8)
+    for key, label, style in (("significant_best", "best state", "o-"),
+                              ("significant_worst", "worst state", "s--")):  # fmt: skip
+        ax2.plot(ks, [p[key] for p in curve], style, label=label)
+    ax2.set_xlabel("plant calibration experiments K")
+    ax2.set_ylabel("objects with a significant difference")
+    ax2.yaxis.get_major_locator().set_params(integer=True)
+    ax2.legend(fontsize=8)
+    for ax in (ax1, ax2):
+        ax.set_xscale("log")
+        ax.set_xticks(ks, labels=[str(k) for k in ks])
+        ax.minorticks_off()
+    return fig
+
+
+def write_rehearsal_curve_report(doc: Mapping[str, object], out_dir: str | Path) -> Path:
+    """``report.html`` (with ``curve.png``) for the ``rehearsal.json`` of several K."""
+    curve: Sequence[Mapping[str, object]] = doc["curve"]  # type: ignore[assignment]
+    png = figure_png(plot_rehearsal_curve(curve))
+    out = Path(out_dir)
+    write_atomic(out / "curve.png", png)
+    n = len(doc.get("objects", []))  # type: ignore[arg-type]
+    rows = [[p["calibration_experiments"], p["f05_before"], p["f05_after"], p["f05_base_rate"],
+             f"{p['significant_best']}/{n}", f"{p['significant_worst']}/{n}",
+             f"<a href='K{p['calibration_experiments']}/{REHEARSAL_REPORT_NAME}'>K"
+             f"{p['calibration_experiments']}</a>"] for p in curve]  # fmt: skip
+    head = ("K", "F0.5 before", "F0.5 after", "always 'success'", "significant best",
+            "significant worst", "report")  # fmt: skip
+    table = _table(head, [r[:-1] for r in rows])
+    links = " ".join(str(r[-1]) for r in rows)
+    page = (
+        f"<!doctype html><html><head><meta charset='utf-8'><title>Rehearsal curve</title>"
+        f"<style>{_STYLE}</style></head><body><h1>How many plant experiments are enough?</h1>"
+        f"<p>{html.escape(str(doc.get('note', '')))}</p>"
+        f"<img alt='F0.5 and significant differences against K' "
+        f"src='data:image/png;base64,{base64.b64encode(png).decode()}'>"
+        + table
+        + f"<p>Per K: {links}</p></body></html>\n"
+    )
+    path = out / REHEARSAL_REPORT_NAME
+    write_atomic(path, page)
+    return path
 
 
 def write_rehearsal_report(doc: Mapping[str, object], out_dir: str | Path) -> Path:
@@ -83,6 +205,8 @@ def write_rehearsal_report(doc: Mapping[str, object], out_dir: str | Path) -> Pa
             ),
             states,
         )
+        + _ablation_section(doc)
+        + _operations_section(doc)
         + f"<h2>Configuration</h2><pre>{html.escape(str(doc.get('config', '')))}</pre>"
         "</body></html>\n"
     )

@@ -188,6 +188,8 @@ BAD: list[tuple[str, list[str]]] = [
     ("rehearse theta step not dividing 360", [*REH, "--theta-step", "7"]),
     ("rehearse holdout of 1", [*REH, "--holdout", "1"]),
     ("rehearse into /sys", [*REH[:-1], "/sys/reh"]),
+    ("rehearse unknown ablation", [*REH, "--ablate", "mass,gravity"]),
+    ("rehearse negative operations", [*REH, "--operations", "-1"]),
     ("web off loopback without token", ["web", "--host", "0.0.0.0"]),
     ("web short token", ["web", "--token", "abc"]),
     ("web port out of range", ["web", "--port", "70000"]),

@@ -67,3 +67,24 @@ def test_the_twin_sees_only_plant_rows(tiny) -> None:
             assert tuple(str(v) for v in r.values()) in logged, name
         for value in (*args, *kwargs.values()):
             assert not isinstance(value, EmulatedPlant), name
+
+
+@pytest.mark.slow
+def test_ablation_and_operations_on_a_tiny_rehearsal(tmp_path: Path) -> None:
+    from dataclasses import replace
+
+    cfg = replace(TINY, ablate=("mass", "compliance"), operations=2)
+    doc = rehearse(cfg, tmp_path)
+    assert doc["counter_measures"] == ["mass", "stability", "compliance"]
+    assert set(doc["ablations"]) == {"mass", "compliance"}
+    mass = doc["ablations"]["mass"]
+    assert mass["counter_measures"] == ["stability", "compliance"]
+    assert mass["delta_f05_after"] == pytest.approx(mass["f05_after"] - doc["f05_after"])
+    assert (tmp_path / "ablate-mass" / "objects" / "o3.proxy.json").is_file()
+    with_mass = json.loads((tmp_path / "objects" / "o3.proxy.json").read_text())
+    without = json.loads((tmp_path / "ablate-mass" / "objects" / "o3.proxy.json").read_text())
+    assert "mass_kg" in with_mass and "mass_kg" not in without
+    ops = doc["operations"]
+    assert ops["twin"]["n"] == ops["random"]["n"] == 2
+    assert doc["plant_experiments"] > 4 + ops["plant_experiments"]
+    assert json.loads((tmp_path / "operations.json").read_text())["orders"] == 2

@@ -1,0 +1,79 @@
+"""Operations with predictions (Sec. 7.2), ablation parsing and the experiments-needed curve,
+on synthetic rows (no simulation)."""
+
+from __future__ import annotations
+
+import pytest
+
+from transfertwin._errors import InputError
+from transfertwin.rehearsal import (
+    HANDLING_S,
+    RECOVERY_S,
+    best_station,
+    curve_document,
+    operation_summary,
+    parse_ablations,
+    twin_scene,
+)
+from transfertwin.report import write_rehearsal_curve_report
+from transfertwin.sim import SceneConfig
+
+
+def _ops(k: int, n: int, t: float = 10.0) -> list[dict[str, object]]:
+    return [{"success": int(i < k), "transfer_time_s": t} for i in range(n)]
+
+
+def test_operation_summary_intervals_and_rates() -> None:
+    s = operation_summary({"twin": _ops(18, 20), "random": _ops(8, 20)})
+    twin, rand = s["twin"], s["random"]
+    assert (twin["k"], twin["n"], rand["k"]) == (18, 20, 8)
+    assert twin["success_low"] < 0.9 < twin["success_high"]
+    assert round(twin["success_low"], 3) == 0.699  # Wilson 95 % of 18/20
+    assert s["success_above_random"] and s["success_diff_low"] > 0
+    hours = (20 * (HANDLING_S + 10.0) + 2 * RECOVERY_S) / 3600
+    assert twin["ops_per_hour"] == pytest.approx(18 / hours)
+    assert twin["ops_per_hour_low"] < twin["ops_per_hour"] < twin["ops_per_hour_high"]
+    assert s["ops_per_hour_ratio"] > 1
+    same = operation_summary({"twin": _ops(10, 20), "random": _ops(10, 20)})
+    assert not same["success_significant"] and same["success_diff"] == 0
+
+
+def test_a_never_valid_operation_costs_t_max() -> None:
+    s = operation_summary({"twin": _ops(0, 1, float("nan")), "random": _ops(1, 1)})
+    t_max = SceneConfig().t_max_s
+    assert s["twin"]["hours"] == pytest.approx((HANDLING_S + t_max + RECOVERY_S) / 3600)
+
+
+def test_the_station_with_the_smaller_gap_area_is_chosen() -> None:
+    logged = (("TU_A", 30.0), ("TU_A", 10.0), ("TU_B", 15.0), ("TU_B", 16.0))
+    rows = [{"transfer_unit": u, "gap_area_cm2": g, "success": 1} for u, g in logged]
+    assert best_station(rows) == "TU_B"
+    with pytest.raises(InputError):
+        best_station([])
+
+
+def test_ablations_parse_and_switch_the_scene() -> None:
+    assert parse_ablations(["mass", "stability, compliance", "mass"]) == (
+        "mass", "stability", "compliance",
+    )  # fmt: skip
+    with pytest.raises(InputError, match="unknown counter-measure"):
+        parse_ablations(["gravity"])
+    on = twin_scene(SceneConfig(), ("stability", "compliance"))
+    assert on.physics.guard and on.physics.feature_solref is not None
+    off = twin_scene(SceneConfig(), ("mass",))
+    assert off == SceneConfig()
+
+
+def test_the_curve_is_written_with_its_plot(tmp_path) -> None:
+    docs = [
+        {"config": {"calibration_experiments": k, "objects": ["o3"]}, "f05_before": 0.5,
+         "f05_after": 0.5 + k / 400, "f05_base_rate": 0.6, "significant_best": b,
+         "significant_worst": 0, "held_out": k // 3, "plant_experiments": k + 10}
+        for k, b in ((100, 0), (25, 1))
+    ]  # fmt: skip
+    doc = curve_document(docs)
+    assert doc["calibration_experiments"] == [25, 100]
+    assert [p["significant_best"] for p in doc["curve"]] == [1, 0]
+    page = write_rehearsal_curve_report(doc, tmp_path).read_text()
+    assert "data:image/png;base64," in page and "K25/report.html" in page
+    assert (tmp_path / "curve.png").read_bytes()[:4] == b"\x89PNG"

@@ -11,6 +11,7 @@ from transfertwin.perception._aabb import AABB, ground_truth_aabb
 from transfertwin.perception._camera import CameraIntrinsics, DepthCamera, View, depth_to_points
 from transfertwin.perception._detector import Detection, DetectorConfig, detect
 from transfertwin.perception._frames import ServoRig, camera_pose, t_ac, t_sa, t_ts
+from transfertwin.perception._loop import PerceptionConfig, open_sensor
 from transfertwin.perception._noise import DepthNoise, apply_depth_noise
 from transfertwin.perception._pair import PairScene, pair_scene
 from transfertwin.perception._plane import fit_plane, ransac_plane
@@ -37,6 +38,7 @@ __all__ = [
     "DetectorConfig",
     "Look",
     "PairScene",
+    "PerceptionConfig",
     "PerceptionSensor",
     "SeparationResult",
     "ServoRig",
@@ -55,6 +57,7 @@ __all__ = [
     "ground_truth_aabb",
     "look",
     "min_separation",
+    "open_sensor",
     "pair_scene",
     "plot_detection",
     "ransac_plane",

@@ -43,6 +43,7 @@ class PerceptionSensor:
         alpha_rad: Initial servo angle.
         detector, tracker: Parameters.
         seed: Seed of frame k's noise and RANSAC draws is `seed + k`.
+        owns_camera: `close` (or leaving the `with` block) closes the camera.
     """
 
     def __init__(
@@ -56,6 +57,7 @@ class PerceptionSensor:
         detector: DetectorConfig | None = None,
         tracker: TrackerConfig | None = None,
         seed: int = 0,
+        owns_camera: bool = False,
     ) -> None:
         self.system, self.camera, self.workspace = system, camera, workspace
         self.theta_rad = theta_rad
@@ -67,6 +69,19 @@ class PerceptionSensor:
         self.followed: int | None = None
         self.alphas: list[float] = []
         self._last_t: float | None = None
+        self._owns_camera = owns_camera
+
+    def __enter__(self) -> PerceptionSensor:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Free the camera's renderer if this sensor opened it (`open_sensor`)."""
+        if self._owns_camera:
+            self.camera.close()
+            self._owns_camera = False
 
     def _belt_velocity(self, centre: np.ndarray) -> np.ndarray:
         """(v_x, v_y) of the belt(s) under a centre: the unit by x, the belt by the sign of y

@@ -14,6 +14,7 @@ import logging
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -32,8 +33,12 @@ from transfertwin.ots import (
 from transfertwin.sim import DockingError, SceneConfig, SimulationUnstable, VirtualTransferSystem
 from transfertwin.store import DOCKING_ERROR_COLUMNS, RESULT_COLUMNS
 
+if TYPE_CHECKING:  # perception imports Open3D: loaded only when a run asks for it
+    from transfertwin.perception import PerceptionConfig
+
 __all__ = [
     "RESULT_COLUMNS",
+    "SENSORS",
     "ExperimentResult",
     "ExperimentSpec",
     "Frame",
@@ -43,6 +48,10 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
+
+#: Where the OTS controller's object state comes from: the simulator's exact state
+#: ('truth', `VirtualTransferSystem.observe`) or the TM's depth camera ('perception').
+SENSORS: tuple[str, ...] = ("truth", "perception")
 
 
 @dataclass(frozen=True)
@@ -212,6 +221,9 @@ def run_experiment(
     *,
     tu_hal: UnitHAL | None = None,
     system: VirtualTransferSystem | None = None,
+    sensor: str = "truth",
+    perception: PerceptionConfig | None = None,
+    perception_seed: int | None = None,
 ) -> ExperimentResult:
     """Run E^V (Eq. 6.18): settle, check P_pre, transfer TM → TU, and back if y1 = 1.
 
@@ -229,14 +241,26 @@ def run_experiment(
         system: A compiled system to run in instead of the one `spec.object_ref` and
             `spec.scene` describe (an emulated plant's hidden object and scene); the
             result's object id is then `spec.object_ref`.
+        sensor: 'truth' (default) or 'perception': the controller sees the object through
+            the TM's simulated depth camera (`transfertwin.perception.open_sensor`: scan,
+            aim at the detection nearest to the conveyor's position, then one rendered and
+            detected frame per sample with the camera following the object). Not part of
+            the spec, so plans, hashes and stored results are those of ground truth.
+        perception: Camera and pipeline of the perception sensor (default
+            `PerceptionConfig()`).
+        perception_seed: Seed of the camera's noise and RANSAC draws; None uses
+            `spec.seed`.
     """
+    if sensor not in SENSORS:
+        raise InputError(f"sensor must be one of {', '.join(SENSORS)}, got {sensor!r}")
     own_system = system is None
     if system is None:
         system = system_for(spec.object_ref, spec.units, spec.scene)
         object_id = _object(spec.object_ref, spec.units).object_id
     else:
         object_id = spec.object_ref
-    result = _run(spec, system, object_id, tu_hal)
+    seeing = _Seeing(sensor, perception, perception_seed)
+    result = _run(spec, system, object_id, tu_hal, seeing)
     physics = spec.scene.physics
     factor = physics.guard_retry_timestep_factor
     retry_ok = own_system and tu_hal is None  # a given system or HAL is the caller's
@@ -246,10 +270,20 @@ def run_experiment(
             "physics.timestep_s": finer, "physics.guard_retry_timestep_factor": None,
         })  # fmt: skip
         again = dataclasses.replace(spec, scene=scene)
-        retry = _run(again, system_for(spec.object_ref, spec.units, scene), object_id, tu_hal)
+        retry = _run(again, system_for(spec.object_ref, spec.units, scene), object_id, tu_hal,
+                     seeing)  # fmt: skip
         note = f"re-run at {finer * 1000:g} ms after: {result.message}"
         result = dataclasses.replace(retry, message=f"{note}; {retry.message}".rstrip("; "))
     return result
+
+
+@dataclass(frozen=True)
+class _Seeing:
+    """How the controller sees the object (`run_experiment`'s sensor arguments)."""
+
+    sensor: str
+    perception: PerceptionConfig | None
+    seed: int | None
 
 
 def _run(
@@ -257,6 +291,7 @@ def _run(
     system: VirtualTransferSystem,
     object_id: str,
     tu_hal: UnitHAL | None,
+    seeing: _Seeing,
 ) -> ExperimentResult:
     """One E^V in `system` (see `run_experiment`)."""
     base = {
@@ -276,9 +311,19 @@ def _run(
             frames.append(Frame(phase[0], t_s, _tuple(system.object_qpos())))
 
     tu = tu_hal if tu_hal is not None else system.tu
-    controller = scene_controller(spec.scene, system.tm, tu, system, system.clock, record)
+    camera = None
     try:
         _place_and_settle(system, spec)
+        seen: ObjectSensor = system
+        if seeing.sensor == "perception":
+            from transfertwin.perception import open_sensor
+
+            seen = camera = open_sensor(
+                system, expected_xy=POSITIONS[spec.conveyor],
+                theta_rad=math.radians(spec.theta_deg), config=seeing.perception,
+                seed=spec.seed if seeing.seed is None else seeing.seed,
+            )  # fmt: skip
+        controller = scene_controller(spec.scene, system.tm, tu, seen, system.clock, record)
         system.clock.start()
         s_pre = controller.state(spec.face, spec.conveyor)
         if not bool(experiment_pre_transfer_set(controller.thresholds).contains(s_pre)):
@@ -304,6 +349,9 @@ def _run(
             object_id, **base, y1=None, y2=None, success=None, t_end_s=math.nan,
             status="error", message=f"{type(exc).__name__}: {exc}", frames=tuple(frames),
         )  # fmt: skip
+    finally:
+        if camera is not None:
+            camera.close()
     y1 = there.y
     y2 = back.y if back is not None else None
     t2 = back.t_end_s if back is not None else math.nan

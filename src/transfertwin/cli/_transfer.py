@@ -54,7 +54,7 @@ def cmd_transfer(args: argparse.Namespace) -> int:
         units=args.units,
         record=image is not None,
     )
-    result = run_experiment(spec)
+    result = run_experiment(spec, sensor=args.sensor)
     if image is not None:
         system = system_for(spec.object_ref, spec.units, spec.scene)
         poses = [(f.phase, f.t_s, f.qpos) for f in result.frames]
@@ -189,6 +189,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--mu", type=float, help="dynamic friction (default: the profile's, 0.489)")
     p.add_argument("--gap-mm", type=float, help="nominal gap (default: the profile's, 11.88)")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument(
+        "--sensor", choices=("truth", "perception"), default="truth",
+        help="object state from the simulator (truth) or the TM's depth camera "
+        "(perception: scan, follow, one detected frame per sample; slower)",
+    )  # fmt: skip
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--image", help="write a strip of frames from t0 to t_end to this PNG")
     p.set_defaults(func=cmd_transfer)

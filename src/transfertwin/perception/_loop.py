@@ -17,7 +17,7 @@ from transfertwin.perception._camera import CameraIntrinsics, DepthCamera
 from transfertwin.perception._detector import DetectorConfig
 from transfertwin.perception._frames import ServoRig
 from transfertwin.perception._noise import DepthNoise
-from transfertwin.perception._scan import SCAN_ANGLES_DEG, workspace_scan
+from transfertwin.perception._scan import workspace_scan
 from transfertwin.perception._sensor import PerceptionSensor
 from transfertwin.perception._servo import servo_angle
 from transfertwin.perception._tracker import TrackerConfig
@@ -25,6 +25,7 @@ from transfertwin.perception._workspace import Workspace
 from transfertwin.sim import VirtualTransferSystem
 
 __all__ = ["PerceptionConfig", "open_sensor"]
+
 
 @dataclass(frozen=True)
 class PerceptionConfig:
@@ -45,6 +46,7 @@ class PerceptionConfig:
     rig: ServoRig = field(default_factory=ServoRig)
     detector: DetectorConfig = field(default_factory=DetectorConfig)
     tracker: TrackerConfig = field(default_factory=TrackerConfig)
+
 
 def open_sensor(
     system: VirtualTransferSystem,
@@ -82,4 +84,3 @@ def open_sensor(
         system, camera, workspace, theta_rad=theta_rad, alpha_rad=alpha,
         detector=cfg.detector, tracker=cfg.tracker, seed=seed + len(views), owns_camera=True,
     )  # fmt: skip
-

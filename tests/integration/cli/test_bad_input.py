@@ -162,6 +162,7 @@ BAD: list[tuple[str, list[str]]] = [
     ("tune lhs with storage", [*TUNE, "--method", "lhs", "--storage", "sqlite:///t.sqlite"]),
     ("tune profile not toml", [*TUNE, "--save-profile", "p.txt"]),
     ("transfer missing profile", [*T, "--profile", "missing.toml"]),
+    ("transfer unknown sensor", [*T, "--sensor", "sonar"]),
     ("sensitivity one level", [*SENS, "--levels", "1"]),
     ("sensitivity zero runs", [*SENS, "--runs", "0"]),
     ("sensitivity on ray", [*SENS, "--executor", "ray"]),

@@ -3,10 +3,10 @@
 from transfertwin.study.experiment._demo import real_docking_error, run_demo
 from transfertwin.study.experiment._experiment import (
     RESULT_COLUMNS,
+    SENSORS,
     ExperimentResult,
     ExperimentSpec,
     Frame,
-    SENSORS,
     run_experiment,
     scene_controller,
     system_for,
@@ -43,6 +43,7 @@ __all__ = [
     "PRESETS",
     "RESULT_COLUMNS",
     "SAMPLING_MODES",
+    "SENSORS",
     "Executor",
     "ExperimentResult",
     "ExperimentSpec",
@@ -60,7 +61,6 @@ __all__ = [
     "profile_toml",
     "real_docking_error",
     "run_demo",
-    "SENSORS",
     "run_experiment",
     "run_rows",
     "run_study",

@@ -16,6 +16,14 @@ from transfertwin.perception._noise import DepthNoise, apply_depth_noise
 from transfertwin.perception._pair import PairScene, pair_scene
 from transfertwin.perception._plane import fit_plane, ransac_plane
 from transfertwin.perception._plot import plot_detection
+from transfertwin.perception._possession import (
+    Possession,
+    PossessionMatch,
+    PossessionReport,
+    match_possessions,
+    size_distance,
+    unit_by_gap,
+)
 from transfertwin.perception._scan import SCAN_ANGLES_DEG, Look, look, workspace_scan
 from transfertwin.perception._sensor import PerceptionSensor
 from transfertwin.perception._separation import (
@@ -40,6 +48,9 @@ __all__ = [
     "PairScene",
     "PerceptionConfig",
     "PerceptionSensor",
+    "Possession",
+    "PossessionMatch",
+    "PossessionReport",
     "SeparationResult",
     "ServoRig",
     "Track",
@@ -56,6 +67,7 @@ __all__ = [
     "fit_plane",
     "ground_truth_aabb",
     "look",
+    "match_possessions",
     "min_separation",
     "open_sensor",
     "pair_scene",
@@ -63,9 +75,11 @@ __all__ = [
     "ransac_plane",
     "servo_angle",
     "servo_chain_2d",
+    "size_distance",
     "t_ac",
     "t_sa",
     "t_ts",
     "told_apart",
+    "unit_by_gap",
     "workspace_scan",
 ]

@@ -8,8 +8,10 @@ Steps, in the study's order:
 3. workspace crop (`Workspace`: own belts, plus the docked unit's);
 4. voxel-grid downsampling (Open3D);
 5. RANSAC plane removal: the belts (`ransac_plane`); repeated up to `max_planes` times, a
-   plane counts as a belt when its normal is within `plane_max_tilt_deg` of z and its
-   inliers span at least `plane_min_span_m` (an object's flat top is smaller than that);
+   plane counts as a belt when its normal is within `plane_max_tilt_deg` of z, its
+   inliers span at least `plane_min_span_m` (one object's flat top is smaller than that)
+   and lie no higher than `plane_max_z_m` on average (the belts are at z = 0 in F_T; the
+   flat tops of two objects in a row can span more than `plane_min_span_m`);
 6. statistical outlier removal on k nearest neighbours (Open3D);
 7. Euclidean cluster extraction (Open3D's DBSCAN);
 8. one AABB per cluster. Clusters whose footprints (x, y boxes) overlap are merged first:
@@ -48,6 +50,7 @@ class DetectorConfig:
     max_planes: int = 3
     plane_max_tilt_deg: float = 15.0
     plane_min_span_m: float = 0.3
+    plane_max_z_m: float = 0.02
     outlier_neighbours: int = 16
     outlier_std_ratio: float = 10.0
     cluster_eps_m: float = 0.03
@@ -90,7 +93,8 @@ def _remove_planes(
             break
         plane, inliers = ransac_plane(pts, cfg.plane_distance_m, cfg.plane_iterations, seed + k)
         span = np.ptp(pts[inliers, :2], axis=0).max() if inliers.any() else 0.0
-        if plane[2] < cos_tilt or span < cfg.plane_min_span_m:
+        high = float(pts[inliers, 2].mean()) > cfg.plane_max_z_m if inliers.any() else True
+        if plane[2] < cos_tilt or span < cfg.plane_min_span_m or high:
             break
         planes.append(plane)
         pts = pts[~inliers]

@@ -311,14 +311,14 @@ def _run(
             frames.append(Frame(phase[0], t_s, _tuple(system.object_qpos())))
 
     tu = tu_hal if tu_hal is not None else system.tu
-    camera = None
+    vision = None  # the perception sensor, closed at the end
     try:
         _place_and_settle(system, spec)
         seen: ObjectSensor = system
         if seeing.sensor == "perception":
             from transfertwin.perception import open_sensor
 
-            seen = camera = open_sensor(
+            seen = vision = open_sensor(
                 system, expected_xy=POSITIONS[spec.conveyor],
                 theta_rad=math.radians(spec.theta_deg), config=seeing.perception,
                 seed=spec.seed if seeing.seed is None else seeing.seed,
@@ -350,8 +350,8 @@ def _run(
             status="error", message=f"{type(exc).__name__}: {exc}", frames=tuple(frames),
         )  # fmt: skip
     finally:
-        if camera is not None:
-            camera.close()
+        if vision is not None:
+            vision.close()
     y1 = there.y
     y2 = back.y if back is not None else None
     t2 = back.t_end_s if back is not None else math.nan

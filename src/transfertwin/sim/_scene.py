@@ -34,6 +34,7 @@ __all__ = [
     "add_unit",
     "build_spec",
     "configure_physics",
+    "pulley_prism",
 ]
 
 UNITS = ("tm", "tu")
@@ -83,6 +84,7 @@ def add_belt(
     layout: LayoutConfig,
     mu: float,
     physics: PhysicsConfig | None = None,
+    spec: mujoco.MjSpec | None = None,
 ) -> None:
     """Add one belt (deck + two end pulleys) to `parent`, in the unit's frame.
 
@@ -91,7 +93,9 @@ def add_belt(
     priority 1 so that their friction `mu` governs every contact with the object — and,
     because MuJoCo takes *all* contact parameters from the higher-priority geom, also
     `physics`' condim, solref and solimp, which are therefore set on the belt geoms here
-    (None: MuJoCo's defaults).
+    (None: MuJoCo's defaults). The pulleys are prism meshes when `physics.pulley_facets`
+    is set (their meshes are added to `spec`, required then), else MuJoCo cylinders; either
+    way a pulley's axle runs along the unit's y axis and its surface turns with the belt.
     """
     physics = physics if physics is not None else PhysicsConfig()
     r = layout.pulley_radius_m
@@ -111,19 +115,45 @@ def add_belt(
     deck.priority = 1
     deck.friction = friction
     _contact_settings(deck, physics)
+    facets = physics.pulley_facets
+    if facets and spec is None:
+        raise ValueError("prism pulleys need the spec to add their meshes to")
     for end, x in (("start", x0), ("end", x1)):
-        pulley = parent.add_geom(
-            name=belt_geom(unit, belt, f"pulley_{end}"),
-            type=mujoco.mjtGeom.mjGEOM_CYLINDER,
-            size=[r, half_w, 0],
-            pos=[x, y, -r],
-            quat=_Z_TO_Y,
-            rgba=_PULLEY_RGBA,
-        )
+        name = belt_geom(unit, belt, f"pulley_{end}")
+        if facets:
+            spec.add_mesh(name=name, uservert=pulley_prism(r, half_w, facets).ravel())
+            shape = {"type": mujoco.mjtGeom.mjGEOM_MESH, "meshname": name}
+        else:
+            shape = {"type": mujoco.mjtGeom.mjGEOM_CYLINDER, "size": [r, half_w, 0]}
+        pulley = parent.add_geom(name=name, pos=[x, y, -r], quat=_Z_TO_Y, rgba=_PULLEY_RGBA,
+                                 **shape)  # fmt: skip
+        # Spin about the geom's z axis (the axle); `MujocoUnitHAL` re-aims it at the axle
+        # in the compiled geom frame, which MuJoCo turns to a mesh's principal axes.
         pulley.surfacevel = np.array([0, 0, 0, 0, 0, layout.belt_speed_m_s / r], dtype=float)
         pulley.priority = 1
         pulley.friction = friction
         _contact_settings(pulley, physics)
+
+
+def pulley_prism(radius_m: float, half_width_m: float, facets: int) -> np.ndarray:
+    """Vertices (2·facets, 3) of a prism pulley about the z axis, in float32.
+
+    The polygon circumscribes the circle of `radius_m` (every facet touches it) and a
+    facet is centred at each of the angles 0, 90, 180 and 270° when `facets` is a multiple
+    of 4: turned by `_Z_TO_Y`, the top facet lies flush with the deck's surface.
+
+    Why a prism: MuJoCo's native collider (nativeccd) finds a single contact between a
+    hull and a cylinder, by EPA, and for a hull's face resting on the cylinder's top line
+    that contact's normal depends on the hull's orientation (a box's 'front' got a
+    horizontal normal, a wall at the roller; its 'back' the vertical one). Between two
+    meshes it clips polygons and finds the face's corners wherever the hull points.
+    """
+    r_circ = radius_m / np.cos(np.pi / facets)
+    angles = np.pi / facets + 2 * np.pi * np.arange(facets) / facets
+    ring = np.stack([r_circ * np.cos(angles), r_circ * np.sin(angles)], axis=1)
+    return np.concatenate([
+        np.column_stack([ring, np.full(facets, z)]) for z in (-half_width_m, half_width_m)
+    ]).astype(np.float32)  # fmt: skip
 
 
 def _contact_settings(geom: mujoco.MjsGeom, physics: PhysicsConfig) -> None:
@@ -184,7 +214,7 @@ def add_unit(
         span = UnitGeometry(0.0, layout.tu_length_m)
         near, far = span.x_start + layout.barrier_inset_m, span.x_end - layout.barrier_inset_m
     for belt in BELTS:
-        add_belt(parent, unit, belt, span, layout, mu, physics)
+        add_belt(parent, unit, belt, span, layout, mu, physics, spec)
     add_light_barrier(parent, spec, unit, "near", near, layout)
     add_light_barrier(parent, spec, unit, "far", far, layout)
 

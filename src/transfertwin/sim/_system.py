@@ -101,6 +101,15 @@ class SimClock:
             listener()
 
 
+def _axle_in_geom_frame(model: mujoco.MjModel, geom: int) -> np.ndarray:
+    """The unit's y axis (a pulley's axle) in `geom`'s compiled frame, (3,)."""
+    if model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_CYLINDER:
+        return np.array([0.0, 0.0, 1.0])  # exactly the cylinder's axis
+    rot = np.empty(9)
+    mujoco.mju_quat2Mat(rot, model.geom_quat[geom])
+    return rot.reshape(3, 3)[1].copy()  # row 1 of R = R^T e_y
+
+
 class MujocoUnitHAL:
     """Virtual HAL of one unit ('tm' or 'tu'): two belt drives and two light barriers.
 
@@ -126,6 +135,13 @@ class MujocoUnitHAL:
             which: int(model.sensor(barrier_sensor(unit, which)).adr[0]) for which in BARRIERS
         }
         self._beam_m = 2 * system.cfg.layout.belt_width_m + system.cfg.layout.belt_separation_m
+        # A pulley spins about its axle (the unit's y axis), in its compiled geom frame: the
+        # geom's z for a cylinder, wherever MuJoCo's principal axes put it for a prism mesh.
+        self._axles = {
+            gid: _axle_in_geom_frame(model, gid)
+            for belt in BELTS
+            for gid in (self._geoms[belt]["pulley_start"], self._geoms[belt]["pulley_end"])
+        }
         self._speeds = dict.fromkeys(BELTS, 0.0)
 
     def set_belt_speed(self, belt: str, speed_m_s: float) -> None:
@@ -136,8 +152,10 @@ class MujocoUnitHAL:
         ids = self._geoms[belt]
         sv[ids["deck"]] = (speed_m_s, 0, 0, 0, 0, 0)
         omega = speed_m_s / self._r
-        sv[ids["pulley_start"]] = (0, 0, 0, 0, 0, omega)
-        sv[ids["pulley_end"]] = (0, 0, 0, 0, 0, omega)
+        for part in ("pulley_start", "pulley_end"):
+            gid = ids[part]
+            sv[gid, :3] = 0.0
+            sv[gid, 3:] = omega * self._axles[gid]
         self._speeds[belt] = float(speed_m_s)
 
     def belt_speed(self, belt: str) -> float:

@@ -32,6 +32,13 @@ def test_invalid_values_are_input_errors():
         SceneConfig(gap_m=0.6)
 
 
+@pytest.mark.parametrize("facets", [-1, 1, 7, 257, 12.0, True, "32"])
+def test_pulley_facets_are_zero_or_a_prism(facets):
+    with pytest.raises(InputError, match="pulley_facets"):
+        PhysicsConfig(pulley_facets=facets)
+    assert PhysicsConfig().pulley_facets == 32 and PhysicsConfig(pulley_facets=0).pulley_facets == 0
+
+
 def test_camera_sampling_is_whole_physics_steps():
     cfg = SceneConfig(camera_rate_hz=30.0).with_overrides(**{"physics.timestep_s": 0.002})
     assert cfg.steps_per_sample() == 17  # 1/30 s at 2 ms steps, rounded

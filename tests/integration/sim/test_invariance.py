@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 
+import mujoco
 import numpy as np
 import pytest
 import trimesh
@@ -157,3 +158,25 @@ def test_symmetric_box_outcomes_agree_for_front_back_and_mirrored_states(box):
         lo_b, hi_b = intervals[b].low, intervals[b].high
         # each estimate lies in the other's interval
         assert lo_b <= counts[a] / n <= hi_b and lo_a <= counts[b] / n <= hi_a, (a, b, counts)
+
+
+@pytest.mark.parametrize("facets", [0, 32])
+def test_pulleys_spin_about_their_axle_with_the_belt(box, facets):
+    """A prism pulley's compiled frame is its mesh's principal frame: the belt drive still
+    turns it about the unit's y axis, so that its top moves with the belt."""
+    scene = SceneConfig().with_overrides(**{"physics.pulley_facets": facets})
+    system = system_for(box, "mm", scene)
+    system.reset(DockingError.from_mm_deg(*ERR))
+    system.tm.set_belt_speed("left", 0.15)
+    system.tu.set_belt_speed("left", 0.15)
+    model, data = system.model, system.data
+    omega = 0.15 / scene.layout.pulley_radius_m
+    for name in ("tm_left_pulley_start", "tm_left_pulley_end", "tu_left_pulley_end"):
+        g = model.geom(name).id
+        if facets:
+            assert model.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH
+        xmat = data.geom_xmat[g].reshape(3, 3)
+        spin_world = xmat @ model.geom_surfacevel[g, 3:]
+        unit_y = data.xmat[model.geom_bodyid[g]].reshape(3, 3)[:, 1]
+        np.testing.assert_allclose(spin_world, omega * unit_y, atol=1e-9)
+        np.testing.assert_allclose(model.geom_surfacevel[g, :3], 0.0)

@@ -62,10 +62,11 @@ class PhysicsConfig:
         multiccd: Multiple contact points per convex pair (MuJoCo 4's default: on). Off
             makes steps ~20 % cheaper, but a single-hull object (a box) then rocks and
             sinks ~6 mm into the belt; kept on (SPEED.md).
-        pulley_facets: The end pulleys' collider: N >= 8 makes each an N-sided prism mesh
-            circumscribing the pulley radius, with a facet on top flush with the deck (the
-            default, 32: at most 0.12 mm outside the 25 mm circle); 0 uses MuJoCo's cylinder
-            primitive, whose contacts with an object's hull depend on the hull's orientation
+        pulley_facets: The end pulleys' collider: 0 (default) uses MuJoCo's cylinder
+            primitive, whose contacts with an object's hull depend on the hull's orientation;
+            N >= 8 makes each an N-sided prism mesh circumscribing the pulley radius, with a
+            facet on top flush with the deck (32: at most 0.12 mm outside the 25 mm circle),
+            which removes that dependence but lowered the twin's fidelity to the real data
             (docs/design-choices.md, "Contact asymmetry").
         condim: Contact dimensionality of object–belt contacts (3: sliding friction; 4
             adds torsional, 6 adds rolling).
@@ -108,7 +109,7 @@ class PhysicsConfig:
     impratio: float = 1.0
     noslip_iterations: int = 0
     multiccd: bool = True
-    pulley_facets: int = 32
+    pulley_facets: int = 0
     condim: int = 3
     solref: tuple[float, float] = (0.02, 1.0)
     solimp: tuple[float, float, float, float, float] = (0.9, 0.95, 0.001, 0.5, 2.0)

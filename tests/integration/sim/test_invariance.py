@@ -10,8 +10,10 @@ native collider between a hull and a *cylinder* pulley: it returns one contact, 
 EPA, and for the box's bottom face resting on the pulley's top line that contact's normal
 depended on the mesh's orientation ('front' got a horizontal normal, a wall at the roller,
 and stalled; 'back' the vertical one and crossed). Pulleys are therefore prism meshes
-(`physics.pulley_facets`, default 32): mesh against mesh, MuJoCo clips polygons and finds
-the same contacts whichever way the hull points.
+(`physics.pulley_facets` = 32): mesh against mesh, MuJoCo clips polygons and finds the
+same contacts whichever way the hull points. The default stays the cylinder (0) because
+the prism lowered the twin's fidelity to the real data (docs); the invariance is tested on
+the prism scene and kept as a strict xfail on the cylinder one.
 """
 
 from __future__ import annotations
@@ -29,6 +31,8 @@ from transfertwin.study.experiment import ExperimentSpec, run_experiment, system
 from transfertwin.study.fullstate import clopper_pearson
 
 ERR = (-8.82, 9.66, 1.34)  # the docking error of the report (mm, mm, deg)
+#: The scene with prism pulleys (the fix; the default keeps MuJoCo's cylinders for now).
+PRISM = SceneConfig().with_overrides(**{"physics.pulley_facets": 32})
 
 
 @pytest.fixture(scope="module")
@@ -119,7 +123,7 @@ def test_symmetric_box_front_back_and_mirrored_runs_agree(box):
     mirrored = (ERR[0], -ERR[1], -ERR[2])
     for seed in (0, 1):
         rows = [
-            _row(box, face, conveyor, err, seed)
+            _row(box, face, conveyor, err, seed, PRISM)
             for face in ("front", "back")
             for conveyor, err in (("left", ERR), ("right", mirrored))
         ]
@@ -133,19 +137,31 @@ def test_symmetric_box_front_back_and_mirrored_runs_agree(box):
                 assert a[key] == b[key], (seed, key)
 
 
-def _successes(box, face, conveyor, err, n):
-    return sum(_row(box, face, conveyor, err, seed)["success"] == 1 for seed in range(n))
+def _successes(box, face, conveyor, err, n, scene):
+    return sum(_row(box, face, conveyor, err, seed, scene)["success"] == 1 for seed in range(n))
 
 
 @pytest.mark.slow
-def test_symmetric_box_outcomes_agree_for_front_back_and_mirrored_states(box):
+@pytest.mark.parametrize(
+    "scene",
+    [
+        pytest.param(PRISM, id="prism"),
+        pytest.param(
+            SceneConfig().with_overrides(**{"physics.pulley_facets": 0}),
+            id="cylinder",
+            marks=pytest.mark.xfail(strict=True, reason="cylinder pulleys: contact normals "
+                                    "depend on the hull's orientation (module docstring)"),
+        ),
+    ],
+)  # fmt: skip
+def test_symmetric_box_outcomes_agree_for_front_back_and_mirrored_states(box, scene):
     n = 8
     mirrored = (ERR[0], -ERR[1], -ERR[2])
     counts = {
-        ("front", "left"): _successes(box, "front", "left", ERR, n),
-        ("back", "left"): _successes(box, "back", "left", ERR, n),
-        ("front", "right"): _successes(box, "front", "right", mirrored, n),
-        ("back", "right"): _successes(box, "back", "right", mirrored, n),
+        ("front", "left"): _successes(box, "front", "left", ERR, n, scene),
+        ("back", "left"): _successes(box, "back", "left", ERR, n, scene),
+        ("front", "right"): _successes(box, "front", "right", mirrored, n, scene),
+        ("back", "right"): _successes(box, "back", "right", mirrored, n, scene),
     }
     intervals = {k: clopper_pearson(v, n) for k, v in counts.items()}
     for a, b in (

@@ -1,7 +1,7 @@
 """The cyber-physical runtime (Ch. 3, Sec. 5.2–5.3): assets, AAS virtual representations
 served over OPC UA, the knowledge graph and the logical assets."""
 
-from transfertwin.cps._runtime import Cps, CpsConfig
+from transfertwin.cps._runtime import DOCKING_MODES, Cps, CpsConfig
 from transfertwin.cps.aas import (
     TYPE_PROPERTIES,
     AssetDescriptor,
@@ -32,6 +32,7 @@ from transfertwin.cps.opcua import (
 )
 
 __all__ = [
+    "DOCKING_MODES",
     "TYPE_PROPERTIES",
     "AssetClient",
     "AssetDescriptor",

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from transfertwin._atomic import write_atomic
+from transfertwin._errors import InputError
 from transfertwin.cps.aas import (
     DEMO_PLACEMENT,
     AssetDescriptor,
@@ -28,7 +29,13 @@ from transfertwin.cps.aas import (
     demo_descriptors,
     externally_synced,
 )
-from transfertwin.cps.apps import AssetApplications, Environment, ObjectLedger, PoseGraph
+from transfertwin.cps.apps import (
+    AssetApplications,
+    Environment,
+    FloorRobot,
+    ObjectLedger,
+    PoseGraph,
+)
 from transfertwin.cps.kg import KnowledgeGraph
 from transfertwin.cps.opcua import (
     AssetServer,
@@ -44,7 +51,10 @@ from transfertwin.cps.opcua import (
 from transfertwin.sim import SceneConfig
 from transfertwin.study.docking import GaussianCopula, measured_docking_errors
 
-__all__ = ["Cps", "CpsConfig"]
+__all__ = ["DOCKING_MODES", "Cps", "CpsConfig"]
+
+#: Values of `CpsConfig.docking`.
+DOCKING_MODES = ("sampled", "navigated")
 
 log = logging.getLogger("transfertwin.cps")
 
@@ -62,6 +72,12 @@ class CpsConfig:
         gossip_period_s: Discovery gossip period of every asset.
         scene: Virtual system configuration.
         placement: Object id -> transfer unit it lies on when the CPS starts.
+        docking: How the transport module gets to a station and sees the belts
+            (docs/architecture.md, "Transport operation flow"): 'sampled' puts it at the
+            station with a docking error drawn from the generator fitted to the real errors
+            and forms the OTS from the simulation's true object box; 'navigated' plans and
+            drives on the shop floor, docks by laser (the error emerges) and forms the OTS
+            from its depth camera's workspace scan (about 1–2 s more per leg).
     """
 
     workdir: Path
@@ -72,6 +88,12 @@ class CpsConfig:
     gossip_period_s: float = 1.0
     scene: SceneConfig = field(default_factory=SceneConfig)
     placement: Mapping[str, str] = field(default_factory=lambda: dict(DEMO_PLACEMENT))
+    docking: str = "sampled"
+
+    def __post_init__(self) -> None:
+        if self.docking not in DOCKING_MODES:
+            raise InputError(f"CpsConfig.docking must be one of {', '.join(DOCKING_MODES)}, "
+                             f"got {self.docking!r}")  # fmt: skip
 
 
 @dataclass
@@ -101,6 +123,8 @@ class Cps(AssetApplications):
         self.ledger = ObjectLedger(config.placement, units)
         self.operations: dict[str, dict[str, object]] = {}
         self.completed: list[dict[str, object]] = []
+        self.floor_robots = {d.asset_id: FloorRobot() for d in demo_descriptors()
+                             if d.asset_class == "transport_module"}  # fmt: skip
 
     # -- life cycle -----------------------------------------------------------------------
     async def __aenter__(self) -> Cps:
@@ -173,6 +197,7 @@ class Cps(AssetApplications):
         self.kg.join(desc, endpoint=server.endpoint, security_policy=server.security_policy)
         if desc.asset_class == "transport_module":
             self.kg.set_state(desc.asset_id, await server.get("OperationalData", "State"))
+            await self._publish_pose(desc.asset_id)
         log.info("%s joined at %s", desc.asset_id, server.endpoint)
 
     async def leave(self, asset_id: str) -> None:

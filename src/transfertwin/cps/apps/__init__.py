@@ -1,7 +1,9 @@
-"""The logical assets' applications: TMS, Experiment Manager, PropS, virtual environment."""
+"""The assets' applications: TMS, Experiment Manager, PropS, virtual environment, and the
+transport module's operation flow (Fig. 5.9a) on the shop floor."""
 
 from transfertwin.cps.apps._applications import AssetApplications
 from transfertwin.cps.apps._environment import Environment, ScaledClock
+from transfertwin.cps.apps._floor import HOME_POSE, FloorRobot, LegResult
 from transfertwin.cps.apps._ledger import ObjectLedger
 from transfertwin.cps.apps._props import (
     Pose2D,
@@ -11,16 +13,37 @@ from transfertwin.cps.apps._props import (
     fuse_poses,
     wrap_angle,
 )
+from transfertwin.cps.apps._transport import (
+    STEPS,
+    Leg,
+    OtsCheck,
+    StepResult,
+    TransportSkills,
+    form_ots,
+    legs_of,
+    run_transport_operation,
+)
 
 __all__ = [
+    "HOME_POSE",
+    "STEPS",
     "AssetApplications",
     "Environment",
+    "FloorRobot",
+    "Leg",
+    "LegResult",
     "ObjectLedger",
+    "OtsCheck",
     "Pose2D",
     "PoseGraph",
     "PoseGraphSolution",
     "PoseObservation",
     "ScaledClock",
+    "StepResult",
+    "TransportSkills",
+    "form_ots",
     "fuse_poses",
+    "legs_of",
+    "run_transport_operation",
     "wrap_angle",
 ]

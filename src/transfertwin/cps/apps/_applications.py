@@ -23,13 +23,30 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
+import math
 from collections.abc import Awaitable, Callable
 
 from transfertwin._errors import InputError
+from transfertwin.control import TransferRecord
 from transfertwin.cps.aas import AssetDescriptor
 from transfertwin.cps.apps._props import PoseObservation
+from transfertwin.cps.apps._transport import (
+    Leg,
+    StepResult,
+    form_ots,
+    legs_of,
+    run_transport_operation,
+)
 from transfertwin.cps.opcua import AssetServer, OpcUaUnitHAL, OperationRefused
-from transfertwin.ots import TransferDirection
+from transfertwin.ots import BeltThresholds, TransferDirection
+from transfertwin.perception import (
+    AABB,
+    CameraIntrinsics,
+    DepthCamera,
+    Workspace,
+    ground_truth_aabb,
+    workspace_scan,
+)
 from transfertwin.study.experiment import (
     ExperimentSpec,
     experiment_seeds,
@@ -192,7 +209,7 @@ class AssetApplications:
                  record["location"])  # fmt: skip
 
     async def _queue_task(self, tm: str, source: str, target: str, obj: str) -> str:
-        """TM_1 application layer: fetch `obj` at `source`, deliver it to `target`."""
+        """TM_1 application layer: fetch `obj` at `source`, deliver it to `target` (Fig. 5.9a)."""
         server = self.assets[tm].server
         if (state := await server.get("OperationalData", "State")) != "idle":
             raise OperationRefused(f"{tm} is {state}", status="BadInvalidState")
@@ -202,16 +219,33 @@ class AssetApplications:
         if at != source:
             raise OperationRefused(f"{obj} is at {at}, not at {source}", status="BadInvalidState",
                                    argument="source")  # fmt: skip
-        await server.set("OperationalData", "State", "busy")
         await server.set("OperationalData", "CurrentTask", f"{obj}: {source} -> {target}")
-        self.kg.set_state(tm, "busy")
+
+        async def on_state(state: str, leg: Leg | None) -> None:
+            await server.set("OperationalData", "State", state)
+            self.kg.set_state(tm, state)
+            if leg is not None:
+                log.info("%s: %s (%s at %s)", tm, state, leg.name, leg.unit)
+
+        skills = _VirtualTransport(self, tm, source, target, obj)
         try:
-            result = await self._transport(tm, source, target, obj)
+            result = await run_transport_operation(skills, legs_of(source, target), on_state)
         finally:
             await server.set("OperationalData", "State", "idle")
             await server.set("OperationalData", "CurrentTask", "")
             self.kg.set_state(tm, "idle")
+        result["docking"] = self.config.docking
+        if result["failed_step"] is not None:
+            log.info("%s: %s failed while %s: %s", tm, result["status"].split(" at ")[-1],
+                     result["failed_step"], result["reason"])  # fmt: skip
         return json.dumps(result)
+
+    async def _publish_pose(self, tm: str) -> None:
+        """Publish the transport module's floor pose (PoseX, PoseY, PoseTheta)."""
+        x, y, theta = (float(v) for v in self.floor_robots[tm].pose)
+        server = self.assets[tm].server
+        for prop, value in (("PoseX", x), ("PoseY", y), ("PoseTheta", theta)):
+            await server.set("OperationalData", prop, value)
 
     async def _moved(self, obj: str, holder: str) -> None:
         """A transfer put `obj` onto `holder`: update the ledger, both holders' possessions
@@ -236,37 +270,6 @@ class AssetApplications:
         seed, _ = experiment_seeds(self.config.seed, f"{obj}:{source}:{target}", leg, 0)
         return self._docking.sample(seed)
 
-    async def _transport(self, tm: str, source: str, target: str, obj: str) -> dict:
-        env = self.env
-        err1 = self._error(source, target, obj, 0)
-        await asyncio.to_thread(self._locked, env.load_object_at_unit, obj, source, err1)
-        await self._dock(tm, source)
-        log.info("%s: docked at %s, docking error %s", tm, source,
-                 tuple(round(v, 2) for v in err1.as_mm_deg()))  # fmt: skip
-        y1 = await self._transfer(tm, source, TransferDirection.TU_TO_TM)
-        log.info("%s: took %s from %s: y = %d", tm, obj, source, y1)
-        if y1 != 1:  # the object stays at the source; the TM leaves
-            await self._undock(tm)
-            with env.lock:
-                env.undock()
-            return {"status": "failed at pick-up", "y_pickup": y1}
-        await self._moved(obj, tm)
-        await self._undock(tm)
-        err2 = self._error(source, target, obj, 1)
-        await asyncio.to_thread(self._locked, env.dock, target, err2)
-        await self._dock(tm, target)
-        log.info("%s: docked at %s, docking error %s", tm, target,
-                 tuple(round(v, 2) for v in err2.as_mm_deg()))  # fmt: skip
-        y2 = await self._transfer(tm, target, TransferDirection.TM_TO_TU)
-        log.info("%s: handed %s to %s: y = %d", tm, obj, target, y2)
-        if y2 == 1:
-            await self._moved(obj, target)
-        await self._undock(tm)
-        with env.lock:
-            env.undock()
-        return {"status": "delivered" if y2 == 1 else "failed at delivery",
-                "y_pickup": y1, "y_delivery": y2}  # fmt: skip
-
     def _locked(self, fn: Callable[..., object], *args: object) -> object:
         with self.env.lock:
             return fn(*args)
@@ -275,15 +278,14 @@ class AssetApplications:
         async with self.client(aid) as session:
             return await session.call(operation, *args)
 
-    async def _transfer(self, tm: str, unit: str, direction: TransferDirection) -> int:
+    async def _transfer(self, tm: str, unit: str, direction: TransferDirection) -> TransferRecord:
         """One OTS between the TM (local HAL) and `unit` (over OPC UA)."""
         scene = self.config.scene
         async with self.client(unit) as session:
             remote = OpcUaUnitHAL(session, asyncio.get_running_loop(), timeout_s=30)
             system = self.env.system
             ctl = scene_controller(scene, system.tm, remote, system, self.env.clock)
-            record = await asyncio.to_thread(ctl.transfer, direction, "front", None)
-        return record.y
+            return await asyncio.to_thread(ctl.transfer, direction, "front", None)
 
     # -- experiment manager, PropS, knowledge graph ----------------------------------------
     async def _run_experiment(
@@ -318,3 +320,120 @@ class AssetApplications:
 
     async def _query(self, sparql: str) -> str:
         return json.dumps(self.kg.query(sparql))
+
+
+#: Depth image size of the workspace scan when forming the OTS (the perception benchmarks'
+#: size: enough for a core's box within a centimetre or two, ~0.5 s per scan).
+SCAN_SIZE = (160, 120)
+
+
+class _VirtualTransport:
+    """The virtual transport module's skills (`TransportSkills`) in the demo CPS.
+
+    With ``CpsConfig.docking == 'navigated'`` the module drives on the shop floor
+    (`FloorRobot`), docks with the error that emerges there and forms the OTS from its
+    depth camera's workspace scan; with 'sampled' it is put at the station with an error
+    drawn from the fitted generator and forms the OTS from the simulation's true box.
+    """
+
+    def __init__(self, cps: AssetApplications, tm: str, source: str, target: str, obj: str):
+        self.cps, self.tm, self.obj = cps, tm, obj
+        self.source, self.target = source, target
+        self.robot = cps.floor_robots[tm]
+        self.navigated = cps.config.docking == "navigated"
+
+    def _seed(self, leg: Leg) -> int:
+        cfg = self.cps.config
+        seed, _ = experiment_seeds(cfg.seed, f"{self.obj}:{self.source}:{self.target}",
+                                   leg.index, 0)  # fmt: skip
+        return seed
+
+    def _station(self, leg: Leg) -> str:
+        station = self.cps.assets[leg.unit].desc.station
+        if station is None:
+            raise ValueError(f"{leg.unit} stands at no station of the shop floor")
+        return station
+
+    async def navigate(self, leg: Leg) -> StepResult:
+        station = self._station(leg)
+        if not self.navigated:
+            return StepResult(True, info={"station": station})
+        res = await asyncio.to_thread(self.robot.navigate, station, self._seed(leg))
+        await self.cps._publish_pose(self.tm)
+        info = {"station": station, "path_m": round(res.path_m, 3),
+                "drive_s": round(res.drive_s, 2)}  # fmt: skip
+        return StepResult(res.status == "ok", res.reason, info)
+
+    async def dock(self, leg: Leg) -> StepResult:
+        cps, station = self.cps, self._station(leg)
+        if self.navigated:
+            res = await asyncio.to_thread(self.robot.dock, station)
+        else:
+            err = cps._error(self.source, self.target, self.obj, leg.index)
+            res = self.robot.teleport_dock(station, err)
+        await cps._publish_pose(self.tm)
+        info = {k: v for k, v in res.as_dict().items() if k not in ("path_m", "reason")}
+        if res.status != "ok":
+            return StepResult(False, f"docking at {leg.unit}: {res.reason}", info)
+        err, env = res.docking_error(), cps.env
+        if leg.name == "pick-up":  # the object lies on the source unit's belts
+            await asyncio.to_thread(cps._locked, env.load_object_at_unit, self.obj, leg.unit, err)
+        else:
+            await asyncio.to_thread(cps._locked, env.dock, leg.unit, err)
+        await cps._dock(self.tm, leg.unit)
+        log.info("%s: docked at %s, docking error %s", self.tm, leg.unit,
+                 tuple(round(v, 2) for v in err.as_mm_deg()))  # fmt: skip
+        return StepResult(True, info=info)
+
+    def _scan(self, seed: int) -> list[AABB]:
+        scene, system = self.cps.config.scene, self.cps.env.system
+        workspace = Workspace.for_layout(scene.layout, scene.gap_m, docked=True)
+        size = CameraIntrinsics(*SCAN_SIZE)
+        with DepthCamera(system.model, system.data, intrinsics=size) as camera:
+            detection, _ = workspace_scan(camera, workspace, seed=seed)
+        return list(detection.boxes)
+
+    async def form_ots(self, leg: Leg) -> StepResult:
+        cps = self.cps
+        if self.navigated:
+            boxes = await asyncio.to_thread(cps._locked, self._scan, self._seed(leg))
+        else:
+            boxes = [cps._locked(ground_truth_aabb, cps.env.system)]
+        # The transport module carries objects only on its belts; a unit's representation
+        # also lists what its station holds off the belts, so for a unit the scan decides.
+        pickup = leg.direction is TransferDirection.TU_TO_TM
+        holds = cps.ledger.objects_at(self.tm) if pickup else []
+        check = form_ots(
+            boxes, leg.direction, BeltThresholds(t_max=cps.config.scene.t_max_s),
+            obj=self.obj, tm=self.tm, unit=leg.unit, receiver_holds=holds,
+        )  # fmt: skip
+        info = {"source": "depth camera" if self.navigated else "ground truth",
+                "boxes": [b.as_dict() for b in boxes]}  # fmt: skip
+        log.info("%s: scanned %s and itself: %d object(s) seen%s", self.tm, leg.unit,
+                 len(boxes), "" if check.ok else f"; no OTS: {check.reason}")  # fmt: skip
+        return StepResult(check.ok, check.reason, info)
+
+    async def transfer(self, leg: Leg) -> StepResult:
+        rec = await self.cps._transfer(self.tm, leg.unit, leg.direction)
+        if leg.name == "pick-up":
+            log.info("%s: took %s from %s: y = %d", self.tm, self.obj, leg.unit, rec.y)
+        else:
+            log.info("%s: handed %s to %s: y = %d", self.tm, self.obj, leg.unit, rec.y)
+        t_end = rec.t_end_s
+        info = {"y": rec.y, "valid": rec.valid, "conveyor": rec.conveyor,
+                "t_end_s": None if math.isnan(t_end) else round(t_end, 3)}  # fmt: skip
+        if not rec.valid:
+            return StepResult(False, "the controller's observed start state is not in "
+                                     "P_pre (Eq. 5.7)", info)  # fmt: skip
+        if rec.y != 1:
+            return StepResult(False, f"the object did not reach the receiver "
+                                     f"(failure state after {t_end:.2f} s)", info)  # fmt: skip
+        return StepResult(True, info=info)
+
+    async def resolve(self, leg: Leg, success: bool) -> None:
+        cps = self.cps
+        if success:
+            await cps._moved(self.obj, self.tm if leg.name == "pick-up" else leg.unit)
+        await cps._undock(self.tm)
+        with cps.env.lock:
+            cps.env.undock()

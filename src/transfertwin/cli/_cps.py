@@ -7,6 +7,7 @@ import asyncio
 import contextlib
 import json
 import logging
+import math
 import signal
 from pathlib import Path
 
@@ -58,11 +59,11 @@ def cmd_up(args: argparse.Namespace) -> int:
     from transfertwin.study.experiment import load_profile
 
     wd = _workdir(args.workdir, must_exist=False)
-    wd.mkdir(parents=True, exist_ok=True)
     scene = load_profile(args.config)[1] if args.config else None
     kwargs = {"scene": scene} if scene is not None else {}
     cfg = CpsConfig(wd, host=args.host, insecure=args.insecure, time_scale=args.time_scale,
-                    seed=args.seed, **kwargs)  # fmt: skip
+                    seed=args.seed, docking=args.docking, **kwargs)  # fmt: skip
+    wd.mkdir(parents=True, exist_ok=True)
     handler = logging.FileHandler(wd / "cps.log")
     handler.setFormatter(logging.Formatter("%(asctime)s %(message)s"))
     logging.getLogger("transfertwin.cps").addHandler(handler)
@@ -83,7 +84,8 @@ def cmd_up(args: argparse.Namespace) -> int:
 
 
 def cmd_status(args: argparse.Namespace) -> int:
-    """List the assets as the knowledge graph knows them, with where each object is."""
+    """List the assets as the knowledge graph knows them, with where each object is and
+    where each transport module stands on the shop floor (and the unit it is docked at)."""
     from transfertwin.cps.opcua import connect
 
     wd = _workdir(args.workdir, must_exist=True)
@@ -97,7 +99,12 @@ def cmd_status(args: argparse.Namespace) -> int:
             cert_dir=Path(info["cert_dir"]),
             insecure=info["insecure"],
         ) as kg:
-            return json.loads(await kg.call("Query", _ASSETS_QUERY))  # fmt: skip
+            rows = json.loads(await kg.call("Query", _ASSETS_QUERY))
+        tms = {a["id"] for a in info["assets"] if a["class"] == "transport_module"}
+        for r in rows:  # a transport module's location: its floor pose, from its own server
+            if r.get("id") in tms and r.get("status") != "offline":
+                r["location"] = await _floor_pose(info, creds, r["id"])
+        return rows
 
     rows = _run_client(wd, ask)
     for r in rows:  # the graph's order of the classes is arbitrary
@@ -105,6 +112,19 @@ def cmd_status(args: argparse.Namespace) -> int:
     print("assets in the knowledge graph")
     print(_table(rows, ("id", "class", "type", "status", "state", "location", "endpoint")))
     return 0
+
+
+async def _floor_pose(info: dict, creds, tm: str) -> str:
+    """'[unit ](x, y) m θ°' of a transport module, read from its OperationalData."""
+    from transfertwin.cps.opcua import connect
+
+    cert_dir, insecure = Path(info["cert_dir"]), info["insecure"]
+    async with connect(_endpoint(info, tm), tm, credentials=creds, role="observer",
+                       cert_dir=cert_dir, insecure=insecure) as s:  # fmt: skip
+        x, y, theta, docked = [await s.read("OperationalData", p)
+                               for p in ("PoseX", "PoseY", "PoseTheta", "DockedAt")]  # fmt: skip
+    at = f"{docked} " if docked else ""
+    return f"{at}({x:.2f}, {y:.2f}) m {math.degrees(theta):.1f}°"
 
 
 def _table(rows: list[dict], cols: tuple[str, ...]) -> str:
@@ -246,6 +266,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--time-scale", type=float, default=1.0,
                    help="simulated seconds per wall second (0: as fast as possible)")  # fmt: skip
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--docking", default="sampled",
+                   help="sampled: docking errors drawn from the fitted generator; navigated: "
+                        "the transport module drives the shop floor, docks by laser and "
+                        "scans with its depth camera (default sampled)")  # fmt: skip
     p.set_defaults(func=cmd_up)
     p = csub.add_parser("status", help="list the assets and where the objects are")
     p.add_argument("--workdir", required=True)

@@ -393,7 +393,7 @@ class CpsGateway:
             lines = self._log_lines(op)
             for tm in tms_ids if not lines else ():  # no CPS log: what the modules report
                 v = self.values.get(tm, {})
-                if v.get("State") == "busy" or v.get("DockedAt"):
+                if v.get("State") not in (None, "", "idle") or v.get("DockedAt"):
                     docked = f", docked at {v['DockedAt']}" if v.get("DockedAt") else ""
                     task = f" ({v['CurrentTask']})" if v.get("CurrentTask") else ""
                     order.step(f"{tm}: {v.get('State')}{docked}{task}")

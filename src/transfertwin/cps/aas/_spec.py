@@ -125,7 +125,12 @@ OPERATIONAL_DATA: Mapping[str, tuple[PropertySpec, ...]] = MappingProxyType(
             PropertySpec("PoseY", _D, 0.0, "m", description="Map y of the robot."),
             PropertySpec("PoseTheta", _D, 0.0, "rad", description="Heading of the robot."),
             PropertySpec("DockedAt", _S, "", description="Station/unit docked at, '' if none."),
-            PropertySpec("State", _S, "idle", description="idle|busy|docking|transferring."),
+            PropertySpec(
+                "State",
+                _S,
+                "idle",
+                description="idle|navigating|docking|scanning|transferring (Fig. 5.9a).",
+            ),
             PropertySpec("CurrentTask", _S, "", description="Id of the running task, '' if none."),
         ),
         "object": (

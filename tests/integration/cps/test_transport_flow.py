@@ -24,7 +24,7 @@ def _dedup(states: list[str]) -> list[str]:
 
 def test_a_navigated_order_runs_navigate_dock_scan_transfer_in_order(tmp_path):
     async def scenario():
-        cfg = CpsConfig(tmp_path, gossip_period_s=0.5, docking="navigated")
+        cfg = CpsConfig(tmp_path, gossip_period_s=10.0, docking="navigated")  # quiet gossip
         async with Cps(cfg) as cps:
             seen: list[str] = []
             done = asyncio.Event()
@@ -90,7 +90,7 @@ def test_a_navigated_order_runs_navigate_dock_scan_transfer_in_order(tmp_path):
                      "failed at delivery": "TM_1"}[result["status"]]  # fmt: skip
             assert cps.ledger.location("o2") == where == record["location"]
 
-    asyncio.run(asyncio.wait_for(scenario(), timeout=300))
+    asyncio.run(asyncio.wait_for(scenario(), timeout=600))
 
 
 def test_the_ots_is_refused_on_what_the_scan_sees(tmp_path):

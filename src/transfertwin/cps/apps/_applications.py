@@ -1,9 +1,11 @@
 """The application layers of the demo CPS's assets (Fig. 3.2, Sec. 5.1–5.2).
 
 What each asset's OPC UA operations do: the transfer units' belt drives and possession
-(external sync of a D/E asset), the transport module's docking and transport tasks (which
-drive a docked unit only through its OPC UA interface), and the logical assets: the
-Transport Module System, the Experiment Manager, PropS and the knowledge graph.
+(external sync of a D/E asset), the transport module's docking and transport tasks (the flow
+of Fig. 5.9a, `_transport.run_transport_operation`, with the virtual module's skills in
+`_VirtualTransport`; it drives a docked unit only through its OPC UA interface), and the
+logical assets: the Transport Module System, the Experiment Manager, PropS and the
+knowledge graph.
 
 The Transport Module System keeps the `ObjectLedger` (where every object is, which
 operation holds it): an order is checked and its object reserved when it is submitted, so
@@ -15,7 +17,8 @@ the source; after a failed delivery it stays on the transport module (an operato
 take it off: no order can name a transport module as source).
 
 `AssetApplications` is a mixin of `Cps`; it uses the runtime's `assets`, `env`, `kg`,
-`poses`, `config`, `ledger`, `completed`, `operations`, `client()` and `_spawn()`.
+`poses`, `config`, `ledger`, `completed`, `operations`, `floor_robots`, `client()` and
+`_spawn()`.
 """
 
 from __future__ import annotations

@@ -86,7 +86,10 @@ async def connect(
     timeout_s: float = 10.0,
 ) -> AsyncIterator[AssetClient]:
     """A session with an asset server (secure unless `insecure`)."""
-    client = Client(url=endpoint, timeout=timeout_s)
+    # asyncua's watchdog reads the server state every interval and drops the session if the
+    # answer takes longer than the interval (default 1 s): a server whose event loop also runs
+    # the simulation answers slower than that on a loaded machine. Probe every 10 s instead.
+    client = Client(url=endpoint, timeout=timeout_s, watchdog_intervall=10.0)
     client.application_uri = f"urn:transfertwin:client-{role}"
     if not insecure:
         cert, key = await ensure_certificate(cert_dir, f"client-{role}")

@@ -1,4 +1,4 @@
-"""`transfertwin cps up|status|order`: the demo cyber-physical system on loopback."""
+"""`transfertwin cps up|status|order|trust|export`: the demo cyber-physical system on loopback."""
 
 from __future__ import annotations
 
@@ -29,6 +29,8 @@ def _workdir(path: str, must_exist: bool) -> Path:
 
 def _run_client(wd: Path, coro_fn):
     """Run a client coroutine; a CPS that does not answer is reported in one line."""
+    from asyncua import ua
+
     try:
         return asyncio.run(coro_fn())
     except (TimeoutError, ConnectionError, OSError) as exc:
@@ -36,6 +38,11 @@ def _run_client(wd: Path, coro_fn):
             f"{wd}: the CPS is not running or not answering "
             f"({type(exc).__name__}); start it with 'transfertwin cps up'"
         ) from None
+    except ua.UaStatusCodeError as exc:
+        if exc.code != ua.StatusCodes.BadCertificateUntrusted:
+            raise
+        raise InputError(f"{wd}: the CPS does not trust this client's certificate; trust it "
+                         "with 'transfertwin cps trust CERT --workdir WORKDIR'") from None  # fmt: skip
 
 
 def _load(wd: Path) -> tuple[dict, object]:
@@ -235,6 +242,33 @@ def cmd_order(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_trust(args: argparse.Namespace) -> int:
+    """Put a client certificate on the trust list of the CPS's OPC UA servers.
+
+    The servers read the list on every new session: a running CPS accepts the client at
+    once. The list is ``WORKDIR/certs/trusted`` (created by the first ``cps up``).
+    """
+    from cryptography.hazmat.primitives import hashes
+
+    from transfertwin.cps.opcua import read_certificate, trust_certificate
+
+    wd = Path(args.workdir)
+    if not ((wd / "cps.json").is_file() or (wd / "certs").is_dir()):
+        raise InputError(f"--workdir {args.workdir}: no CPS there (no cps.json, no certs/); "
+                         "start one with 'transfertwin cps up --workdir DIR'")  # fmt: skip
+    try:
+        cert = read_certificate(Path(args.cert))
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+    path = trust_certificate(wd / "certs" / "trusted", cert)
+    print(f"trusted {cert.subject.rfc4514_string()} "
+          f"(SHA-256 {cert.fingerprint(hashes.SHA256()).hex()[:16]}...): {path}")  # fmt: skip
+    info = json.loads((wd / "cps.json").read_text()) if (wd / "cps.json").is_file() else {}
+    if info.get("insecure"):
+        print("note: this CPS runs with --insecure (NoSecurity): it checks no certificates")
+    return 0
+
+
 def cmd_export(args: argparse.Namespace) -> int:
     """Write the demo assets' AAS (and their physical twins') as JSON, XML or AASX."""
     from transfertwin.cps import (
@@ -255,7 +289,7 @@ def cmd_export(args: argparse.Namespace) -> int:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add `cps up|status|order` to the CLI."""
+    """Add `cps up|status|order|trust|export` to the CLI."""
     cps = sub.add_parser("cps", help="demo cyber-physical system on loopback (Ch. 3, Sec. 5.3)")
     csub = cps.add_subparsers(dest="cps_command", required=True, parser_class=type(cps))
     p = csub.add_parser("up", help="start TU_A..TU_D, TM_1, objects, KG and logical assets")
@@ -282,6 +316,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--timeout", type=float, default=600.0,
                    help="seconds to follow the operation (default 600)")  # fmt: skip
     p.set_defaults(func=cmd_order)
+    p = csub.add_parser("trust", help="trust a client certificate (DER or PEM) for the servers")
+    p.add_argument("cert", metavar="CERT", help="the client's application certificate")
+    p.add_argument("--workdir", default=".", help="the CPS's workdir (default: .)")
+    p.set_defaults(func=cmd_trust)
     p = csub.add_parser("export", help="write the demo assets' AAS as JSON, XML or AASX")
     p.add_argument("--out", required=True, help="FILE.json, FILE.xml or FILE.aasx")
     p.add_argument("--with-physical", action="store_true",

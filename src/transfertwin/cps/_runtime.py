@@ -38,14 +38,17 @@ from transfertwin.cps.apps import (
 )
 from transfertwin.cps.kg import KnowledgeGraph
 from transfertwin.cps.opcua import (
+    ROLES,
     AssetServer,
     Credentials,
     Discovery,
     Peer,
     ServerConfig,
     connect,
+    ensure_certificate,
     free_port,
     new_credentials,
+    trust_certificate,
     write_credentials,
 )
 from transfertwin.sim import SceneConfig
@@ -132,6 +135,10 @@ class Cps(AssetApplications):
         wd = self.config.workdir
         wd.mkdir(parents=True, exist_ok=True)
         self.env.on_step(self._sync_barriers)
+        if not self.config.insecure:  # the CPS's own clients (apps, web console) are trusted
+            for role in ROLES:
+                cert, _ = await ensure_certificate(self.cert_dir, f"client-{role}")
+                trust_certificate(self.trust_dir, cert)
         for desc in demo_descriptors():
             await self._start(desc)
         for obj, holder in self.ledger.locations().items():
@@ -153,6 +160,16 @@ class Cps(AssetApplications):
         (self.config.workdir / "cps.json").unlink(missing_ok=True)  # no stale endpoints
         log.info("CPS down")
 
+    @property
+    def cert_dir(self) -> Path:
+        """Where the application certificates of the servers and clients are."""
+        return self.config.workdir / "certs"
+
+    @property
+    def trust_dir(self) -> Path:
+        """The servers' trust list of client certificates (`transfertwin cps trust`)."""
+        return self.cert_dir / "trusted"
+
     def describe(self) -> dict[str, object]:
         """The cps.json content."""
         return {
@@ -168,7 +185,8 @@ class Cps(AssetApplications):
                 for a in self.assets.values()
             ],
             "credentials_file": str((self.config.workdir / "credentials.json").resolve()),
-            "cert_dir": str((self.config.workdir / "certs").resolve()),
+            "cert_dir": str(self.cert_dir.resolve()),
+            "trust_dir": str(self.trust_dir.resolve()),
             "insecure": self.config.insecure,
         }
 
@@ -182,7 +200,7 @@ class Cps(AssetApplications):
         writable = frozenset(("OperationalData", p) for p in externally_synced(rep))
         cfg = ServerConfig(
             host=host, port=port, insecure=self.config.insecure,
-            cert_dir=self.config.workdir / "certs",
+            cert_dir=self.cert_dir, trust_dir=self.trust_dir,
             credentials=None if self.config.insecure else self.credentials,
         )  # fmt: skip
         server = AssetServer(desc.asset_id, rep.submodels, cfg, self._handlers(desc), writable)
@@ -224,7 +242,7 @@ class Cps(AssetApplications):
     def _session(self, url: str, asset_id: str, role: str = "operator", timeout_s: float = 10.0):
         return connect(
             url, asset_id, credentials=None if self.config.insecure else self.credentials,
-            role=role, cert_dir=self.config.workdir / "certs", insecure=self.config.insecure,
+            role=role, cert_dir=self.cert_dir, insecure=self.config.insecure,
             timeout_s=timeout_s,
         )  # fmt: skip
 

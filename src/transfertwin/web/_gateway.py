@@ -3,7 +3,7 @@ read over OPC UA, AAS browsing and transport orders.
 
 The gateway reads ``cps.json`` and the credentials file of a running `transfertwin cps up`
 and talks to the assets through the CPS client API (`transfertwin.cps.opcua.connect`): an
-*observer* session per asset for the live values and browsing, *operator* sessions for the
+*viewer* session per asset for the live values and browsing, *operator* sessions for the
 knowledge-graph queries and the orders (the only calls). Credentials stay in this process;
 nothing returned to the browser carries them.
 """
@@ -151,7 +151,7 @@ class CpsGateway:
     async def start(self) -> None:
         """Open the sessions (in the background: assets that are down come up later)."""
         if not self._insecure:
-            for role in ("observer", "operator"):  # once, before sessions race to make them
+            for role in ("viewer", "operator"):  # once, before sessions race to make them
                 await ensure_certificate(self._cert_dir, f"client-{role}")
         self._tasks = [asyncio.create_task(self._watch(aid)) for aid in self._assets]
         self._tasks.append(asyncio.create_task(self._watch_graph()))
@@ -170,10 +170,10 @@ class CpsGateway:
                        timeout_s=timeout_s)  # fmt: skip
 
     async def _watch(self, aid: str) -> None:
-        """Keep an observer session with one asset; read its operational data each period."""
+        """Keep a viewer session with one asset; read its operational data each period."""
         while True:
             try:
-                async with self._session(aid, "observer", timeout_s=5.0) as s:
+                async with self._session(aid, "viewer", timeout_s=5.0) as s:
                     nodes = await self._variables(s, "OperationalData")
                     self._sessions[aid] = s
                     while True:

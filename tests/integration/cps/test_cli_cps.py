@@ -64,7 +64,7 @@ def test_cps_is_up_and_quiet_without_verbose(cps):
     info = json.loads((cps.wd / "cps.json").read_text())
     assert len(info["assets"]) == 14
     creds = json.loads((cps.wd / "credentials.json").read_text())
-    assert set(creds) == {"operator", "observer"}
+    assert set(creds) == {"operator", "viewer"}
     # The log goes to cps.log; stderr has no INFO lines and no asyncua certificate warnings.
     assert "TU_A joined" in (cps.wd / "cps.log").read_text()
     assert cps.stderr_path.read_text() == ""
@@ -154,7 +154,7 @@ def _read(wd: Path, asset: str, prop: str):
 
     async def read():
         async with connect(url, asset, credentials=load_credentials(wd / "credentials.json"),
-                           role="observer", cert_dir=wd / "certs") as client:  # fmt: skip
+                           role="viewer", cert_dir=wd / "certs") as client:  # fmt: skip
             return await client.read("OperationalData", prop)
 
     return asyncio.run(read())

@@ -44,10 +44,10 @@ def test_demo_cps_end_to_end(tmp_path):
                      "failed at delivery": "TM_1"}[record["result"]["status"]]  # fmt: skip
             assert record["location"] == where == cps.ledger.location("o5")
             assert kg.locations()["o5"] == where
-            async with cps.client("o5", role="observer") as o5:
+            async with cps.client("o5", role="viewer") as o5:
                 assert await o5.read("OperationalData", "PossessedBy") == where
             if where != "TM_1":
-                async with cps.client(where, role="observer") as tu:
+                async with cps.client(where, role="viewer") as tu:
                     held = await tu.read("OperationalData", "PossessedObjects")
                     assert "o5" in held.split(",")
             assert kg.idle_transport_modules() == ["TM_1"]

@@ -23,7 +23,7 @@ def test_thousand_writes_and_hundred_subscriptions_lose_nothing(tmp_path):
         async with AssetServer("TU_B", rep.submodels, cfg, {}, writable) as server:
             kw = {"credentials": creds, "cert_dir": tmp_path}
             async with (
-                connect(server.endpoint, "TU_B", role="observer", **kw) as watcher,
+                connect(server.endpoint, "TU_B", role="viewer", **kw) as watcher,
                 connect(server.endpoint, "TU_B", role="operator", **kw) as writer,
             ):
                 final = f"o{N_WRITES - 1}"

@@ -1,114 +1,167 @@
-"""Asset servers on loopback: secure by default, roles enforced, robust to garbage."""
+"""Asset servers on loopback: secure by default, a trust list of client certificates, roles
+enforced on the server, robust to garbage (issue 13, item 3).
+
+Most tests share one TU_A server and the run's certificates (see conftest.py).
+"""
 
 from __future__ import annotations
 
 import asyncio
+import shutil
+from pathlib import Path
 
 import pytest
 from asyncua import ua
+from cryptography.hazmat.primitives.serialization import Encoding
 
-from transfertwin.cps.aas._demo import demo_descriptors
-from transfertwin.cps.aas._representation import build_representation, externally_synced
-from transfertwin.cps.opcua._client import connect
-from transfertwin.cps.opcua._security import new_credentials
-from transfertwin.cps.opcua._server import AssetServer, OperationRefused, ServerConfig
-
-
-def _tu():
-    return next(d for d in demo_descriptors() if d.asset_id == "TU_A")
-
-
-async def _serve(tmp_path, creds, **handlers):
-    rep = build_representation(_tu())
-    writable = frozenset(("OperationalData", p) for p in externally_synced(rep))
-    cfg = ServerConfig(cert_dir=tmp_path / "certs", credentials=creds)
-    return AssetServer("TU_A", rep.submodels, cfg, handlers, writable)
+from transfertwin.cli import main
+from transfertwin.cps.opcua import (
+    OperationRefused,
+    RoleUserManager,
+    TrustList,
+    connect,
+    ensure_certificate,
+    new_credentials,
+    read_certificate,
+)
 
 
 def _run(coro):
     return asyncio.run(asyncio.wait_for(coro, timeout=120))
 
 
-def test_operator_calls_and_writes_observer_only_reads(tmp_path):
-    creds = new_credentials()
+def test_operator_calls_and_writes(tu_a, pki):
+    calls = []
+
+    async def set_speed(belt, speed):
+        calls.append((belt, speed))
+        await tu_a.server.set("OperationalData", "BeltSpeedLeft", speed)
+        return True
+
+    tu_a.handle("SetBeltSpeed", set_speed)
 
     async def scenario():
-        calls = []
+        assert tu_a.server.security_policy == "Basic256Sha256_SignAndEncrypt"
+        async with connect(tu_a.endpoint, "TU_A", role="operator", **pki.client_kw()) as op:
+            assert await op.call("SetBeltSpeed", "left", 0.15) is True
+            assert await op.read("OperationalData", "BeltSpeedLeft") == 0.15
+            await op.write("OperationalData", "PossessedObjects", "o5")
 
-        async def set_speed(belt, speed):
-            calls.append((belt, speed))
-            await server.set("OperationalData", "BeltSpeedLeft", speed)
-            return True
+    _run(scenario())
+    assert calls == [("left", 0.15)]
+    assert tu_a.run(tu_a.server.get("OperationalData", "PossessedObjects")) == "o5"
 
-        server = await _serve(tmp_path, creds, SetBeltSpeed=set_speed)
-        async with server:
-            assert server.security_policy == "Basic256Sha256_SignAndEncrypt"
-            kw = {"credentials": creds, "cert_dir": tmp_path / "certs"}
-            async with connect(server.endpoint, "TU_A", role="operator", **kw) as op:
-                assert await op.call("SetBeltSpeed", "left", 0.15) is True
-                assert await op.read("OperationalData", "BeltSpeedLeft") == 0.15
-                await op.write("OperationalData", "PossessedObjects", "o5")
-            async with connect(server.endpoint, "TU_A", role="observer", **kw) as obs:
-                assert await obs.read("OperationalData", "PossessedObjects") == "o5"
-                with pytest.raises(ua.UaStatusCodeError, match="BadUserAccessDenied"):
-                    await obs.write("OperationalData", "PossessedObjects", "x")
-                with pytest.raises(ua.UaStatusCodeError, match="BadUserAccessDenied"):
-                    await obs.call("SetBeltSpeed", "left", 0.1)
-            assert calls == [("left", 0.15)]
-            assert await server.get("OperationalData", "PossessedObjects") == "o5"
+
+def test_viewer_reads_but_its_writes_and_calls_are_refused_by_the_server(tu_a, pki):
+    calls = []
+
+    async def set_speed(belt, speed):
+        calls.append((belt, speed))
+        return True
+
+    tu_a.handle("SetBeltSpeed", set_speed)
+    tu_a.run(tu_a.server.set("OperationalData", "PossessedObjects", "o7"))
+
+    async def scenario():
+        async with connect(tu_a.endpoint, "TU_A", role="viewer", **pki.client_kw()) as viewer:
+            assert await viewer.read("OperationalData", "PossessedObjects") == "o7"
+            with pytest.raises(OperationRefused) as refused:
+                await viewer.write("OperationalData", "PossessedObjects", "x")
+            assert refused.value.status == "BadUserAccessDenied"
+            assert str(refused.value) == (
+                "BadUserAccessDenied: TU_A.write OperationalData.PossessedObjects refused: "
+                "the viewer role may only read (writes and calls need the operator role)"
+            )
+            with pytest.raises(ua.UaStatusCodeError, match="BadUserAccessDenied.*viewer role"):
+                await viewer.call("SetBeltSpeed", "left", 0.1)
+            # the refusals did not end the session
+            assert await viewer.read("Identification", "AssetId") == "TU_A"
+            # the server refuses the raw request too, whatever the client library does
+            node = await viewer._node("OperationalData", "PossessedObjects")
+            raw = ua.WriteValue(NodeId=node.nodeid, AttributeId=ua.AttributeIds.Value,
+                                Value=ua.DataValue(ua.Variant("x", ua.VariantType.String)))  # fmt: skip
+            with pytest.raises(ua.UaStatusCodeError, match="BadUserAccessDenied"):
+                await viewer.client.uaclient.write(ua.WriteParameters(NodesToWrite=[raw]))
+
+    _run(scenario())
+    assert calls == []
+    assert tu_a.run(tu_a.server.get("OperationalData", "PossessedObjects")) == "o7"
+
+
+def test_unknown_client_certificate_is_refused_until_cps_trust(tu_a, pki, tmp_path, capsys):
+    stranger = tmp_path / "stranger"
+
+    async def attempt() -> str:
+        async with connect(tu_a.endpoint, "TU_A", role="operator", cert_dir=stranger,
+                           credentials=pki.credentials) as op:  # fmt: skip
+            return await op.read("Identification", "AssetId")
+
+    with pytest.raises(ua.UaStatusCodeError, match="BadCertificateUntrusted"):
+        _run(attempt())  # right password, unknown application certificate
+    cert = stranger / "client-operator.der"
+    assert not TrustList(pki.trust_dir).is_trusted(cert.read_bytes())
+
+    assert main(["cps", "trust", str(cert), "--workdir", str(pki.root)]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("trusted ") and "CN=client-operator" in out
+    added = Path(out.strip().rsplit(": ", 1)[1])
+    assert added.parent == pki.trust_dir and added.read_bytes() == cert.read_bytes()
+    try:
+        assert _run(attempt()) == "TU_A"  # no restart: the list is read per session
+    finally:
+        added.unlink()
+    with pytest.raises(ua.UaStatusCodeError, match="BadCertificateUntrusted"):
+        _run(attempt())  # removed from the list: refused again
+
+
+def test_activation_is_refused_for_a_channel_whose_certificate_is_not_trusted(pki, tmp_path):
+    """The second check (ActivateSession) holds even for a client that ignores the refused
+    CreateSession: the user manager looks at the channel's certificate itself."""
+    own = (pki.cert_dir / "client-viewer.der").read_bytes()
+    other, _ = asyncio.run(ensure_certificate(tmp_path, "client-viewer"))
+    users = RoleUserManager(pki.credentials, TrustList(pki.trust_dir))
+    name, password = pki.credentials.for_role("viewer")
+    assert users.get_user(None, name, password, own).name == "viewer"
+    assert users.get_user(None, name, password, other.read_bytes()) is None
+    assert users.get_user(None, name, password, None) is None
+    assert users.get_user(None, name, "wrong", own) is None
+
+
+def test_unauthenticated_and_wrong_password_are_refused(tu_a, pki):
+    async def scenario():
+        for wrong in (None, new_credentials()):
+            with pytest.raises(ua.UaError):
+                async with connect(tu_a.endpoint, "TU_A", credentials=wrong,
+                                   cert_dir=pki.cert_dir) as c:  # fmt: skip
+                    await c.read("OperationalData", "BeltSpeedLeft")
 
     _run(scenario())
 
 
-def test_unauthenticated_and_wrong_password_are_refused(tmp_path):
-    creds, other = new_credentials(), new_credentials()
-
+def test_read_only_variables_refuse_operator_writes(tu_a, pki):
     async def scenario():
-        async with await _serve(tmp_path, creds) as server:
-            for wrong in (None, other):
-                with pytest.raises(ua.UaError):
-                    async with connect(server.endpoint, "TU_A", credentials=wrong,
-                                       cert_dir=tmp_path / "certs") as c:  # fmt: skip
-                        await c.read("OperationalData", "BeltSpeedLeft")
-
-    _run(scenario())
-
-
-def test_read_only_variables_refuse_operator_writes(tmp_path):
-    creds = new_credentials()
-
-    async def scenario():
-        async with (
-            await _serve(tmp_path, creds) as server,
-            connect(server.endpoint, "TU_A", credentials=creds, cert_dir=tmp_path / "certs") as op,
-        ):
-            with pytest.raises(ua.UaStatusCodeError):
+        async with connect(tu_a.endpoint, "TU_A", **pki.client_kw()) as op:
+            with pytest.raises(ua.UaStatusCodeError, match="BadUserAccessDenied|BadNotWritable"):
                 await op.write("OperationalData", "BeltSpeedLeft", 9.0)
 
     _run(scenario())
 
 
-def test_garbage_on_the_port_leaves_the_server_serving(tmp_path):
-    creds = new_credentials()
-
+def test_garbage_on_the_port_leaves_the_server_serving(tu_a, pki):
     async def scenario():
-        async with await _serve(tmp_path, creds) as server:
-            port = int(server.endpoint.split(":")[2].split("/")[0])
-            for payload in (b"\x00" * 64, b"HEL" + b"\xff" * 500, b"GET / HTTP/1.1\r\n\r\n"):
-                _, writer = await asyncio.open_connection("127.0.0.1", port)
-                writer.write(payload)
-                await writer.drain()
-                writer.close()
-            async with connect(server.endpoint, "TU_A", credentials=creds,
-                               cert_dir=tmp_path / "certs") as op:  # fmt: skip
-                assert await op.read("Identification", "AssetId") == "TU_A"
+        port = int(tu_a.endpoint.split(":")[2].split("/")[0])
+        for payload in (b"\x00" * 64, b"HEL" + b"\xff" * 500, b"GET / HTTP/1.1\r\n\r\n"):
+            _, writer = await asyncio.open_connection("127.0.0.1", port)
+            writer.write(payload)
+            await writer.drain()
+            writer.close()
+        async with connect(tu_a.endpoint, "TU_A", **pki.client_kw()) as op:
+            assert await op.read("Identification", "AssetId") == "TU_A"
 
     _run(scenario())
 
 
-def test_handler_errors_become_bad_status_not_crashes(tmp_path):
-    creds = new_credentials()
-
+def test_handler_errors_and_wrong_argument_types_become_bad_status(tu_a, pki):
     async def refuse(belt, speed):
         if belt == "middle":
             raise ValueError("no such belt")
@@ -117,11 +170,10 @@ def test_handler_errors_become_bad_status_not_crashes(tmp_path):
                                    status="BadOutOfRange")  # fmt: skip
         raise RuntimeError("a bug")
 
+    tu_a.handle("SetBeltSpeed", refuse)
+
     async def scenario():
-        async with (
-            await _serve(tmp_path, creds, SetBeltSpeed=refuse) as server,
-            connect(server.endpoint, "TU_A", credentials=creds, cert_dir=tmp_path / "certs") as op,
-        ):
+        async with connect(tu_a.endpoint, "TU_A", **pki.client_kw()) as op:
             with pytest.raises(ua.UaStatusCodeError, match="BadInvalidArgument") as exc:
                 await op.call("SetBeltSpeed", "middle", 0.1)
             assert isinstance(exc.value, OperationRefused)
@@ -133,6 +185,18 @@ def test_handler_errors_become_bad_status_not_crashes(tmp_path):
             with pytest.raises(OperationRefused, match="BadInternalError") as exc:
                 await op.call("SetBeltSpeed", "left", 0.1)
             assert exc.value.reason == "internal error: RuntimeError: a bug"
+            # wrong types never reach the handler; a whole number counts as a Double
+            with pytest.raises(OperationRefused, match="BadTypeMismatch") as exc:
+                await op.call("SetBeltSpeed", 3, 0.1)
+            assert exc.value.reason == "belt must be a String, got Int64"
+            with pytest.raises(OperationRefused, match="BadTypeMismatch"):
+                await op.call("SetBeltSpeed", "left", "fast")
+            with pytest.raises(OperationRefused, match="BadOutOfRange"):
+                await op.call("SetBeltSpeed", "left", 2)
+            with pytest.raises(OperationRefused, match="BadArgumentsMissing"):
+                await op.call("SetBeltSpeed", "left")
+            with pytest.raises(OperationRefused, match="BadTooManyArguments"):
+                await op.call("SetBeltSpeed", "left", 0.1, 1)
             # the same refusal, raw: Bad status, the offending argument marked Bad with
             # the reason in its diagnostic info
             request = ua.CallMethodRequest()
@@ -146,3 +210,24 @@ def test_handler_errors_become_bad_status_not_crashes(tmp_path):
             assert await op.read("Identification", "AssetId") == "TU_A"
 
     _run(scenario())
+
+
+def test_cps_trust_refuses_what_is_not_a_certificate(pki, tmp_path, capsys):
+    key = pki.cert_dir / "client-viewer.pem"  # a private key, not a certificate
+    for argv, reason in [
+        ([str(key), "--workdir", str(pki.root)], "not an X.509 certificate"),
+        ([str(tmp_path / "none.der"), "--workdir", str(pki.root)], "cannot read"),
+        ([str(pki.cert_dir / "client-viewer.der"), "--workdir", str(tmp_path)], "no CPS there"),
+    ]:
+        before = sorted(p.name for p in pki.trust_dir.iterdir())
+        assert main(["cps", "trust", *argv]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and reason in err[0], err
+        assert sorted(p.name for p in pki.trust_dir.iterdir()) == before
+    # PEM works as well as DER, and trusting twice changes nothing
+    pem = tmp_path / "viewer.pem"
+    shutil.copy(pki.cert_dir / "client-viewer.der", tmp_path / "viewer.der")
+    pem.write_bytes(read_certificate(tmp_path / "viewer.der").public_bytes(Encoding.PEM))
+    before = sorted(p.name for p in pki.trust_dir.iterdir())
+    assert main(["cps", "trust", str(pem), "--workdir", str(pki.root)]) == 0
+    assert sorted(p.name for p in pki.trust_dir.iterdir()) == before

@@ -8,10 +8,13 @@ from transfertwin.cps.opcua._security import (
     Credentials,
     RoleRuleset,
     RoleUserManager,
+    TrustList,
     ensure_certificate,
     free_port,
     load_credentials,
     new_credentials,
+    read_certificate,
+    trust_certificate,
     write_credentials,
 )
 from transfertwin.cps.opcua._server import (
@@ -37,11 +40,14 @@ __all__ = [
     "RoleRuleset",
     "RoleUserManager",
     "ServerConfig",
+    "TrustList",
     "connect",
     "ensure_certificate",
     "free_port",
     "load_credentials",
     "new_credentials",
     "node_id",
+    "read_certificate",
+    "trust_certificate",
     "write_credentials",
 ]

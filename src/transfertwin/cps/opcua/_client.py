@@ -16,13 +16,30 @@ from transfertwin.cps.opcua._server import NAMESPACE, OperationRefused, node_id
 __all__ = ["AssetClient", "connect"]
 
 
-class AssetClient:
-    """A session with one asset server, addressing nodes by AAS idShorts."""
+_DENIED = ua.StatusCodes.BadUserAccessDenied
 
-    def __init__(self, client: Client, asset_id: str) -> None:
+
+class AssetClient:
+    """A session with one asset server, addressing nodes by AAS idShorts.
+
+    Args:
+        client: The connected asyncua client.
+        asset_id: The asset served.
+        role: The role the session was opened with (for error messages).
+    """
+
+    def __init__(self, client: Client, asset_id: str, role: str = "operator") -> None:
         self.client = client
         self.asset_id = asset_id
+        self.role = role
         self._ns: int | None = None
+        self._vtypes: dict[tuple[str, ...], ua.VariantType] = {}
+
+    def _denied(self, what: str) -> OperationRefused:
+        return OperationRefused(
+            f"the {self.role} role may only read (writes and calls need the operator role)",
+            status="BadUserAccessDenied", asset=self.asset_id, operation=what,
+        )  # fmt: skip
 
     async def _node(self, *parts: str):
         if self._ns is None:
@@ -34,10 +51,22 @@ class AssetClient:
         return await (await self._node(submodel, prop)).read_value()
 
     async def write(self, submodel: str, prop: str, value: Any) -> None:
-        """Write a property (needs the operator role and a writable variable)."""
+        """Write a property (needs the operator role and a writable variable).
+
+        Raises:
+            OperationRefused: BadUserAccessDenied for a session without the operator role.
+            ua.UaStatusCodeError: Other Bad statuses (e.g. BadNotWritable, BadTypeMismatch).
+        """
         node = await self._node(submodel, prop)
-        vtype = await node.read_data_type_as_variant_type()
-        await node.write_value(ua.DataValue(ua.Variant(value, vtype)))
+        vtype = self._vtypes.get((submodel, prop))
+        if vtype is None:
+            vtype = self._vtypes[(submodel, prop)] = await node.read_data_type_as_variant_type()
+        try:
+            await node.write_value(ua.DataValue(ua.Variant(value, vtype)))
+        except ua.UaStatusCodeError as exc:
+            if exc.code == _DENIED and not isinstance(exc, OperationRefused):
+                raise self._denied(f"write {submodel}.{prop}") from None
+            raise
 
     async def call(self, operation: str, *args: Any, submodel: str = "ControlInterface") -> Any:
         """Call an operation; returns its single output or a list of outputs.
@@ -52,7 +81,12 @@ class AssetClient:
         request.ObjectId = parent.nodeid
         request.MethodId = method.nodeid
         request.InputArguments = [a if isinstance(a, ua.Variant) else ua.Variant(a) for a in args]
-        (result,) = await self.client.uaclient.call([request])
+        try:
+            (result,) = await self.client.uaclient.call([request])
+        except ua.UaStatusCodeError as exc:
+            if exc.code == _DENIED:
+                raise self._denied(operation) from None
+            raise
         if not result.StatusCode.is_good():
             infos = result.InputArgumentDiagnosticInfos or []
             reason = next((d.AdditionalInfo for d in infos if d and d.AdditionalInfo), None)
@@ -85,7 +119,15 @@ async def connect(
     insecure: bool = False,
     timeout_s: float = 10.0,
 ) -> AsyncIterator[AssetClient]:
-    """A session with an asset server (secure unless `insecure`)."""
+    """A session with an asset server (secure unless `insecure`).
+
+    The client's application certificate is ``cert_dir/client-<role>.der`` (created on
+    first use); the server accepts it only if it is on the server's trust list.
+
+    Raises:
+        ua.UaStatusCodeError: BadCertificateUntrusted (the server does not trust this
+            client's certificate), BadUserAccessDenied (wrong credentials), ...
+    """
     # asyncua's watchdog reads the server state every interval and drops the session if the
     # answer takes longer than the interval (default 1 s): a server whose event loop also runs
     # the simulation answers slower than that on a loaded machine. Probe every 10 s instead.
@@ -102,4 +144,4 @@ async def connect(
         client.set_user(user)
         client.set_password(password)
     async with client:
-        yield AssetClient(client, asset_id)
+        yield AssetClient(client, asset_id, role)

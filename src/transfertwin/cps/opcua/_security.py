@@ -1,9 +1,17 @@
-"""Security of the asset servers: certificates, demo users and role-based permissions.
+"""Security of the asset servers: certificates, a trust list, demo users and roles.
 
 Secure by default: Basic256Sha256 SignAndEncrypt with a self-signed application certificate
-created on first start, username/password users with roles, no anonymous access. An
-*observer* may read, browse and subscribe; an *operator* may also write and call methods.
+created on first start, username/password users with roles, no anonymous access. A *viewer*
+may read, browse and subscribe; an *operator* may also write and call methods (order).
 NoSecurity is only used when a caller passes ``insecure=True`` explicitly.
+
+Trust list: a server accepts a session only from a client whose application certificate is
+in its trust folder (one DER file per certificate, compared by SHA-256 of the whole
+certificate, i.e. pinned). The folder is read again on every new session, so a certificate
+added with `trust_certificate` (``transfertwin cps trust``) counts at once, without a
+restart. It is checked twice: at CreateSession (an unknown certificate gets
+BadCertificateUntrusted) and again by the user manager at ActivateSession (a client that
+ignores the first refusal gets BadUserAccessDenied).
 """
 
 from __future__ import annotations
@@ -11,16 +19,21 @@ from __future__ import annotations
 import hashlib
 import hmac
 import json
+import logging
 import os
 import secrets
 import socket
 from dataclasses import dataclass
+from datetime import UTC, datetime
 from pathlib import Path
 
 from asyncua import ua
+from asyncua.common.utils import ServiceError
 from asyncua.crypto.cert_gen import setup_self_signed_certificate
 from asyncua.crypto.permission_rules import PermissionRuleset, User, UserRole
-from cryptography.x509.oid import ExtendedKeyUsageOID
+from cryptography import x509
+from cryptography.hazmat.primitives.serialization import Encoding
+from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
 
 from transfertwin._atomic import write_atomic
 
@@ -29,14 +42,19 @@ __all__ = [
     "Credentials",
     "RoleRuleset",
     "RoleUserManager",
+    "TrustList",
     "ensure_certificate",
     "free_port",
     "load_credentials",
     "new_credentials",
+    "read_certificate",
+    "trust_certificate",
     "write_credentials",
 ]
 
-ROLES = ("observer", "operator")
+log = logging.getLogger(__name__)
+
+ROLES = ("viewer", "operator")
 
 _READ_TYPES = {
     ua.ObjectIds.CreateSessionRequest_Encoding_DefaultBinary,
@@ -69,7 +87,7 @@ _WRITE_TYPES = {
 
 
 class RoleRuleset(PermissionRuleset):
-    """Observers read; operators also write and call; nobody changes the address space."""
+    """Viewers read; operators also write and call; nobody changes the address space."""
 
     def __init__(self) -> None:
         self._read = {ua.NodeId(i) for i in _READ_TYPES}
@@ -126,13 +144,22 @@ def load_credentials(path: Path) -> Credentials:
 
 
 class RoleUserManager:
-    """Username/password users mapped to roles; asyncua calls `get_user` on activation."""
+    """Username/password users mapped to roles; asyncua calls `get_user` on activation.
 
-    def __init__(self, creds: Credentials) -> None:
+    Args:
+        creds: The users.
+        trust: If given, a session is refused unless the client's application certificate
+            (the secure channel's peer certificate) is on this trust list.
+    """
+
+    def __init__(self, creds: Credentials, trust: TrustList | None = None) -> None:
         self._users = {u: (p, role) for role, (u, p) in creds.users.items()}
+        self._trust = trust
 
     def get_user(self, iserver, username=None, password=None, certificate=None) -> User | None:
         """The user for these credentials, or None (refused)."""
+        if self._trust is not None and not self._trust.is_trusted(certificate):
+            return None
         if username is None or username not in self._users:
             return None
         expected, role = self._users[username]
@@ -141,6 +168,90 @@ class RoleUserManager:
             hashlib.sha256((password or "").encode()).digest(),
         )
         return User(role=UserRole.User, name=role) if ok else None
+
+
+def read_certificate(path: Path) -> x509.Certificate:
+    """An X.509 certificate from a DER or PEM file.
+
+    Raises:
+        ValueError: Not a readable certificate (the message names the file).
+    """
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read the certificate ({exc.strerror})") from None
+    for load in (x509.load_der_x509_certificate, x509.load_pem_x509_certificate):
+        try:
+            return load(data)
+        except ValueError:
+            continue
+    raise ValueError(f"{path}: not an X.509 certificate (DER or PEM)")
+
+
+def _fingerprint(der: bytes) -> str:
+    return hashlib.sha256(der).hexdigest()
+
+
+def trust_certificate(trust_dir: Path, cert: Path | x509.Certificate) -> Path:
+    """Put a client certificate on a trust list (a DER copy named by CN and fingerprint).
+
+    Args:
+        trust_dir: The trust folder of the servers (created if missing).
+        cert: The certificate or a DER/PEM file holding it.
+
+    Returns:
+        The file written (already there if the certificate was trusted before).
+
+    Raises:
+        ValueError: `cert` is not a readable certificate.
+    """
+    c = cert if isinstance(cert, x509.Certificate) else read_certificate(Path(cert))
+    der = c.public_bytes(Encoding.DER)
+    cn = c.subject.get_attributes_for_oid(NameOID.COMMON_NAME)
+    stem = "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in
+                   (str(cn[0].value) if cn else "cert"))[:40]  # fmt: skip
+    trust_dir.mkdir(parents=True, exist_ok=True)
+    path = trust_dir / f"{stem}-{_fingerprint(der)[:16]}.der"
+    if not path.exists():
+        write_atomic(path, der)
+    return path
+
+
+class TrustList:
+    """The client certificates a server accepts: every DER/PEM file in `folder` (pinned).
+
+    Usable as asyncua's certificate validator (called at CreateSession).
+    """
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = Path(folder)
+
+    def fingerprints(self) -> frozenset[str]:
+        """SHA-256 of every trusted certificate, read from the folder now."""
+        out = set()
+        for f in sorted(self.folder.glob("*")) if self.folder.is_dir() else ():
+            if f.suffix.lower() in (".der", ".pem"):
+                try:
+                    out.add(_fingerprint(read_certificate(f).public_bytes(Encoding.DER)))
+                except ValueError:
+                    log.warning("trust list: %s is not a certificate; ignored", f)
+        return frozenset(out)
+
+    def is_trusted(self, der: bytes | None) -> bool:
+        """Whether a DER certificate is on the list (None: no certificate, not trusted)."""
+        return der is not None and _fingerprint(bytes(der)) in self.fingerprints()
+
+    async def __call__(self, cert: x509.Certificate, app: ua.ApplicationDescription) -> None:
+        """Refuse an untrusted or expired client certificate (asyncua validator)."""
+        name = app.ApplicationUri if app is not None else "?"
+        if not self.is_trusted(cert.public_bytes(Encoding.DER)):
+            log.warning("refused untrusted client certificate %s (%s); trust it with "
+                        "'transfertwin cps trust'", cert.subject.rfc4514_string(), name)  # fmt: skip
+            raise ServiceError(ua.StatusCodes.BadCertificateUntrusted)
+        now = datetime.now(UTC)
+        if not cert.not_valid_before_utc <= now <= cert.not_valid_after_utc:
+            log.warning("refused expired client certificate %s (%s)", cert.subject, name)
+            raise ServiceError(ua.StatusCodes.BadCertificateTimeInvalid)
 
 
 async def ensure_certificate(

@@ -9,9 +9,10 @@ nodes live in the namespace ``urn:transfertwin:aas`` with string node ids
 Deviations from the companion specification: no AAS object/variable *types* are
 instantiated (plain folders, objects and variables), and references are not modelled.
 
-Async context manager; secure by default (see `_security`). Variables listed as writable
-accept client writes (external state synchronisation); all others are updated by the asset
-itself through `set`.
+Async context manager; secure by default (see `_security`: trust list of client
+certificates, viewer/operator roles). Variables listed as writable accept client writes
+(external state synchronisation) from operators; all others are updated by the asset itself
+through `set`.
 """
 
 from __future__ import annotations
@@ -24,12 +25,14 @@ from typing import Any
 
 import basyx.aas.model as aas
 from asyncua import Server, ua
+from asyncua.common.callback import CallbackType
 from asyncua.common.node import Node
 
 from transfertwin.cps.opcua._security import (
     Credentials,
     RoleRuleset,
     RoleUserManager,
+    TrustList,
     ensure_certificate,
     free_port,
 )
@@ -132,6 +135,7 @@ class ServerConfig:
         insecure: Serve NoSecurity without users (explicit opt-in only).
         cert_dir: Where application certificates are created on first start.
         credentials: Users and passwords per role (required unless insecure).
+        trust_dir: The trust list: client certificates accepted (None: ``cert_dir/trusted``).
     """
 
     host: str = "127.0.0.1"
@@ -139,6 +143,12 @@ class ServerConfig:
     insecure: bool = False
     cert_dir: Path = Path("certs")
     credentials: Credentials | None = None
+    trust_dir: Path | None = None
+
+    @property
+    def trust_folder(self) -> Path:
+        """The folder of trusted client certificates."""
+        return self.trust_dir if self.trust_dir is not None else self.cert_dir / "trusted"
 
 
 @dataclass
@@ -164,6 +174,8 @@ class AssetServer:
     _nodes: dict[tuple[str, str], Node] = field(default_factory=dict)
     _types: dict[tuple[str, str], type] = field(default_factory=dict)
     _ns: int = 0
+    _write_listeners: list[Callable[[str, str, Any], None]] = field(default_factory=list)
+    _keys: dict[ua.NodeId, tuple[str, str]] = field(default_factory=dict)
 
     @property
     def security_policy(self) -> str:
@@ -174,7 +186,9 @@ class AssetServer:
         cfg = self.config
         if not cfg.insecure and cfg.credentials is None:
             raise ValueError("a secure asset server needs credentials")
-        server = Server(user_manager=RoleUserManager(cfg.credentials) if cfg.credentials else None)
+        trust = None if cfg.insecure else TrustList(cfg.trust_folder)
+        users = RoleUserManager(cfg.credentials, trust) if cfg.credentials else None
+        server = Server(user_manager=users)
         await server.init()
         port = cfg.port or free_port(cfg.host)
         self.endpoint = f"opc.tcp://{cfg.host}:{port}/transfertwin/{self.asset_id}"
@@ -192,8 +206,11 @@ class AssetServer:
                 permission_ruleset=RoleRuleset(),
             )
             server.set_identity_tokens([ua.UserNameIdentityToken])
+            server.set_certificate_validator(trust)
+        server.subscribe_server_callback(CallbackType.PostWrite, self._written)
         self._ns = await server.register_namespace(NAMESPACE)
         await self._build(server)
+        self._keys = {n.nodeid: key for key, n in self._nodes.items()}
         await server.start()
         self._server = server
         log.info("%s serving at %s (%s)", self.asset_id, self.endpoint, self.security_policy)
@@ -248,10 +265,12 @@ class AssetServer:
             # server failure.
             if handler is None:
                 return ua.StatusCode(ua.StatusCodes.BadNotImplemented)
-            if len(args) != len(ins):
+            if len(args) < len(ins):
                 return ua.StatusCode(ua.StatusCodes.BadArgumentsMissing)
-            values = [a.Value for a in args]
+            if len(args) > len(ins):
+                return ua.StatusCode(ua.StatusCodes.BadTooManyArguments)
             try:
+                values = [_coerce(n, t, a) for (n, t), a in zip(ins, args, strict=True)]
                 result = await handler(*values)
             except OperationRefused as exc:
                 refused = exc
@@ -298,6 +317,26 @@ class AssetServer:
         self._server.iserver._known_servers.pop(uri, None)
 
     # -- values ---------------------------------------------------------------------------
+    def on_client_write(self, listener: Callable[[str, str, Any], None]) -> Callable[[], None]:
+        """Call `listener(submodel, property, value)` for every accepted client write, in the
+        order the server applied them (a write the server refused is not reported).
+
+        Returns:
+            A function that removes the listener again.
+        """
+        self._write_listeners.append(listener)
+        return lambda: self._write_listeners.remove(listener)
+
+    def _written(self, event: Any, _dispatcher: Any) -> None:
+        if not self._write_listeners:
+            return
+        results = event.response_params or []
+        for wv, status in zip(event.request_params.NodesToWrite, results, strict=False):
+            key = self._keys.get(wv.NodeId)
+            if key is not None and status.is_good():
+                for listener in self._write_listeners:
+                    listener(*key, wv.Value.Value.Value)
+
     async def set(self, submodel: str, prop: str, value: Any) -> None:
         """Update a variable (the asset synchronising its own state)."""
         ptype = self._types[(submodel, prop)]
@@ -306,6 +345,28 @@ class AssetServer:
     async def get(self, submodel: str, prop: str) -> Any:
         """Current value of a variable."""
         return await self._nodes[(submodel, prop)].read_value()
+
+
+def _coerce(name: str, ptype: type, arg: ua.Variant) -> Any:
+    """An input argument as the declared Python type; any integer type is accepted for an
+    Int64 and integers and Floats for a Double. Anything else is refused (BadTypeMismatch
+    on that argument)."""
+    vtype = arg.VariantType
+    if not arg.is_array:
+        if vtype == _VARIANT[ptype]:
+            return arg.Value
+        if ptype is int and vtype in _INTS:
+            return int(arg.Value)
+        if ptype is float and (vtype in _INTS or vtype == ua.VariantType.Float):
+            return float(arg.Value)
+    raise OperationRefused(
+        f"{name} must be a {_VARIANT[ptype].name}, got {vtype.name}"
+        + (" array" if arg.is_array else ""), status="BadTypeMismatch", argument=name,
+    )  # fmt: skip
+
+
+_INTS = frozenset(getattr(ua.VariantType, t) for t in
+                  ("SByte", "Byte", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64"))  # fmt: skip
 
 
 def _argument(name: str, ptype: type) -> ua.Argument:

@@ -128,10 +128,11 @@ async def connect(
         ua.UaStatusCodeError: BadCertificateUntrusted (the server does not trust this
             client's certificate), BadUserAccessDenied (wrong credentials), ...
     """
-    # asyncua's watchdog reads the server state every interval and drops the session if the
-    # answer takes longer than the interval (default 1 s): a server whose event loop also runs
-    # the simulation answers slower than that on a loaded machine. Probe every 10 s instead.
-    client = Client(url=endpoint, timeout=timeout_s, watchdog_intervall=10.0)
+    # asyncua probes the connection every `watchdog_intervall` seconds and drops it when a
+    # probe takes longer than that (1 s by default): a busy server (load test, 14 servers on
+    # two cores, an event loop that also runs the simulation) lost its clients mid-operation.
+    # A probe may take as long as any request, and runs at most every 10 s.
+    client = Client(url=endpoint, timeout=timeout_s, watchdog_intervall=max(10.0, timeout_s))
     client.application_uri = f"urn:transfertwin:client-{role}"
     if not insecure:
         cert, key = await ensure_certificate(cert_dir, f"client-{role}")

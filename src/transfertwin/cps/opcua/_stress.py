@@ -111,7 +111,7 @@ async def paced_writes(
     *,
     rate_hz: float,
     duration_s: float,
-    max_in_flight: int = 256,
+    max_in_flight: int = 64,
     on_second: Any = None,
 ) -> tuple[int, float]:
     """Write 0, 1, 2, ... to a variable at `rate_hz` for `duration_s`, one request each.

@@ -41,8 +41,10 @@ def _run_client(wd: Path, coro_fn):
     except ua.UaStatusCodeError as exc:
         if exc.code != ua.StatusCodes.BadCertificateUntrusted:
             raise
-        raise InputError(f"{wd}: the CPS does not trust this client's certificate; trust it "
-                         "with 'transfertwin cps trust CERT --workdir WORKDIR'") from None  # fmt: skip
+        raise InputError(
+            f"{wd}: the CPS does not trust this client's certificate; trust it with "
+            "'transfertwin cps trust CERT --workdir WORKDIR'"
+        ) from None
 
 
 def _load(wd: Path) -> tuple[dict, object]:

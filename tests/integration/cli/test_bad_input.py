@@ -120,6 +120,9 @@ BAD: list[tuple[str, list[str]]] = [
             "0",
         ],
     ),
+    ("cps trust without a cps", ["cps", "trust", "real.csv", "--workdir", "nowhere"]),
+    ("cps trust missing cert", ["cps", "trust", "missing.der", "--workdir", "cpswd"]),
+    ("cps trust not a certificate", ["cps", "trust", "real.csv", "--workdir", "cpswd"]),
     ("demo into /sys", ["demo", "--out", "/sys/demo"]),
     ("data export not csv", ["data", "calibration", "--out", "real.txt"]),
     (
@@ -225,6 +228,7 @@ def workdir(tmp_path: Path, box_stl: Path, monkeypatch: pytest.MonkeyPatch) -> P
     (tmp_path / "no_units.csv").write_text(
         "\n".join(",".join(c for i, c in enumerate(line.split(",")) if i != 1) for line in real)
     )
+    (tmp_path / "cpswd" / "certs").mkdir(parents=True)  # a CPS workdir (cps trust)
     first = calibration_csv_path().read_text().splitlines()[1].split(",")
     first[3] = "999"
     (tmp_path / "bad_theta.csv").write_text(HEADER + ",".join(first[:10]) + "\n")

@@ -82,7 +82,9 @@ class ServedAsset:
                         if isinstance(e, aas.Operation)]  # fmt: skip
         self._behaviour: dict[str, Callable[..., Awaitable[Any]]] = {}
         handlers = {op: self._dispatcher(op) for op in self.methods}
-        self.server = AssetServer(asset_id, rep.submodels, config, handlers, frozenset(self.writable))
+        self.server = AssetServer(
+            asset_id, rep.submodels, config, handlers, frozenset(self.writable)
+        )
         self._loop = asyncio.new_event_loop()
         self._thread = threading.Thread(target=self._loop.run_forever, daemon=True)
 

@@ -19,8 +19,9 @@ def _paced(tu_a, pki, rate_hz: float, duration_s: float):
     remove = tu_a.server.on_client_write(recorder)
 
     async def scenario():
-        async with connect(tu_a.endpoint, "TU_A", role="operator", timeout_s=60,
-                           **pki.client_kw()) as op:
+        async with connect(
+            tu_a.endpoint, "TU_A", role="operator", timeout_s=60, **pki.client_kw()
+        ) as op:
             return await paced_writes(op, "OperationalData", "PossessedObjects",
                                       rate_hz=rate_hz, duration_s=duration_s)  # fmt: skip
 
@@ -53,10 +54,12 @@ def test_thirty_seconds_at_a_thousand_writes_per_second(tu_a, pki):
 def test_thousand_writes_and_hundred_subscriptions_lose_nothing(tu_a, pki):
     async def scenario():
         async with (
-            connect(tu_a.endpoint, "TU_A", role="viewer", timeout_s=60,
-                    **pki.client_kw()) as watcher,
-            connect(tu_a.endpoint, "TU_A", role="operator", timeout_s=60,
-                    **pki.client_kw()) as writer,
+            connect(
+                tu_a.endpoint, "TU_A", role="viewer", timeout_s=60, **pki.client_kw()
+            ) as watcher,
+            connect(
+                tu_a.endpoint, "TU_A", role="operator", timeout_s=60, **pki.client_kw()
+            ) as writer,
         ):
             final = str(N_WRITES - 1)
             seen = [asyncio.Event() for _ in range(N_SUBS)]

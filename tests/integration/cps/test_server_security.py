@@ -72,14 +72,14 @@ def test_viewer_reads_but_its_writes_and_calls_are_refused_by_the_server(tu_a, p
                 "BadUserAccessDenied: TU_A.write OperationalData.PossessedObjects refused: "
                 "the viewer role may only read (writes and calls need the operator role)"
             )
-            with pytest.raises(ua.UaStatusCodeError, match="BadUserAccessDenied.*viewer role"):
+            with pytest.raises(ua.UaStatusCodeError, match=r"BadUserAccessDenied.*viewer role"):
                 await viewer.call("SetBeltSpeed", "left", 0.1)
             # the refusals did not end the session
             assert await viewer.read("Identification", "AssetId") == "TU_A"
             # the server refuses the raw request too, whatever the client library does
             node = await viewer._node("OperationalData", "PossessedObjects")
-            raw = ua.WriteValue(NodeId=node.nodeid, AttributeId=ua.AttributeIds.Value,
-                                Value=ua.DataValue(ua.Variant("x", ua.VariantType.String)))  # fmt: skip
+            value = ua.DataValue(ua.Variant("x", ua.VariantType.String))
+            raw = ua.WriteValue(NodeId=node.nodeid, AttributeId=ua.AttributeIds.Value, Value=value)
             with pytest.raises(ua.UaStatusCodeError, match="BadUserAccessDenied"):
                 await viewer.client.uaclient.write(ua.WriteParameters(NodesToWrite=[raw]))
 
@@ -141,7 +141,7 @@ def test_unauthenticated_and_wrong_password_are_refused(tu_a, pki):
 def test_read_only_variables_refuse_operator_writes(tu_a, pki):
     async def scenario():
         async with connect(tu_a.endpoint, "TU_A", **pki.client_kw()) as op:
-            with pytest.raises(ua.UaStatusCodeError, match="BadUserAccessDenied|BadNotWritable"):
+            with pytest.raises(ua.UaStatusCodeError, match=r"BadUserAccessDenied|BadNotWritable"):
                 await op.write("OperationalData", "BeltSpeedLeft", 9.0)
 
     _run(scenario())

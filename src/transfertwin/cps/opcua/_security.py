@@ -245,8 +245,9 @@ class TrustList:
         """Refuse an untrusted or expired client certificate (asyncua validator)."""
         name = app.ApplicationUri if app is not None else "?"
         if not self.is_trusted(cert.public_bytes(Encoding.DER)):
+            subject = cert.subject.rfc4514_string()
             log.warning("refused untrusted client certificate %s (%s); trust it with "
-                        "'transfertwin cps trust'", cert.subject.rfc4514_string(), name)  # fmt: skip
+                        "'transfertwin cps trust'", subject, name)  # fmt: skip
             raise ServiceError(ua.StatusCodes.BadCertificateUntrusted)
         now = datetime.now(UTC)
         if not cert.not_valid_before_utc <= now <= cert.not_valid_after_utc:

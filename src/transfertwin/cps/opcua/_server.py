@@ -263,14 +263,14 @@ class AssetServer:
         async def call(_parent: ua.NodeId, *args: ua.Variant) -> Any:
             # A bad request becomes a status code (and the reason) for the caller, never a
             # server failure.
-            if handler is None:
-                return ua.StatusCode(ua.StatusCodes.BadNotImplemented)
             if len(args) < len(ins):
                 return ua.StatusCode(ua.StatusCodes.BadArgumentsMissing)
             if len(args) > len(ins):
                 return ua.StatusCode(ua.StatusCodes.BadTooManyArguments)
             try:
                 values = [_coerce(n, t, a) for (n, t), a in zip(ins, args, strict=True)]
+                if handler is None:
+                    return ua.StatusCode(ua.StatusCodes.BadNotImplemented)
                 result = await handler(*values)
             except OperationRefused as exc:
                 refused = exc
@@ -365,8 +365,10 @@ def _coerce(name: str, ptype: type, arg: ua.Variant) -> Any:
     )  # fmt: skip
 
 
-_INTS = frozenset(getattr(ua.VariantType, t) for t in
-                  ("SByte", "Byte", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64"))  # fmt: skip
+_INTS = frozenset(
+    getattr(ua.VariantType, t)
+    for t in ("SByte", "Byte", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64")
+)
 
 
 def _argument(name: str, ptype: type) -> ua.Argument:

@@ -16,6 +16,7 @@ servers, never for probing others.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import ipaddress
 import struct
 import time
@@ -31,7 +32,7 @@ import numpy as np
 from asyncua import ua
 from asyncua.common.connection import SecureConnection, TransportLimits
 from asyncua.crypto.security_policies import SecurityPolicyNone
-from asyncua.ua.ua_binary import struct_to_binary, uatcp_to_binary
+from asyncua.ua.ua_binary import nodeid_to_binary, struct_to_binary, uatcp_to_binary
 
 from transfertwin.cps.opcua._client import AssetClient
 
@@ -135,7 +136,7 @@ async def paced_writes(
     node = await client._node(submodel, prop)
     vtype = await node.read_data_type_as_variant_type()
     convert = str if vtype == ua.VariantType.String else int
-    n = int(round(rate_hz * duration_s))
+    n = round(rate_hz * duration_s)
     window = asyncio.Semaphore(max_in_flight)
     pending: set[asyncio.Task] = set()
     errors: list[BaseException] = []
@@ -235,7 +236,7 @@ def _session_request(rng: np.random.Generator) -> bytes:
     (Read, Write, Call, CreateSession, ActivateSession, RegisterServer2 or any number) and
     a garbage body, on the channel the server assigned (1) or a wrong one."""
     type_id = int(rng.choice([631, 673, 712, 461, 467, 12211, int(rng.integers(0, 20000))]))
-    body = struct_to_binary(ua.NodeId(type_id)) + rng.bytes(int(rng.integers(0, 200)))
+    body = nodeid_to_binary(ua.NodeId(type_id)) + rng.bytes(int(rng.integers(0, 200)))
     channel = int(rng.choice([1, 0, int(rng.integers(0, 2**32))]))
     header = struct.pack("<3scII", b"MSG", b"F", 12 + 12 + len(body), channel)
     return header + struct.pack("<III", 1, 2, 2) + body
@@ -256,10 +257,8 @@ async def _raw(host: str, port: int, payloads: list[bytes], wait_s: float) -> st
         return "closed"
     finally:
         writer.close()
-        try:
+        with contextlib.suppress(ConnectionError, OSError):
             await writer.wait_closed()
-        except (ConnectionError, OSError):
-            pass
 
 
 def _bad_node_id(rng: np.random.Generator, ns: int) -> ua.NodeId:

@@ -5,12 +5,11 @@ from __future__ import annotations
 
 import asyncio
 
-from transfertwin.cps import AssetServer, ServerConfig, build_representation, connect
+from transfertwin.cps import AssetServer, build_representation, connect
 from transfertwin.cps.aas._demo import demo_descriptors
 from transfertwin.cps.opcua._discovery import Discovery
-from transfertwin.cps.opcua._security import new_credentials
 
-IDS = ("TU_A", "TU_B", "TM_1", "TU_C")
+IDS = ("TU_A", "TU_B", "TU_C")  # TU_C learns of TU_B only by gossip
 
 
 def _names(agent: Discovery) -> set[str]:
@@ -28,14 +27,13 @@ async def _until(agents, predicate, timeout=30.0):
     await asyncio.wait_for(loop(), timeout)
 
 
-def test_join_spreads_and_leave_is_noticed(tmp_path):
-    creds = new_credentials()
+def test_join_spreads_and_leave_is_noticed(pki):
     descs = {d.asset_id: d for d in demo_descriptors()}
-    cfg = ServerConfig(cert_dir=tmp_path, credentials=creds)
+    cfg = pki.config()
     events: list[tuple[str, str, str]] = []
 
     def connector(url):
-        return connect(url, url.rsplit("/", 1)[-1], credentials=creds, cert_dir=tmp_path)
+        return connect(url, url.rsplit("/", 1)[-1], **pki.client_kw())
 
     async def scenario():
         servers = {}
@@ -61,7 +59,7 @@ def test_join_spreads_and_leave_is_noticed(tmp_path):
 
         # FindServers on any peer lists the others: there is no central registry.
         found = await agents["TU_B"]._ask(servers["TU_C"].endpoint)
-        assert {p.asset_id for p in found} >= {"TU_A", "TU_B", "TM_1"}
+        assert {p.asset_id for p in found} >= {"TU_A", "TU_B"}
 
         # TU_C leaves; every other asset notices.
         await agents.pop("TU_C").stop()

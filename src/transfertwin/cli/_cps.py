@@ -128,7 +128,7 @@ async def _floor_pose(info: dict, creds, tm: str) -> str:
     from transfertwin.cps.opcua import connect
 
     cert_dir, insecure = Path(info["cert_dir"]), info["insecure"]
-    async with connect(_endpoint(info, tm), tm, credentials=creds, role="observer",
+    async with connect(_endpoint(info, tm), tm, credentials=creds, role="viewer",
                        cert_dir=cert_dir, insecure=insecure) as s:  # fmt: skip
         x, y, theta, docked = [await s.read("OperationalData", p)
                                for p in ("PoseX", "PoseY", "PoseTheta", "DockedAt")]  # fmt: skip

@@ -39,7 +39,7 @@ def test_a_navigated_order_runs_navigate_dock_scan_transfer_in_order(tmp_path):
                         done.set()
 
             pose_props = ("PoseX", "PoseY", "PoseTheta")
-            async with cps.client("TM_1", role="observer") as tm, cps.client("TMS") as tms:
+            async with cps.client("TM_1", role="viewer") as tm, cps.client("TMS") as tms:
                 home = [await tm.read("OperationalData", p) for p in pose_props]
                 assert home == list(HOME_POSE)
                 await tm.subscribe(States(), ("OperationalData", "State"))

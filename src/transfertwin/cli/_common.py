@@ -12,6 +12,7 @@ from transfertwin._errors import InputError
 __all__ = [
     "Parser",
     "add_executor_args",
+    "add_state_args",
     "executor_from_args",
     "parse_dock_error",
     "positive_int",
@@ -39,6 +40,17 @@ def parse_dock_error(text: str):  # -> DockingError
     if len(values) != 3:
         raise InputError(f"--dock-error expects X_MM,Y_MM,THETA_DEG, got {text!r}")
     return DockingError.from_mm_deg(*values)
+
+
+def add_state_args(p: argparse.ArgumentParser) -> None:
+    """The object and its pre-transfer state: --object, --units, --face, --conveyor, --theta
+    and --dock-error (the options `transfer` and `perceive` share)."""
+    p.add_argument("--object", required=True, help="built-in core id (o1..o37) or a mesh path")
+    p.add_argument("--units", default="m", help="length unit of a mesh file: m, cm, mm, in")
+    p.add_argument("--face", required=True, help="front or back")
+    p.add_argument("--conveyor", required=True, help="left, right or both")
+    p.add_argument("--theta", required=True, type=int, help="yaw in integer degrees, -179..180")
+    p.add_argument("--dock-error", default="0,0,0", help="X_MM,Y_MM,THETA_DEG (default 0,0,0)")
 
 
 def positive_int(option: str, value: int) -> int:

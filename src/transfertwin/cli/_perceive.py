@@ -10,7 +10,7 @@ from rich.console import Console
 from rich.table import Table
 
 from transfertwin._errors import InputError
-from transfertwin.cli._common import parse_dock_error
+from transfertwin.cli._common import add_state_args, parse_dock_error
 from transfertwin.cli._paths import out_file
 
 __all__ = ["register"]
@@ -107,12 +107,7 @@ def _print(out: dict) -> None:
 def register(sub: argparse._SubParsersAction) -> None:
     """Add `perceive`."""
     p = sub.add_parser("perceive", help="detect an object with the TM's simulated depth camera")
-    p.add_argument("--object", required=True, help="built-in core id (o1..o37) or a mesh path")
-    p.add_argument("--units", default="m", help="length unit of a mesh file: m, cm, mm, in")
-    p.add_argument("--face", required=True, help="front or back")
-    p.add_argument("--conveyor", required=True, help="left, right or both")
-    p.add_argument("--theta", required=True, type=int, help="yaw in integer degrees, -179..180")
-    p.add_argument("--dock-error", default="0,0,0", help="X_MM,Y_MM,THETA_DEG (default 0,0,0)")
+    add_state_args(p)
     p.add_argument("--seed", type=int, default=0, help="seed of the noise and RANSAC draws")
     p.add_argument("--size", default="320x240", help="depth image WIDTHxHEIGHT (320x240)")
     p.add_argument("--clean", action="store_true", help="no depth noise, no dropout")

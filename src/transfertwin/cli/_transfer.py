@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 from rich.console import Console
 from rich.table import Table
 
-from transfertwin.cli._common import parse_dock_error
+from transfertwin.cli._common import add_state_args, parse_dock_error
 from transfertwin.cli._paths import out_dir, out_file
 from transfertwin.cli._progress import progress_bar
 
@@ -179,12 +179,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 def register(sub: argparse._SubParsersAction) -> None:
     """Add `transfer`, `states`, `objects list|export` and `demo`."""
     p = sub.add_parser("transfer", help="run one virtual transfer experiment (E^V)")
-    p.add_argument("--object", required=True, help="built-in core id (o1..o37) or a mesh path")
-    p.add_argument("--units", default="m", help="length unit of a mesh file: m, cm, mm, in")
-    p.add_argument("--face", required=True, help="front or back")
-    p.add_argument("--conveyor", required=True, help="left, right or both")
-    p.add_argument("--theta", required=True, type=int, help="yaw in integer degrees, -179..180")
-    p.add_argument("--dock-error", default="0,0,0", help="X_MM,Y_MM,THETA_DEG (default 0,0,0)")
+    add_state_args(p)
     p.add_argument("--profile", help="physics profile TOML or built-in name (default: defaults)")
     p.add_argument("--mu", type=float, help="dynamic friction (default: the profile's, 0.489)")
     p.add_argument("--gap-mm", type=float, help="nominal gap (default: the profile's, 11.88)")

@@ -1,4 +1,5 @@
-"""`transfertwin cps up|status|order|trust|export`: the demo cyber-physical system on loopback."""
+"""`transfertwin cps up|status|order|trust|experiment|export`: the demo cyber-physical system
+on loopback, optionally with an emulated plant as its physical assets (`cps up --plant-seed`)."""
 
 from __future__ import annotations
 
@@ -64,14 +65,20 @@ def _endpoint(info: dict, asset_id: str) -> str:
 
 def cmd_up(args: argparse.Namespace) -> int:
     """Start the demo CPS and serve until SIGINT/SIGTERM."""
-    from transfertwin.cps import Cps, CpsConfig
+    from transfertwin.cps import Cps, CpsConfig, check_plant_seed
     from transfertwin.study.experiment import load_profile
 
+    if args.plant_seed is not None:
+        check_plant_seed(args.plant_seed)
+        if args.insecure:
+            raise InputError("--plant-seed with --insecure: physical assets are served only "
+                             "with security (drop --insecure)")  # fmt: skip
     wd = _workdir(args.workdir, must_exist=False)
     scene = load_profile(args.config)[1] if args.config else None
     kwargs = {"scene": scene} if scene is not None else {}
     cfg = CpsConfig(wd, host=args.host, insecure=args.insecure, time_scale=args.time_scale,
-                    seed=args.seed, docking=args.docking, **kwargs)  # fmt: skip
+                    seed=args.seed, docking=args.docking, plant_seed=args.plant_seed,
+                    **kwargs)  # fmt: skip
     wd.mkdir(parents=True, exist_ok=True)
     handler = logging.FileHandler(wd / "cps.log")
     handler.setFormatter(logging.Formatter("%(asctime)s %(message)s"))
@@ -271,6 +278,53 @@ def cmd_trust(args: argparse.Namespace) -> int:
     return 0
 
 
+def _experiment_unit(info: dict, unit: str, physical: bool) -> str:
+    """The transfer unit an experiment runs against: `unit`, or its physical twin."""
+    units = [a["id"] for a in info["assets"] if a["class"] == "transfer_unit"]
+    if physical and not unit.endswith("_P"):
+        unit = f"{unit}_P"
+    if unit not in units:
+        if unit.endswith("_P") and not any(u.endswith("_P") for u in units):
+            raise InputError(f"--unit {unit}: this CPS has no physical assets; start it with "
+                             "'transfertwin cps up --plant-seed N'")  # fmt: skip
+        raise InputError(f"--unit {unit}: no such transfer unit; units: {', '.join(units)}")
+    return unit
+
+
+def cmd_experiment(args: argparse.Namespace) -> int:
+    """Run experiments through the Experiment Manager: E^V against a virtual unit, E^P
+    against a physical one (`--physical` or a ``_P`` id); one JSON record per line."""
+    from transfertwin.cps.opcua import OperationRefused, connect
+    from transfertwin.objects import builtin_ids
+    from transfertwin.ots import state_index
+
+    state_index(args.face, args.conveyor, args.theta)  # an experiment state (Eq. 6.7)
+    if args.object not in set(builtin_ids()):
+        raise InputError(f"--object {args.object}: not a built-in core (o1..o37)")
+    if args.seed < 0:
+        raise InputError(f"--seed must be a non-negative integer, got {args.seed}")
+    if args.runs < 1:
+        raise InputError(f"--runs must be at least 1, got {args.runs}")
+    wd = _workdir(args.workdir, must_exist=True)
+    info, creds = _load(wd)
+    unit = _experiment_unit(info, args.unit, args.physical)
+
+    async def run() -> None:
+        async with connect(_endpoint(info, "EM"), "EM", credentials=creds,
+                           cert_dir=Path(info["cert_dir"]), insecure=info["insecure"],
+                           timeout_s=300) as em:  # fmt: skip
+            for i in range(args.runs):
+                try:
+                    record = await em.call("RunExperiment", unit, args.object, args.face,
+                                           args.conveyor, args.theta, args.seed + i)  # fmt: skip
+                except OperationRefused as exc:
+                    raise InputError(f"the Experiment Manager refused: {exc.reason}") from None
+                print(record, flush=True)
+
+    _run_client(wd, run)
+    return 0
+
+
 def cmd_export(args: argparse.Namespace) -> int:
     """Write the demo assets' AAS (and their physical twins') as JSON, XML or AASX."""
     from transfertwin.cps import (
@@ -291,7 +345,7 @@ def cmd_export(args: argparse.Namespace) -> int:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add `cps up|status|order|trust|export` to the CLI."""
+    """Add `cps up|status|order|trust|experiment|export` to the CLI."""
     cps = sub.add_parser("cps", help="demo cyber-physical system on loopback (Ch. 3, Sec. 5.3)")
     csub = cps.add_subparsers(dest="cps_command", required=True, parser_class=type(cps))
     p = csub.add_parser("up", help="start TU_A..TU_D, TM_1, objects, KG and logical assets")
@@ -306,6 +360,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="sampled: docking errors drawn from the fitted generator; navigated: "
                         "the transport module drives the shop floor, docks by laser and "
                         "scans with its depth camera (default sampled)")  # fmt: skip
+    p.add_argument("--plant-seed", type=int, metavar="N",
+                   help="also start an emulated plant drawn from seed N as the physical "
+                        "transfer units TU_A_P..TU_D_P (its parameters stay hidden)")  # fmt: skip
     p.set_defaults(func=cmd_up)
     p = csub.add_parser("status", help="list the assets and where the objects are")
     p.add_argument("--workdir", required=True)
@@ -322,6 +379,21 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("cert", metavar="CERT", help="the client's application certificate")
     p.add_argument("--workdir", default=".", help="the CPS's workdir (default: .)")
     p.set_defaults(func=cmd_trust)
+    p = csub.add_parser("experiment",
+                        help="run experiments through the Experiment Manager: E^V on a "
+                             "virtual unit, E^P on a physical one")  # fmt: skip
+    p.add_argument("--workdir", required=True)
+    p.add_argument("--unit", required=True, help="transfer unit, e.g. TU_A (or TU_A_P)")
+    p.add_argument("--physical", action="store_true",
+                   help="E^P on the unit's physical twin (needs cps up --plant-seed)")  # fmt: skip
+    p.add_argument("--object", required=True, help="built-in core, e.g. o2")
+    p.add_argument("--face", required=True)
+    p.add_argument("--conveyor", required=True)
+    p.add_argument("--theta", type=int, required=True, help="yaw in degrees")
+    p.add_argument("--seed", type=int, default=0,
+                   help="seed of the first E^V (one more per run; recorded for E^P)")  # fmt: skip
+    p.add_argument("--runs", type=int, default=1, help="experiments in a row (default 1)")
+    p.set_defaults(func=cmd_experiment)
     p = csub.add_parser("export", help="write the demo assets' AAS as JSON, XML or AASX")
     p.add_argument("--out", required=True, help="FILE.json, FILE.xml or FILE.aasx")
     p.add_argument("--with-physical", action="store_true",

@@ -22,9 +22,11 @@ from pathlib import Path
 
 from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
+from transfertwin.cps._plant_assets import PhysicalAssets, check_plant_seed, plant_representation
 from transfertwin.cps.aas import (
     DEMO_PLACEMENT,
     AssetDescriptor,
+    AssetKind,
     build_representation,
     demo_descriptors,
     externally_synced,
@@ -81,6 +83,8 @@ class CpsConfig:
             and forms the OTS from the simulation's true object box; 'navigated' plans and
             drives on the shop floor, docks by laser (the error emerges) and forms the OTS
             from its depth camera's workspace scan (about 1–2 s more per leg).
+        plant_seed: Start an emulated plant drawn from this seed as the physical assets
+            (``TU_A_P``…``TU_D_P``, `transfertwin.cps._plant_assets`); None: none.
     """
 
     workdir: Path
@@ -92,11 +96,14 @@ class CpsConfig:
     scene: SceneConfig = field(default_factory=SceneConfig)
     placement: Mapping[str, str] = field(default_factory=lambda: dict(DEMO_PLACEMENT))
     docking: str = "sampled"
+    plant_seed: int | None = None
 
     def __post_init__(self) -> None:
         if self.docking not in DOCKING_MODES:
             raise InputError(f"CpsConfig.docking must be one of {', '.join(DOCKING_MODES)}, "
                              f"got {self.docking!r}")  # fmt: skip
+        if self.plant_seed is not None:
+            check_plant_seed(self.plant_seed)
 
 
 @dataclass
@@ -106,7 +113,7 @@ class _Asset:
     discovery: Discovery | None = None
 
 
-class Cps(AssetApplications):
+class Cps(PhysicalAssets, AssetApplications):
     """The running demo CPS (async context manager)."""
 
     def __init__(self, config: CpsConfig) -> None:
@@ -141,6 +148,7 @@ class Cps(AssetApplications):
                 trust_certificate(self.trust_dir, cert)
         for desc in demo_descriptors():
             await self._start(desc)
+        await self._start_physical()
         for obj, holder in self.ledger.locations().items():
             await self._publish_location(obj, holder)
         write_credentials(wd / "credentials.json", self.credentials)
@@ -194,9 +202,12 @@ class Cps(AssetApplications):
         host = self.config.host
         port = free_port(host)
         endpoint = f"opc.tcp://{host}:{port}/transfertwin/{desc.asset_id}"
-        rep = build_representation(
-            desc, endpoint=endpoint, provenance="transfertwin virtual model (MuJoCo)"
-        )
+        if desc.kind is AssetKind.PHYSICAL:
+            rep = plant_representation(desc, endpoint)
+        else:
+            rep = build_representation(
+                desc, endpoint=endpoint, provenance="transfertwin virtual model (MuJoCo)"
+            )
         writable = frozenset(("OperationalData", p) for p in externally_synced(rep))
         cfg = ServerConfig(
             host=host, port=port, insecure=self.config.insecure,

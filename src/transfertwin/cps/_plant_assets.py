@@ -72,7 +72,7 @@ PHYSICAL_RECORD_EXTRA = ("kind", "experiment_id", "transfer_unit", "gap_area_cm2
 #: The transport module the plant's schedule docks (a plant resource, not a CPS asset).
 PLANT_TM = "TM_1_P"
 
-PROVENANCE = "emulated plant: a hidden simulation (transfertwin.plant)"
+PROVENANCE = "emulated plant (transfertwin.plant)"
 
 RUN_TRANSFER = OperationSpec(
     "RunTransfer",

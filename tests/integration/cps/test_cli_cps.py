@@ -29,13 +29,13 @@ def _tt(*args: str, timeout: float = 300, env: dict | None = None) -> subprocess
 class RunningCps:
     """A `cps up` subprocess; stderr goes to a file the tests read."""
 
-    def __init__(self, wd: Path) -> None:
+    def __init__(self, wd: Path, *extra: str) -> None:
         self.wd = wd
         self.stderr_path = wd.parent / "up.stderr"
         self._err = self.stderr_path.open("w")
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "transfertwin", "cps", "up", "--workdir", str(wd),
-             "--time-scale", "0"], stdout=subprocess.PIPE, stderr=self._err, text=True,
+             "--time-scale", "0", *extra], stdout=subprocess.PIPE, stderr=self._err, text=True,
         )  # fmt: skip
         self.first_line = self.proc.stdout.readline()  # blocks until the CPS reports it is up
 

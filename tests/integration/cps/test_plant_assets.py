@@ -1,0 +1,300 @@
+"""`cps up --plant-seed N`: the emulated plant as the CPS's physical assets (issue 12, item 1).
+
+One `cps up --plant-seed` per module (its start dominates; every test after it takes
+seconds). The Experiment Manager runs E^P on the physical units over OPC UA; the same plant
+seed gives the same E^P rows as a fresh plant fed the same requests; nothing the twin can
+reach — the physical servers' address spaces, the knowledge graph, cps.json, the log, the
+AAS — holds a hidden parameter of the plant, and the CPS touches the plant only through its
+public methods.
+"""
+
+from __future__ import annotations
+
+import ast
+import asyncio
+import csv
+import dataclasses
+import json
+import math
+import re
+from pathlib import Path
+
+import pytest
+from asyncua import ua
+
+from tests.integration.cps.test_cli_cps import RunningCps, _tt
+
+SEED = 913
+PHYSICAL = ("TU_A_P", "TU_B_P", "TU_C_P", "TU_D_P")
+SRC = Path(__file__).resolve().parents[3] / "src" / "transfertwin"
+
+
+@pytest.fixture(scope="module")
+def plant_cps(tmp_path_factory):
+    running = RunningCps(tmp_path_factory.mktemp("plant") / "wd", "--plant-seed", str(SEED))
+    yield running
+    if running.proc.poll() is None:
+        running.stop()
+
+
+def _experiment(cps: RunningCps, *args: str) -> list[dict]:
+    res = _tt("cps", "experiment", "--workdir", str(cps.wd), *args)
+    assert res.returncode == 0 and res.stderr == "", res.stderr
+    return [json.loads(line) for line in res.stdout.splitlines()]
+
+
+def test_plant_units_join_beside_the_virtual_models(plant_cps):
+    assert plant_cps.first_line.startswith("CPS up: 18 assets"), plant_cps.first_line
+    info = json.loads((plant_cps.wd / "cps.json").read_text())
+    kinds = {a["id"]: (a["kind"], a["class"], a["type"]) for a in info["assets"]}
+    for unit in PHYSICAL:
+        assert kinds[unit] == ("physical", "transfer_unit", "D/E")
+        assert kinds[unit.removesuffix("_P")][0] == "virtual_model"
+    assert plant_cps.stderr_path.read_text() == ""
+    st = _tt("cps", "status", "--workdir", str(plant_cps.wd))
+    assert st.returncode == 0, st.stderr
+    rows = {line.split()[0]: line.split() for line in st.stdout.splitlines()[2:]}
+    assert rows["TU_C_P"][1] == "PhysicalAsset/TransferUnit"
+    # The TMS moves the CPS's (virtual) objects; a physical unit is no place in its ledger.
+    res = plant_cps.order("TU_A_P", "TU_C", "o1")
+    assert res.returncode == 2 and "TU_A_P" in res.stderr, res.stderr
+
+
+def test_em_runs_e_p_over_opc_ua_in_the_e_v_record_shape(plant_cps):
+    from transfertwin.cps import PHYSICAL_RECORD_EXTRA
+    from transfertwin.store import RESULT_COLUMNS
+
+    physical = _experiment(plant_cps, "--unit", "TU_A", "--physical", "--object", "o2",
+                           "--face", "front", "--conveyor", "both", "--theta", "30",
+                           "--runs", "2")  # fmt: skip
+    physical += _experiment(plant_cps, "--unit", "TU_C_P", "--object", "o3", "--face", "back",
+                            "--conveyor", "left", "--theta", "0")  # fmt: skip
+    (virtual,) = _experiment(plant_cps, "--unit", "TU_A", "--object", "o2", "--face", "front",
+                             "--conveyor", "both", "--theta", "30", "--seed", "4")  # fmt: skip
+    assert list(virtual) == list(RESULT_COLUMNS)  # E^V, unchanged by the plant
+    assert virtual["y1"] in (0, 1) and virtual["state_pre"]
+    for rec in physical:
+        assert list(rec) == [*RESULT_COLUMNS, *PHYSICAL_RECORD_EXTRA]
+        assert rec["kind"] == "physical" and rec["status"] == "ok"
+        assert rec["success"] in (0, 1) and rec["y1"] is None and rec["state_pre"] == ""
+        assert math.isfinite(rec["dock_err_x_mm"]) and rec["t_end_s"] > 0
+    assert [r["transfer_unit"] for r in physical] == ["TU_A", "TU_A", "TU_C"]
+    ids = [r["experiment_id"] for r in physical]
+    assert ids == sorted(ids) and len(set(ids)) == 3
+
+    # Logged as a real calibration table that `calibrate --real` accepts.
+    from transfertwin.store import read_results
+    from transfertwin.study.calibration import check_real_rows
+
+    rows = read_results(plant_cps.wd / "plant_experiments.csv")
+    check_real_rows(rows, "plant_experiments.csv")
+    logged = {int(r["experiment_id"]): r for r in rows}
+    for rec in physical:
+        row = logged[rec["experiment_id"]]
+        assert (row["success"], row["dock_err_x_mm"]) == (rec["success"], rec["dock_err_x_mm"])
+
+
+def test_the_same_plant_seed_gives_the_same_e_p_rows(plant_cps):
+    from transfertwin.plant import PLANT_COLUMNS, EmulatedPlant, PlantRequest
+
+    _experiment(plant_cps, "--unit", "TU_B_P", "--object", "o5", "--face", "front",
+                "--conveyor", "right", "--theta", "0")  # fmt: skip
+    with (plant_cps.wd / "plant_experiments.csv").open(newline="") as fh:
+        reader = csv.DictReader(fh)
+        assert tuple(reader.fieldnames or ()) == PLANT_COLUMNS
+        rows = [{k: _typed(k, v) for k, v in r.items()} for r in reader]
+    requests = [
+        PlantRequest(r["object_id"], r["face"], r["conveyor"], r["theta_deg"], r["transfer_unit"])
+        for r in rows
+    ]
+    # A fresh plant of the same seed, fed the CPS's requests in its order: the same rows.
+    fresh = EmulatedPlant(SEED).run(requests)
+    assert rows == fresh
+    other = EmulatedPlant(SEED + 1).run(requests)  # the comparison can fail
+    assert [r["dock_err_x_mm"] for r in other] != [r["dock_err_x_mm"] for r in fresh]
+
+
+def _typed(column: str, text: str) -> object:
+    if column in ("experiment_id", "theta_deg", "success"):
+        return int(text)
+    if column in ("transfer_unit", "object_id", "face", "conveyor"):
+        return text
+    return float(text)
+
+
+def _hidden_numbers(seed: int, objects) -> list[float]:
+    from transfertwin.plant._truth import draw_docking, draw_object, draw_scene
+
+    out: list[float] = []
+
+    def walk(v) -> None:
+        if dataclasses.is_dataclass(v):
+            v = dataclasses.asdict(v)
+        if isinstance(v, dict):
+            v = list(v.values())
+        if isinstance(v, list | tuple):
+            for x in v:
+                walk(x)
+        elif isinstance(v, float) and v != 0.0:
+            out.append(v)
+
+    walk([draw_scene(seed), draw_docking(seed), *(draw_object(seed, o) for o in objects)])
+    return out
+
+
+def _patterns(values: list[float]) -> re.Pattern:
+    texts = set()
+    for v in values:
+        scaled = [v, v * 1000] + ([math.degrees(v)] if abs(v) < 0.05 else [])
+        for s in scaled:
+            texts |= {repr(s), f"{s:.4f}", f"{s:.5f}", f"{s:.6f}"}
+    texts = {t for t in texts if len(t.split(".")[-1]) >= 3 and t.strip("-0.")}
+    alternatives = "|".join(re.escape(t) for t in sorted(texts, key=len, reverse=True))
+    return re.compile(rf"(?<![\d.])(?:{alternatives})(?!\d)")
+
+
+_FORBIDDEN = {"mass", "friction", "mu", "com", "depth", "protrusion", "protrusions", "solref",
+              "flip", "truth", "hidden", "seed", "pitch", "gap", "sigma", "offset", "compliance",
+              "inertia", "scale"}  # fmt: skip
+
+
+def _words(name: str) -> set[str]:
+    return {w.lower() for w in re.findall(r"[A-Z]?[a-z]+|[A-Z]+(?![a-z])", name)}
+
+
+async def _browse(node, found: dict, skip: set) -> None:
+    """Every node under `node`: names, description, and the value of each variable."""
+    if node.nodeid in found or node.nodeid in skip:
+        return
+    ids = ua.AttributeIds
+    attrs = await node.read_attributes(
+        [ids.BrowseName, ids.DisplayName, ids.Description, ids.NodeClass]
+    )
+    name, display, desc, cls = (a.Value.Value if a.Value else None for a in attrs)
+    entry = {"name": name.Name, "display": display.Text or "",
+             "description": (desc.Text or "") if desc else "", "value": None}  # fmt: skip
+    if cls == ua.NodeClass.Variable:
+        entry["value"] = (await node.read_data_value(raise_on_bad_status=False)).Value.Value
+    found[node.nodeid] = entry
+    for child in await node.get_children():
+        await _browse(child, found, skip)
+
+
+def test_nothing_the_twin_can_reach_holds_a_hidden_parameter(plant_cps):
+    from transfertwin.cps import plant_descriptors
+    from transfertwin.cps.aas import build_representation, export_aas
+    from transfertwin.cps.opcua import connect, load_credentials
+
+    _experiment(plant_cps, "--unit", "TU_D_P", "--object", "o4", "--face", "back",
+                "--conveyor", "both", "--theta", "60")  # fmt: skip
+    wd = plant_cps.wd
+    info = json.loads((wd / "cps.json").read_text())
+    creds = load_credentials(wd / "credentials.json")
+    objects = [f"o{i}" for i in range(1, 38)]
+    hidden = _hidden_numbers(SEED, objects)
+    assert len(hidden) > 300
+    pattern = _patterns(hidden)
+    from transfertwin.plant._truth import draw_object, draw_scene
+
+    # The search finds the truth wherever it is written down (the test can fail).
+    assert pattern.search(json.dumps(dataclasses.asdict(draw_scene(SEED))))
+    assert pattern.search(f"depth {draw_object(SEED, 'o2').com_offset_m[0] * 1000:.4f} mm")
+    seed_text = re.compile(rf"(?<![\d.]){SEED}(?![\d.])")
+
+    async def browse_and_query() -> tuple[dict, list]:
+        found: dict = {}
+        for i, unit in enumerate(PHYSICAL):
+            url = next(a["endpoint"] for a in info["assets"] if a["id"] == unit)
+            async with connect(url, unit, credentials=creds, role="observer",
+                               cert_dir=wd / "certs") as session:  # fmt: skip
+                objects = session.client.nodes.objects
+                # the standard Server object once (it is the same on every unit)
+                skip = {session.client.nodes.server.nodeid} if i else set()
+                await _browse(objects, found, skip)
+        kg_url = next(a["endpoint"] for a in info["assets"] if a["id"] == "KG")
+        async with connect(kg_url, "KG", credentials=creds, cert_dir=wd / "certs") as kg:
+            triples = json.loads(await kg.call("Query", "SELECT ?s ?p ?o WHERE { ?s ?p ?o }"))
+        return found, triples
+
+    found, triples = asyncio.run(browse_and_query())
+    assert len(found) > 200 and len(triples) > 100
+    own = [e for nid, e in found.items() if nid.NamespaceIndex != 0]
+    assert {"RunTransfer", "BeltSpeedLeft", "DockedTransportModule"} <= {e["name"] for e in own}
+    for e in own:  # the names of the units' own nodes say nothing of the truth
+        assert not (_words(e["name"]) | _words(e["display"])) & _FORBIDDEN, e
+    values = [e["value"] for e in found.values()]
+    for v in values:
+        if isinstance(v, float) and v:
+            assert all(abs(v - h) > 1e-9 * max(1.0, abs(h)) for h in hidden), v
+    texts = {
+        "address space": json.dumps(
+            [str(v) for v in values] + [e["description"] for e in found.values()]
+        ),
+        "knowledge graph": json.dumps(triples),
+        "cps.json": (wd / "cps.json").read_text(),
+        "cps.log": (wd / "cps.log").read_text(),
+        "plant log": (wd / "plant_experiments.csv").read_text(),
+    }
+    reps = [build_representation(d, endpoint="opc.tcp://h:1/x") for d in plant_descriptors()]
+    texts["AAS"] = export_aas(reps, wd.parent / "physical.json").read_text()
+    for where, text in texts.items():
+        hit = pattern.search(text)
+        assert hit is None, (where, hit and text[max(0, hit.start() - 80) : hit.end() + 80])
+    for where in ("address space", "knowledge graph", "cps.json", "AAS"):
+        assert not seed_text.search(texts[where]), where  # not even the plant seed
+
+
+def test_the_cps_touches_the_plant_only_through_its_public_methods(monkeypatch):
+    """Statically: only `cps._plant_assets` names the plant, and there only `stations` and
+    `operate` of it; at run time: a recording plant sees nothing else."""
+    from transfertwin.cps import _plant_assets
+    from transfertwin.plant import EmulatedPlant, PlantRequest
+
+    for path in [*(SRC / "cps").rglob("*.py"), *(SRC / "web").rglob("*.py"),
+                 SRC / "cli" / "_cps.py"]:  # fmt: skip
+        text = path.read_text()
+        assert "_EmulatedPlant__" not in text and "plant._" not in text, path
+        if path.name != "_plant_assets.py":
+            assert "transfertwin.plant" not in text and "EmulatedPlant" not in text, path
+    tree = ast.parse((SRC / "cps" / "_plant_assets.py").read_text())
+    used = {
+        node.attr
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Attribute)
+        and isinstance(node.value, ast.Attribute)
+        and node.value.attr == "__plant"
+    }
+    assert used == {"stations", "operate"}
+
+    touched: list[str] = []
+
+    class Recording:
+        def __init__(self, seed: int) -> None:
+            self._real = EmulatedPlant(seed)
+
+        def __getattr__(self, name: str):
+            touched.append(name)
+            return getattr(self._real, name)
+
+    monkeypatch.setattr(_plant_assets, "EmulatedPlant", Recording)
+    plant = _plant_assets.PhysicalPlant(SEED)
+    assert "TU_A" in plant.stations
+    row = plant.cycle(PlantRequest("o1", "front", "left", 0, "TU_A"))
+    assert row["transfer_unit"] == "TU_A" and "transfer_time_s" in row
+    assert set(touched) == {"stations", "operate"}
+    with pytest.raises(TypeError):
+        __import__("pickle").dumps(plant)
+
+
+def test_experiment_on_a_physical_unit_needs_a_plant():
+    from transfertwin._errors import InputError
+    from transfertwin.cli._cps import _experiment_unit
+
+    twin = {"assets": [{"id": u, "class": "transfer_unit"} for u in ("TU_A", "TU_B")]}
+    with pytest.raises(InputError, match=r"no physical assets; start it with .*--plant-seed"):
+        _experiment_unit(twin, "TU_A", physical=True)
+    with_plant = {"assets": [*twin["assets"], {"id": "TU_A_P", "class": "transfer_unit"}]}
+    assert _experiment_unit(with_plant, "TU_A", physical=True) == "TU_A_P"
+    assert _experiment_unit(with_plant, "TU_A_P", physical=False) == "TU_A_P"
+    with pytest.raises(InputError, match="no such transfer unit"):
+        _experiment_unit(with_plant, "TU_B", physical=True)

@@ -22,6 +22,8 @@ SENS = ["calibrate", "sensitivity", "--limit", "2", "--out", "sens"]
 REH = ["rehearse", "--plant-seed", "1", "--objects", "o3", "--calibration-experiments", "20",
        "--out", "reh"]  # fmt: skip
 PER = ["perceive", "--object", "o1", "--face", "front", "--conveyor", "both", "--theta", "0"]
+EXP = ["cps", "experiment", "--workdir", "nowhere", "--unit", "TU_A", "--object", "o2", "--face",
+       "front", "--conveyor", "both", "--theta", "30"]  # fmt: skip
 STUDY = ["study", "run", "--db", "s.sqlite", "--objects", "o1", "--theta-step", "180"]
 
 BAD: list[tuple[str, list[str]]] = [
@@ -123,6 +125,17 @@ BAD: list[tuple[str, list[str]]] = [
     ("cps trust without a cps", ["cps", "trust", "real.csv", "--workdir", "nowhere"]),
     ("cps trust missing cert", ["cps", "trust", "missing.der", "--workdir", "cpswd"]),
     ("cps trust not a certificate", ["cps", "trust", "real.csv", "--workdir", "cpswd"]),
+    ("cps up negative plant seed", ["cps", "up", "--workdir", "w", "--plant-seed", "-1"]),
+    ("cps up plant seed not a number", ["cps", "up", "--workdir", "w", "--plant-seed", "x"]),
+    (
+        "cps up plant seed with insecure",
+        ["cps", "up", "--workdir", "w", "--plant-seed", "1", "--insecure"],
+    ),
+    ("cps experiment without a cps", [*EXP, "--physical"]),
+    ("cps experiment not a state", [*EXP[:11], "left", "--theta", "45"]),
+    ("cps experiment unknown object", [*EXP[:7], "o99", *EXP[8:]]),
+    ("cps experiment zero runs", [*EXP, "--runs", "0"]),
+    ("cps experiment negative seed", [*EXP, "--seed", "-2"]),
     ("demo into /sys", ["demo", "--out", "/sys/demo"]),
     ("data export not csv", ["data", "calibration", "--out", "real.txt"]),
     (

@@ -205,7 +205,7 @@ def test_nothing_the_twin_can_reach_holds_a_hidden_parameter(plant_cps):
         found: dict = {}
         for i, unit in enumerate(PHYSICAL):
             url = next(a["endpoint"] for a in info["assets"] if a["id"] == unit)
-            async with connect(url, unit, credentials=creds, role="observer",
+            async with connect(url, unit, credentials=creds, role="viewer",
                                cert_dir=wd / "certs") as session:  # fmt: skip
                 objects = session.client.nodes.objects
                 # the standard Server object once (it is the same on every unit)

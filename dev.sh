@@ -6,13 +6,16 @@ set -euo pipefail
 cd "$(dirname "$0")"
 
 need_apt=()
-# Headless rendering (EGL via Mesa, OSMesa as fallback) and Open3D's libusb.
-for lib in libEGL.so.1 libEGL_mesa.so.0 libOSMesa.so libusb-1.0.so.0 libgomp.so.1; do
+# Headless rendering (EGL via Mesa, OSMesa as fallback); Open3D links libGL, libX11 and libusb.
+for lib in libEGL.so.1 libEGL_mesa.so.0 libOSMesa.so libGL.so.1 libX11.so.6 libusb-1.0.so.0 \
+    libgomp.so.1; do
     if ! ldconfig -p 2>/dev/null | grep -q "$lib"; then
         case "$lib" in
             libEGL.so.1) need_apt+=(libegl1) ;;
             libEGL_mesa.so.0) need_apt+=(libegl-mesa0 libgl1-mesa-dri) ;;
             libOSMesa.so) need_apt+=(libosmesa6) ;;
+            libGL.so.1) need_apt+=(libgl1) ;;
+            libX11.so.6) need_apt+=(libx11-6) ;;
             libusb-1.0.so.0) need_apt+=(libusb-1.0-0) ;;
             libgomp.so.1) need_apt+=(libgomp1) ;;
         esac

@@ -28,14 +28,17 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-import open3d as o3d
 
 from transfertwin.perception._aabb import AABB
 from transfertwin.perception._camera import View
 from transfertwin.perception._plane import ransac_plane
 from transfertwin.perception._workspace import Workspace
+
+if TYPE_CHECKING:
+    import open3d as o3d
 
 __all__ = ["Detection", "DetectorConfig", "detect"]
 
@@ -79,6 +82,9 @@ class Detection:
 
 
 def _cloud(points: np.ndarray) -> o3d.geometry.PointCloud:
+    import open3d as o3d  # here, not at module level: importing Open3D takes seconds, and
+    # every `transfertwin cps ...` command imports this package through the transport flow
+
     return o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.ascontiguousarray(points)))
 
 

@@ -28,6 +28,7 @@ from asyncua import Server, ua
 from asyncua.common.callback import CallbackType
 from asyncua.common.node import Node
 
+from transfertwin.cps.opcua._aspace import share_standard_address_space
 from transfertwin.cps.opcua._security import (
     Credentials,
     RoleRuleset,
@@ -189,6 +190,7 @@ class AssetServer:
         trust = None if cfg.insecure else TrustList(cfg.trust_folder)
         users = RoleUserManager(cfg.credentials, trust) if cfg.credentials else None
         server = Server(user_manager=users)
+        share_standard_address_space(server)
         await server.init()
         port = cfg.port or free_port(cfg.host)
         self.endpoint = f"opc.tcp://{cfg.host}:{port}/transfertwin/{self.asset_id}"

@@ -1,6 +1,13 @@
 """The cyber-physical runtime (Ch. 3, Sec. 5.2–5.3): assets, AAS virtual representations
 served over OPC UA, the knowledge graph and the logical assets; optionally an emulated plant
-as the physical assets (`CpsConfig.plant_seed`)."""
+as the physical assets (`CpsConfig.plant_seed`).
+
+The runtime and the applications (`Cps`, `CpsConfig`, `DOCKING_MODES`, `PoseGraph`,
+`PoseObservation`) load on first use: they bring the simulation and the study stack, which
+a client command (`cps status`, `cps order`) or the web console's gateway does not need.
+"""
+
+from typing import TYPE_CHECKING
 
 from transfertwin.cps._plant_assets import (
     PHYSICAL_RECORD_EXTRA,
@@ -10,7 +17,6 @@ from transfertwin.cps._plant_assets import (
     physical_record,
     plant_descriptors,
 )
-from transfertwin.cps._runtime import DOCKING_MODES, Cps, CpsConfig
 from transfertwin.cps.aas import (
     TYPE_PROPERTIES,
     AssetDescriptor,
@@ -28,7 +34,6 @@ from transfertwin.cps.aas import (
     validate_export,
     wire_signature,
 )
-from transfertwin.cps.apps import PoseGraph, PoseObservation
 from transfertwin.cps.kg import KnowledgeGraph
 from transfertwin.cps.opcua import (
     AssetClient,
@@ -39,6 +44,34 @@ from transfertwin.cps.opcua import (
     connect,
     new_credentials,
 )
+
+if TYPE_CHECKING:
+    from transfertwin.cps._runtime import DOCKING_MODES, Cps, CpsConfig
+    from transfertwin.cps.apps import PoseGraph, PoseObservation
+
+_LAZY = {
+    "DOCKING_MODES": "_runtime",
+    "Cps": "_runtime",
+    "CpsConfig": "_runtime",
+    "PoseGraph": "apps",
+    "PoseObservation": "apps",
+}
+
+
+def __getattr__(name: str) -> object:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'transfertwin.cps' has no attribute {name!r}")
+    from importlib import import_module
+
+    value = getattr(import_module(f"transfertwin.cps.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
+
 
 __all__ = [
     "DOCKING_MODES",

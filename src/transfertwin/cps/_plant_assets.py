@@ -33,6 +33,7 @@ import math
 import threading
 from collections.abc import Awaitable, Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from transfertwin._errors import InputError
 from transfertwin.cps.aas import (
@@ -47,7 +48,12 @@ from transfertwin.cps.aas import (
     physical_twin,
 )
 from transfertwin.cps.opcua import OperationRefused
-from transfertwin.plant import PLANT_COLUMNS, EmulatedPlant, PlantRequest
+
+if TYPE_CHECKING:
+    from transfertwin.plant import PlantRequest
+
+# The plant (a simulation with the study's calibration stack) is imported when a plant is
+# made, not with the CPS: every `cps` command and the web console import this module.
 
 __all__ = [
     "PHYSICAL_RECORD_EXTRA",
@@ -146,6 +152,8 @@ class PhysicalPlant:
     __slots__ = ("__lock", "__plant")
 
     def __init__(self, seed: int) -> None:
+        from transfertwin.plant import EmulatedPlant
+
         self.__plant = EmulatedPlant(check_plant_seed(seed))
         self.__lock = threading.Lock()
 
@@ -238,6 +246,8 @@ class PhysicalAssets:
             raise _refused("no plant")
         if aid in self._cycling:
             raise _refused(f"{aid} is running an experiment cycle")
+        from transfertwin.plant import PlantRequest
+
         request = PlantRequest(obj, face, conveyor, int(theta_deg), _station(aid))
         server = self.assets[aid].server  # type: ignore[attr-defined]
         nominal = self.config.scene.layout.belt_speed_m_s  # type: ignore[attr-defined]
@@ -273,6 +283,8 @@ class PhysicalAssets:
         return json.dumps(physical_record(row, int(seed)))
 
     def _append_log(self, row: dict[str, object]) -> None:
+        from transfertwin.plant import PLANT_COLUMNS
+
         path = self._plant_log()
         new = not path.exists()
         with path.open("a", newline="") as fh:

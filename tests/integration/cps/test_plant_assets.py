@@ -276,7 +276,7 @@ def test_the_cps_touches_the_plant_only_through_its_public_methods(monkeypatch):
             touched.append(name)
             return getattr(self._real, name)
 
-    monkeypatch.setattr(_plant_assets, "EmulatedPlant", Recording)
+    monkeypatch.setattr("transfertwin.plant.EmulatedPlant", Recording)
     plant = _plant_assets.PhysicalPlant(SEED)
     assert "TU_A" in plant.stations
     row = plant.cycle(PlantRequest("o1", "front", "left", 0, "TU_A"))

@@ -21,10 +21,6 @@ from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from sklearn.linear_model import LogisticRegression
-from sklearn.model_selection import RepeatedStratifiedKFold, StratifiedKFold
-from sklearn.pipeline import make_pipeline
-from sklearn.preprocessing import StandardScaler
 
 from transfertwin._errors import InputError
 from transfertwin.store import DOCKING_ERROR_COLUMNS
@@ -129,6 +125,8 @@ def cv_splits(
         raise InputError(f"--repeats must be at least 1, got {repeats}")
     if min(np.bincount(y, minlength=2)) < folds:
         raise InputError(f"each outcome needs at least {folds} rows for {folds} folds")
+    from sklearn.model_selection import RepeatedStratifiedKFold  # ~1 s: only when evaluating
+
     rskf = RepeatedStratifiedKFold(n_splits=folds, n_repeats=repeats, random_state=seed)
     return list(rskf.split(np.zeros(len(y)), y))
 
@@ -319,6 +317,10 @@ def logistic_probabilities(
 ) -> np.ndarray:
     """P(success) of every row from a logistic regression fitted on `train` rows
     (standardised features, L2 penalty `C`)."""
+    from sklearn.linear_model import LogisticRegression
+    from sklearn.pipeline import make_pipeline
+    from sklearn.preprocessing import StandardScaler
+
     model = make_pipeline(StandardScaler(), LogisticRegression(C=C, max_iter=2000))
     model.fit(X[train], y[train])
     return model.predict_proba(X)[:, 1]
@@ -343,6 +345,8 @@ def hybrid_probabilities(Z: np.ndarray, y: np.ndarray, train: np.ndarray) -> np.
     folds = min(3, int(np.bincount(y_train, minlength=2).min()))
     best_c = 1.0
     if folds >= 2:
+        from sklearn.model_selection import StratifiedKFold
+
         inner = StratifiedKFold(n_splits=folds, shuffle=True, random_state=0)
         losses = []
         for c in HYBRID_CS:

@@ -163,7 +163,8 @@ class Cps(PhysicalAssets, AssetApplications):
             if asset.discovery is not None:
                 await asset.discovery.stop()
             self.kg.leave(aid)
-            await asset.server.__aexit__(None, None, None)
+        # Together: asyncua's stop waits for its server clock's next tick (up to 1 s each).
+        await asyncio.gather(*(a.server.__aexit__(None, None, None) for a in self.assets.values()))
         self.assets.clear()
         (self.config.workdir / "cps.json").unlink(missing_ok=True)  # no stale endpoints
         log.info("CPS down")

@@ -31,6 +31,7 @@ from asyncua import ua
 from asyncua.common.utils import ServiceError
 from asyncua.crypto.cert_gen import setup_self_signed_certificate
 from asyncua.crypto.permission_rules import PermissionRuleset, User, UserRole
+from asyncua.crypto.uacrypto import check_certificate
 from cryptography import x509
 from cryptography.hazmat.primitives.serialization import Encoding
 from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
@@ -261,13 +262,30 @@ async def ensure_certificate(
     """(certificate, private key) of an application, created on first use."""
     cert_dir.mkdir(parents=True, exist_ok=True)
     cert, key = cert_dir / f"{name}.der", cert_dir / f"{name}.pem"
+    uri = f"urn:transfertwin:{name}"
+    if _usable(cert, key, uri, host):
+        return cert, key
     await setup_self_signed_certificate(
-        key, cert, f"urn:transfertwin:{name}", host,
+        key, cert, uri, host,
         [ExtendedKeyUsageOID.CLIENT_AUTH, ExtendedKeyUsageOID.SERVER_AUTH],
         {"countryName": "DE", "organizationName": "transfertwin", "commonName": name},
     )  # fmt: skip
     os.chmod(key, 0o600)
     return cert, key
+
+
+def _usable(cert: Path, key: Path, uri: str, host: str) -> bool:
+    """Whether an existing certificate can be used as it is: both files there, the
+    certificate current and naming `uri` and `host` (asyncua's checks). The private key is
+    not parsed here (an RSA key's validation costs ~0.1 s, and every client connection
+    asked for it twice: here and in asyncua's set_security, which loads it anyway)."""
+    if not (cert.is_file() and key.is_file()):
+        return False
+    try:
+        parsed = x509.load_der_x509_certificate(cert.read_bytes())
+    except ValueError:
+        return False
+    return not check_certificate(parsed, uri, host)
 
 
 def free_port(host: str = "127.0.0.1") -> int:

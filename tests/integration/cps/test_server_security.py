@@ -231,3 +231,19 @@ def test_cps_trust_refuses_what_is_not_a_certificate(pki, tmp_path, capsys):
     before = sorted(p.name for p in pki.trust_dir.iterdir())
     assert main(["cps", "trust", str(pem), "--workdir", str(pki.root)]) == 0
     assert sorted(p.name for p in pki.trust_dir.iterdir()) == before
+
+
+def test_a_usable_certificate_is_kept_and_a_wrong_one_is_made_anew(tmp_path):
+    cert, key = asyncio.run(ensure_certificate(tmp_path, "TU_A"))
+    first = (cert.read_bytes(), key.read_bytes())
+    again = asyncio.run(ensure_certificate(tmp_path, "TU_A"))
+    assert again == (cert, key) and (cert.read_bytes(), key.read_bytes()) == first
+    # a certificate naming another application (copied over) is replaced, the key kept
+    other, _ = asyncio.run(ensure_certificate(tmp_path, "TU_B"))
+    cert.write_bytes(other.read_bytes())
+    asyncio.run(ensure_certificate(tmp_path, "TU_A"))
+    assert cert.read_bytes() not in (first[0], other.read_bytes()) and key.read_bytes() == first[1]
+    # garbage where the certificate should be: made anew too
+    cert.write_bytes(b"not a certificate")
+    asyncio.run(ensure_certificate(tmp_path, "TU_A"))
+    assert cert.read_bytes() != b"not a certificate" and key.read_bytes() == first[1]

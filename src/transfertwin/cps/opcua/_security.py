@@ -283,7 +283,8 @@ def _usable(cert: Path, key: Path, uri: str, host: str) -> bool:
         return False
     try:
         parsed = x509.load_der_x509_certificate(cert.read_bytes())
-    except ValueError:
+    except ValueError:  # not a certificate: made anew (asyncua would fail on it)
+        cert.unlink()
         return False
     return not check_certificate(parsed, uri, host)
 

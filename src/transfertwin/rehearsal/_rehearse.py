@@ -67,6 +67,7 @@ __all__ = [
     "RehearsalConfig",
     "calibration_design",
     "curve_document",
+    "f05_intervals",
     "holdout_split",
     "parse_ablations",
     "parse_object_list",
@@ -92,6 +93,9 @@ COUNTER_MEASURES = ("mass", "stability", "compliance")
 #: marked compliant: nominal values of a soft part (the middle of the emulated plant's prior,
 #: 30-80 ms and 0.5-1.0), not fitted.
 TWIN_FEATURE_SOLREF = (0.05, 0.75)
+
+#: Resamples of the held-out rows behind the F0.5 intervals (percentile bootstrap, seed 0).
+BOOTSTRAP_REPLICATES = 2000
 
 #: Marginal families of the twin's docking model (fast; see `transfertwin.plant`).
 _FAMILIES = ("normal", "truncnorm", "kde")
@@ -256,6 +260,61 @@ def _base_rate_f05(y: Sequence[int]) -> float:
     return 0.0 if p == 0 else 1.25 * p / (0.25 * p + 1)
 
 
+def _f05_rows(pred: np.ndarray, act: np.ndarray) -> np.ndarray:
+    """F0.5 per resample: `pred` and `act` (B, n) bool (0 where nothing is predicted)."""
+    tp = (pred & act).sum(1)
+    fp = (pred & ~act).sum(1)
+    fn = (~pred & act).sum(1)
+    den = 1.25 * tp + 0.25 * fn + fp
+    return np.divide(1.25 * tp, den, out=np.zeros(len(den)), where=den > 0)
+
+
+def f05_intervals(
+    predictions: Mapping[str, np.ndarray],
+    actual: Sequence[int],
+    *,
+    replicates: int = BOOTSTRAP_REPLICATES,
+    seed: int = 0,
+    alpha: float = 0.05,
+) -> dict[str, list[float]]:
+    """Paired percentile-bootstrap intervals of F0.5 on the held-out rows.
+
+    Each resample draws the held-out rows with replacement once and scores every predictor
+    on the same rows (the mean over runs of each run's F0.5, as ``f05_*``), and the
+    always-success predictor ('base_rate'). With 'before' and 'after' it adds their paired
+    difference 'after_minus_before'.
+
+    Args:
+        predictions: Name → virtual outcomes per run and held-out row, (R, n) of 0/1.
+        actual: The plant's outcomes (n,).
+        replicates: Resamples B.
+        seed: Seed of the resampling.
+        alpha: 1 - confidence level.
+
+    Returns:
+        Name → [low, high].
+    """
+    act = np.asarray(actual, dtype=bool)
+    if act.ndim != 1 or act.size == 0:
+        raise InputError("f05_intervals: need at least one held-out row")
+    idx = np.random.default_rng([seed, 0x424F4F54]).integers(0, act.size, (replicates, act.size))
+    a = act[idx]
+    stats: dict[str, np.ndarray] = {"base_rate": _f05_rows(np.ones_like(a), a)}
+    for name, pred in predictions.items():
+        pred = np.asarray(pred, dtype=bool)
+        if pred.ndim != 2 or pred.shape[1] != act.size:
+            raise InputError(f"f05_intervals: {name} needs (runs, {act.size}) predictions")
+        stats[name] = np.mean([_f05_rows(run[idx], a) for run in pred], axis=0)
+    if "before" in stats and "after" in stats:
+        stats["after_minus_before"] = stats["after"] - stats["before"]
+    q = (alpha / 2, 1 - alpha / 2)
+    return {k: [float(v) for v in np.quantile(x, q)] for k, x in stats.items()}
+
+
+def _predictions(result: CalibrationResult) -> np.ndarray:
+    return np.array([r.predicted for r in result.runs], dtype=int)
+
+
 def _csv_text(rows: Sequence[Mapping[str, object]], columns: Sequence[str]) -> str:
     buf = io.StringIO()
     writer = csv.DictWriter(buf, columns, lineterminator="\n", extrasaction="ignore")
@@ -387,7 +446,8 @@ def _twin(run: _Run, measures: frozenset[str], out: Path) -> dict[str, object]:
         scene, tuned = scene_with(scene, best.params), {**best.params, "f05": best.score}
 
     run.stage("calibrated twin: replay of the held-out experiments")
-    after = _scores(run.replay(run.test, scene, object_map))
+    after_result = run.replay(run.test, scene, object_map)
+    after = _scores(after_result)
 
     run.stage("full-state prediction")
     docking = _docking_model(run.plant_rows)
@@ -457,6 +517,7 @@ def _twin(run: _Run, measures: frozenset[str], out: Path) -> dict[str, object]:
         "virtual_rerun": sum(str(r.get("message", "")).startswith("re-run") for r in twin_rows),
         "variant_virtual_experiments": run.virtual - virtual0,
         "_analysis": analysis,
+        "_after_predictions": _predictions(after_result),
         "_object_map": object_map,
         "_scene": scene,
     }
@@ -493,7 +554,9 @@ def rehearse(
     run = _Run(cfg, plant, plant_rows, train, test, stage, progress)
 
     stage("twin before calibration: replay of the held-out experiments")
-    before = _scores(run.replay(test, cfg.scene))
+    before_result = run.replay(test, cfg.scene)
+    before = _scores(before_result)
+    before_pred = _predictions(before_result)
 
     measures = frozenset(COUNTER_MEASURES)
     main = _twin(run, measures, out)
@@ -503,6 +566,7 @@ def rehearse(
         var = _twin(run, measures - {m}, out / f"ablate-{m}")
         ablations[m] = {
             "dir": f"ablate-{m}",
+            "f05_after_ci": f05_intervals({"after": var["_after_predictions"]}, y_test)["after"],
             **{k: var[k] for k in ("counter_measures", "f05_after", "significant_best",
                                    "significant_worst", "significant_best_objects",
                                    "significant_worst_objects", "scores_after",
@@ -521,8 +585,18 @@ def rehearse(
         )  # fmt: skip
         write_atomic(out / "operations.json", json.dumps(operations, indent=2) + "\n")
 
+    ci = f05_intervals({"before": before_pred, "after": main["_after_predictions"]}, y_test)
+    held = [{**r, "p_before": float(np.mean(before_pred[:, i])),
+             "p_after": float(np.mean(main["_after_predictions"][:, i]))}
+            for i, r in enumerate(test)]  # fmt: skip
+    write_atomic(out / "held_out_predictions.csv",
+                 _csv_text(held, [*PLANT_COLUMNS, "p_before", "p_after"]))  # fmt: skip
     doc: dict[str, object] = {
         "f05_before": before["f05"],
+        "f05_before_ci": ci["before"],
+        "f05_after_ci": ci["after"],
+        "f05_base_rate_ci": ci["base_rate"],
+        "f05_delta_ci": ci["after_minus_before"],
         **{k: v for k, v in main.items() if not k.startswith("_")},
         "plant_experiments": len(plant_rows)
         + run.plant_validation
@@ -538,7 +612,9 @@ def rehearse(
         "seconds": round(time.perf_counter() - t0, 1),
         "note": (
             "f05_* are mean per-run F0.5 of the twin's replay of held-out plant experiments "
-            "(never used in calibration); significant_* count objects whose best/worst state "
+            "(never used in calibration), *_ci their 95 % percentile-bootstrap intervals over "
+            "the held-out rows (paired: f05_delta_ci is after - before on the same resamples); "
+            "significant_* count objects whose best/worst state "
             "differs between twin and plant (Newcombe hybrid score interval of p_V - p_P "
             "excludes 0, alpha 0.05). The twin runs with the counter-measures "
             "'counter_measures'; 'ablations' repeats calibration, prediction and validation "
@@ -554,7 +630,8 @@ def rehearse(
 #: Keys of one point of the experiments-needed curve.
 CURVE_KEYS = (
     "calibration_experiments", "f05_before", "f05_after", "f05_base_rate", "significant_best",
-    "significant_worst", "held_out", "plant_experiments",
+    "significant_worst", "held_out", "plant_experiments", "f05_before_ci", "f05_after_ci",
+    "f05_base_rate_ci", "f05_delta_ci",
 )  # fmt: skip
 
 
@@ -565,7 +642,7 @@ def curve_document(docs: Sequence[Mapping[str, object]]) -> dict[str, object]:
     for doc in docs:
         k = int(doc["config"]["calibration_experiments"])  # type: ignore[index]
         points.append({"calibration_experiments": k,
-                       **{key: doc[key] for key in CURVE_KEYS[1:]}})  # fmt: skip
+                       **{key: doc.get(key) for key in CURVE_KEYS[1:]}})  # fmt: skip
     points.sort(key=lambda p: p["calibration_experiments"])
     objects = docs[0]["config"]["objects"] if docs else ()  # type: ignore[index]
     return {

@@ -3,6 +3,7 @@ on synthetic rows (no simulation)."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from transfertwin._errors import InputError
@@ -11,6 +12,7 @@ from transfertwin.rehearsal import (
     RECOVERY_S,
     best_station,
     curve_document,
+    f05_intervals,
     operation_summary,
     parse_ablations,
     twin_scene,
@@ -77,3 +79,36 @@ def test_the_curve_is_written_with_its_plot(tmp_path) -> None:
     page = write_rehearsal_curve_report(doc, tmp_path).read_text()
     assert "data:image/png;base64," in page and "K25/report.html" in page
     assert (tmp_path / "curve.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_f05_intervals_are_paired_and_hold_the_point_estimate() -> None:
+    # 12 held-out rows as in the small configuration: one run of each twin.
+    y = np.array([1, 1, 0, 1, 1, 1, 0, 1, 0, 1, 1, 1])
+    before = np.array([[1, 1, 0, 1, 0, 0, 0, 1, 1, 1, 1, 0]])
+    after = np.array([[1, 1, 1, 1, 1, 0, 0, 1, 1, 1, 1, 1]])
+    ci = f05_intervals({"before": before, "after": after}, y)
+    assert set(ci) == {"before", "after", "base_rate", "after_minus_before"}
+    for name, pred in (("before", before), ("after", after), ("base_rate", np.ones((1, 12)))):
+        tp = int(((pred[0] == 1) & (y == 1)).sum())
+        fp = int(((pred[0] == 1) & (y == 0)).sum())
+        fn = int(((pred[0] == 0) & (y == 1)).sum())
+        point = 1.25 * tp / (1.25 * tp + 0.25 * fn + fp)
+        low, high = ci[name]
+        assert low <= point <= high and high - low > 0.1  # 12 rows: a wide interval
+    low, high = ci["after_minus_before"]
+    assert low < 0 < high  # the two twins are not distinguishable on 12 rows
+    same = f05_intervals({"before": before, "after": before}, y)["after_minus_before"]
+    assert same == [0.0, 0.0]  # paired: the same rows in every resample
+    assert f05_intervals({"after": after}, y) == {k: ci[k] for k in ("after", "base_rate")}
+    with pytest.raises(InputError):
+        f05_intervals({"after": after[:, :5]}, y)
+
+
+def test_curve_points_carry_the_intervals() -> None:
+    doc = {"config": {"calibration_experiments": 25, "objects": ["o3"]}, "f05_before": 0.5,
+           "f05_after": 0.6, "f05_base_rate": 0.6, "significant_best": 0,
+           "significant_worst": 0, "held_out": 8, "plant_experiments": 40,
+           "f05_before_ci": [0.2, 0.8], "f05_after_ci": [0.3, 0.9],
+           "f05_base_rate_ci": [0.4, 0.8], "f05_delta_ci": [-0.3, 0.4]}  # fmt: skip
+    point = curve_document([doc])["curve"][0]
+    assert point["f05_after_ci"] == [0.3, 0.9] and point["f05_delta_ci"] == [-0.3, 0.4]

@@ -52,9 +52,15 @@ def _report(doc: dict, cfg: RehearsalConfig) -> None:
     n = len(cfg.objects)
     print(f"held-out plant experiments: {doc['held_out']} (training {doc['training']})")
     print(f"F0.5 always-success (baseline): {base:.3f}")
+    lo, hi = doc["f05_base_rate_ci"]
+    print(f"  95 % bootstrap interval over the held-out rows [{lo:.3f}, {hi:.3f}]")
     for key in ("f05_before", "f05_after"):
         ratio = doc[key] / base if base else float("nan")
-        print(f"{key}: {doc[key]:.3f}  ({ratio:.2f}x baseline)")
+        lo, hi = doc[f"{key}_ci"]
+        print(f"{key}: {doc[key]:.3f} [{lo:.3f}, {hi:.3f}]  ({ratio:.2f}x baseline)")
+    lo, hi = doc["f05_delta_ci"]
+    print(f"after - before: {doc['f05_after'] - doc['f05_before']:+.3f} [{lo:+.3f}, {hi:+.3f}] "
+          "(paired bootstrap; an interval holding 0: no measurable change)")  # fmt: skip
     print("target F0.5 after >= 0.90:", "met" if doc["f05_after"] >= 0.90 else "NOT met")
     print(f"significant best: {doc['significant_best']}/{n} {doc['significant_best_objects']}")
     print(f"significant worst: {doc['significant_worst']}/{n} {doc['significant_worst_objects']}")
@@ -141,7 +147,8 @@ def main() -> None:
         for p in curve_document(docs)["curve"]:
             print(
                 f"  K={p['calibration_experiments']}: {p['f05_before']:.3f} -> "
-                f"{p['f05_after']:.3f} (always-success {p['f05_base_rate']:.3f}); "
+                f"{p['f05_after']:.3f} [{p['f05_after_ci'][0]:.2f}, {p['f05_after_ci'][1]:.2f}] "
+                f"(always-success {p['f05_base_rate']:.3f}, held-out {p['held_out']}); "
                 f"{p['significant_best']}/{p['significant_worst']}"
             )
     print(f"-> {out}")

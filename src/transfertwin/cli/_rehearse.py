@@ -78,6 +78,8 @@ def cmd_rehearse(args: argparse.Namespace) -> int:
         print(
             f"K={cfg.calibration_experiments}: F0.5 held-out before {doc['f05_before']:.3f}, "
             f"after {doc['f05_after']:.3f} (always-success {doc['f05_base_rate']:.3f}); "
+            f"on {doc['held_out']} rows, after - before 95 % CI [{doc['f05_delta_ci'][0]:.2f}, "
+            f"{doc['f05_delta_ci'][1]:.2f}]; "
             f"significant best {doc['significant_best']}/{len(cfg.objects)}, worst "
             f"{doc['significant_worst']}/{len(cfg.objects)}; {doc['plant_experiments']} plant "
             f"and {doc['virtual_experiments']} virtual experiments in {doc['seconds']} s "

@@ -104,7 +104,11 @@ def plot_rehearsal_curve(curve: Sequence[Mapping[str, object]]):
     for key, label, style in (("f05_after", "after calibration", "o-"),
                               ("f05_before", "before calibration", "s--"),
                               ("f05_base_rate", "always 'success'", ":")):  # fmt: skip
-        ax1.plot(ks, [p[key] for p in curve], style, label=label)
+        (line,) = ax1.plot(ks, [p[key] for p in curve], style, label=label)
+        cis = [p.get(f"{key}_ci") for p in curve]
+        if all(cis):  # 95 % bootstrap band over the held-out rows
+            ax1.fill_between(ks, [c[0] for c in cis], [c[1] for c in cis],  # type: ignore[index]
+                             color=line.get_color(), alpha=0.12, lw=0)  # fmt: skip
     ax1.axhline(0.9, color="grey", lw=0.8)
     ax1.set_xlabel("plant calibration experiments K")
     ax1.set_ylabel("F0.5 (held-out plant experiments)")
@@ -124,6 +128,15 @@ def plot_rehearsal_curve(curve: Sequence[Mapping[str, object]]):
     return fig
 
 
+def _ci_text(ci: object) -> str:
+    return f"[{ci[0]:.2f}, {ci[1]:.2f}]" if ci else ""  # type: ignore[index]
+
+
+def _with_ci(point: Mapping[str, object], key: str) -> str:
+    """'0.833 [0.58, 0.99]': a figure and its bootstrap interval (where the doc has one)."""
+    return f"{point[key]:.3f} {_ci_text(point.get(f'{key}_ci'))}".strip()
+
+
 def write_rehearsal_curve_report(doc: Mapping[str, object], out_dir: str | Path) -> Path:
     """``report.html`` (with ``curve.png``) for the ``rehearsal.json`` of several K."""
     curve: Sequence[Mapping[str, object]] = doc["curve"]  # type: ignore[assignment]
@@ -131,12 +144,14 @@ def write_rehearsal_curve_report(doc: Mapping[str, object], out_dir: str | Path)
     out = Path(out_dir)
     write_atomic(out / "curve.png", png)
     n = len(doc.get("objects", []))  # type: ignore[arg-type]
-    rows = [[p["calibration_experiments"], p["f05_before"], p["f05_after"], p["f05_base_rate"],
-             f"{p['significant_best']}/{n}", f"{p['significant_worst']}/{n}",
+    rows = [[p["calibration_experiments"], _with_ci(p, "f05_before"), _with_ci(p, "f05_after"),
+             _with_ci(p, "f05_base_rate"), _ci_text(p.get("f05_delta_ci")),
+             p.get("held_out", ""), f"{p['significant_best']}/{n}", f"{p['significant_worst']}/{n}",
              f"<a href='K{p['calibration_experiments']}/{REHEARSAL_REPORT_NAME}'>K"
              f"{p['calibration_experiments']}</a>"] for p in curve]  # fmt: skip
-    head = ("K", "F0.5 before", "F0.5 after", "always 'success'", "significant best",
-            "significant worst", "report")  # fmt: skip
+    head = ("K", "F0.5 before [95 %]", "F0.5 after [95 %]", "always 'success' [95 %]",
+            "after - before [95 %]", "held-out rows", "significant best", "significant worst",
+            "report")  # fmt: skip
     table = _table(head, [r[:-1] for r in rows])
     links = " ".join(str(r[-1]) for r in rows)
     page = (

@@ -104,7 +104,7 @@ def test_f05_intervals_are_paired_and_hold_the_point_estimate() -> None:
         f05_intervals({"after": after[:, :5]}, y)
 
 
-def test_curve_points_carry_the_intervals() -> None:
+def test_curve_points_carry_the_intervals(tmp_path) -> None:
     doc = {"config": {"calibration_experiments": 25, "objects": ["o3"]}, "f05_before": 0.5,
            "f05_after": 0.6, "f05_base_rate": 0.6, "significant_best": 0,
            "significant_worst": 0, "held_out": 8, "plant_experiments": 40,
@@ -112,3 +112,5 @@ def test_curve_points_carry_the_intervals() -> None:
            "f05_base_rate_ci": [0.4, 0.8], "f05_delta_ci": [-0.3, 0.4]}  # fmt: skip
     point = curve_document([doc])["curve"][0]
     assert point["f05_after_ci"] == [0.3, 0.9] and point["f05_delta_ci"] == [-0.3, 0.4]
+    page = write_rehearsal_curve_report(curve_document([doc]), tmp_path).read_text()
+    assert "0.600 [0.30, 0.90]" in page and "[-0.30, 0.40]" in page

@@ -1,0 +1,133 @@
+"""ORACLE ceiling of a rehearsal's held-out F0.5 — reads the plant's hidden parameters.
+
+**Benchmark only.** This script opens the emulated plant's private experiment machinery
+(`EmulatedPlant._jobs`, `transfertwin.plant._plant._run_job`), which no part of the twin or
+of `transfertwin rehearse` may do. It answers one question: how high can *any* twin's F0.5 on
+a rehearsal's held-out plant experiments be, given the plant's own outcome noise?
+
+For each rehearsal folder (``rehearsal.json`` and ``plant_calibration.csv``; a curve folder's
+``K*/`` sub-folders in turn) it rebuilds the held-out split exactly as `rehearse` did and the
+plant's own jobs for the calibration experiments (ids 0..K-1, the first experiments of a
+fresh plant of the same seed), then prints beside the twin's F0.5 (before and after
+calibration) and the always-success baseline:
+
+- ``flips``: held-out rows whose recorded outcome the plant flipped (its outcome noise), and
+  ``F0.5 exact``: the predictor that knows the plant's hidden parameters *and* the very
+  placement draws of each experiment (it errs only on the flipped rows).
+- ``F0.5 oracle``: the predictor that knows the hidden parameters but not the placement draws
+  (what the best possible twin can know): the plant's simulation of each held-out row at its
+  logged state and docking error, N times with fresh placement seeds, no flips; the mean
+  over the N runs of each run's F0.5 (as ``f05_*``), and the majority vote.
+- 95 % percentile-bootstrap intervals over the held-out rows (`f05_intervals`, 2000
+  resamples).
+
+    python benchmarks/rehearsal_oracle.py DIR [--n 6] [--workers 2]
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import dataclasses
+import json
+import multiprocessing as mp
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+from transfertwin.plant import EmulatedPlant
+from transfertwin.plant._plant import _run_job  # ORACLE: private plant machinery
+from transfertwin.rehearsal import calibration_design, f05_intervals, holdout_split
+
+
+def _rows(path: Path) -> list[dict[str, object]]:
+    rows: list[dict[str, object]] = []
+    for r in csv.DictReader(path.open()):
+        row: dict[str, object] = dict(r)
+        for c in ("experiment_id", "theta_deg", "success"):
+            row[c] = int(r[c])
+        for c in ("dock_err_x_mm", "dock_err_y_mm", "dock_err_theta_deg", "gap_area_cm2"):
+            row[c] = float(r[c])
+        rows.append(row)
+    return rows
+
+
+def _f05(pred: np.ndarray, y: np.ndarray) -> float:
+    pred, y = pred.astype(bool), y.astype(bool)
+    tp, fp, fn = (pred & y).sum(), (pred & ~y).sum(), (~pred & y).sum()
+    return 0.0 if tp == 0 else float(1.25 * tp / (1.25 * tp + 0.25 * fn + fp))
+
+
+def oracle(folder: Path, n: int, workers: int) -> dict[str, object]:
+    doc = json.loads((folder / "rehearsal.json").read_text())
+    cfg = doc["config"]
+    k = int(cfg["calibration_experiments"])
+    rows = _rows(folder / "plant_calibration.csv")
+    _, test = holdout_split(rows, float(cfg["holdout"]), int(cfg["seed"]))
+    plant = EmulatedPlant(int(cfg["plant_seed"]))
+    jobs = plant._jobs(calibration_design(tuple(cfg["objects"]), k, int(cfg["seed"])))
+    by_id = {j.experiment_id: j for j in jobs}
+    for r in rows:  # the rebuilt jobs are the plant's: same state and logged docking error
+        j = by_id[int(r["experiment_id"])]
+        assert (j.request.face, j.request.theta_deg) == (r["face"], r["theta_deg"])
+        assert [round(v, 2) for v in j.error_mm_deg] == [
+            r["dock_err_x_mm"], r["dock_err_y_mm"], r["dock_err_theta_deg"]
+        ]  # fmt: skip
+    test_jobs = [by_id[int(r["experiment_id"])] for r in test]
+    flip_p = test_jobs[0].scene.flip_p
+    flipped = np.array([j.flip_u < flip_p for j in test_jobs])
+    y = np.array([int(r["success"]) for r in test])
+    reruns = []
+    for j in test_jobs:
+        for i in range(n):
+            ss = np.random.SeedSequence([0x4F52434C, int(cfg["plant_seed"]), j.experiment_id, i])
+            seeds = tuple(int(w) for w in ss.generate_state(len(j.seeds)))
+            reruns.append(dataclasses.replace(j, seeds=seeds, flip_u=1.0))
+    with ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn")) as pool:
+        wins = [int(row["success"]) for row, _ in pool.map(_run_job, reruns)]
+    per_run = np.array(wins).reshape(len(test), n).T  # (N, n)
+    majority = (per_run.mean(axis=0) >= 0.5).astype(int)[None, :]
+    exact = np.where(flipped, 1 - y, y)[None, :]  # the plant's physics before the flip
+    ci = f05_intervals({"oracle": per_run, "majority": majority, "exact": exact}, y)
+    return {
+        "K": k, "held_out": len(test), "flip_p": flip_p, "flipped": int(flipped.sum()),
+        "flipped_all": int(sum(j.flip_u < flip_p for j in jobs)),
+        "f05_before": doc["f05_before"], "f05_after": doc["f05_after"],
+        "f05_base_rate": doc["f05_base_rate"],
+        "exact": _f05(exact[0], y), "oracle": float(np.mean([_f05(p, y) for p in per_run])),
+        "majority": _f05(majority[0], y), "ci": ci,
+        "uncertain_rows": int(((per_run.mean(0) > 0) & (per_run.mean(0) < 1)).sum()),
+    }  # fmt: skip
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("folder", type=Path, help="a rehearsal folder or a curve folder (K*/)")
+    ap.add_argument("--n", type=int, default=6, help="plant reruns per held-out row")
+    ap.add_argument("--workers", type=int, default=2)
+    args = ap.parse_args()
+    folders = sorted(
+        (p for p in args.folder.glob("K*") if (p / "plant_calibration.csv").is_file()),
+        key=lambda p: int(p.name[1:]),
+    ) or [args.folder]
+    print("ORACLE: reads the plant's hidden parameters (benchmark only, never in rehearse)")
+    for folder in folders:
+        o = oracle(folder, args.n, args.workers)
+        ci = o["ci"]
+        print(
+            f"K={o['K']}: held-out {o['held_out']}, flipped {o['flipped']} "
+            f"(all K rows: {o['flipped_all']}, flip p {o['flip_p']:.3f}), rows whose outcome "
+            f"varies between plant reruns {o['uncertain_rows']}\n"
+            f"  twin before {o['f05_before']:.3f}, after {o['f05_after']:.3f}; always-success "
+            f"{o['f05_base_rate']:.3f} [{ci['base_rate'][0]:.2f}, {ci['base_rate'][1]:.2f}]\n"
+            f"  ORACLE (N={args.n} reruns) {o['oracle']:.3f} "
+            f"[{ci['oracle'][0]:.2f}, {ci['oracle'][1]:.2f}], majority {o['majority']:.3f} "
+            f"[{ci['majority'][0]:.2f}, {ci['majority'][1]:.2f}]; exact (errs only on flips) "
+            f"{o['exact']:.3f} [{ci['exact'][0]:.2f}, {ci['exact'][1]:.2f}]; "
+            f"twin after / oracle {o['f05_after'] / o['oracle']:.2f}"
+        )
+
+
+if __name__ == "__main__":
+    main()

@@ -5,11 +5,11 @@
 of `transfertwin rehearse` may do. It answers one question: how high can *any* twin's F0.5 on
 a rehearsal's held-out plant experiments be, given the plant's own outcome noise?
 
-For each rehearsal folder (``rehearsal.json`` and ``plant_calibration.csv``; a curve folder's
-``K*/`` sub-folders in turn) it rebuilds the held-out split exactly as `rehearse` did and the
-plant's own jobs for the calibration experiments (ids 0..K-1, the first experiments of a
-fresh plant of the same seed), then prints beside the twin's F0.5 (before and after
-calibration) and the always-success baseline:
+For each rehearsal folder (``rehearsal.json``, ``plant_calibration.csv`` and, with
+``--test-experiments``, ``plant_test.csv``; a curve folder's ``K*/`` sub-folders in turn) it
+rebuilds the held-out rows exactly as `rehearse` chose them and the plant's own jobs for them
+(the first experiments of a fresh plant of the same seed), then prints beside the twin's F0.5
+(before and after calibration) and the always-success baseline:
 
 - ``flips``: held-out rows whose recorded outcome the plant flipped (its outcome noise), and
   ``F0.5 exact``: the predictor that knows the plant's hidden parameters *and* the very
@@ -63,10 +63,17 @@ def oracle(folder: Path, n: int, workers: int) -> dict[str, object]:
     doc = json.loads((folder / "rehearsal.json").read_text())
     cfg = doc["config"]
     k = int(cfg["calibration_experiments"])
+    h, objects, seed = int(cfg.get("test_experiments", 0)), tuple(cfg["objects"]), int(cfg["seed"])
     rows = _rows(folder / "plant_calibration.csv")
-    _, test = holdout_split(rows, float(cfg["holdout"]), int(cfg["seed"]))
+    if h:  # separate test experiments: ids 0..H-1, then the K calibration experiments
+        test = _rows(folder / "plant_test.csv")
+        rows = test + rows
+        design = calibration_design(objects, h, seed, "test") + calibration_design(objects, k, seed)
+    else:  # the split `rehearse` made of the K experiments (ids 0..K-1)
+        _, test = holdout_split(rows, float(cfg["holdout"]), seed)
+        design = calibration_design(objects, k, seed)
     plant = EmulatedPlant(int(cfg["plant_seed"]))
-    jobs = plant._jobs(calibration_design(tuple(cfg["objects"]), k, int(cfg["seed"])))
+    jobs = plant._jobs(design)
     by_id = {j.experiment_id: j for j in jobs}
     for r in rows:  # the rebuilt jobs are the plant's: same state and logged docking error
         j = by_id[int(r["experiment_id"])]
@@ -92,7 +99,7 @@ def oracle(folder: Path, n: int, workers: int) -> dict[str, object]:
     ci = f05_intervals({"oracle": per_run, "majority": majority, "exact": exact}, y)
     return {
         "K": k, "held_out": len(test), "flip_p": flip_p, "flipped": int(flipped.sum()),
-        "flipped_all": int(sum(j.flip_u < flip_p for j in jobs)),
+        "flipped_all": int(sum(j.flip_u < flip_p for j in jobs)), "rows": len(rows),
         "f05_before": doc["f05_before"], "f05_after": doc["f05_after"],
         "f05_base_rate": doc["f05_base_rate"],
         "exact": _f05(exact[0], y), "oracle": float(np.mean([_f05(p, y) for p in per_run])),
@@ -117,8 +124,8 @@ def main() -> None:
         ci = o["ci"]
         print(
             f"K={o['K']}: held-out {o['held_out']}, flipped {o['flipped']} "
-            f"(all K rows: {o['flipped_all']}, flip p {o['flip_p']:.3f}), rows whose outcome "
-            f"varies between plant reruns {o['uncertain_rows']}\n"
+            f"(all {o['rows']} rows: {o['flipped_all']}, flip p {o['flip_p']:.3f}), rows whose "
+            f"outcome varies between plant reruns {o['uncertain_rows']}\n"
             f"  twin before {o['f05_before']:.3f}, after {o['f05_after']:.3f}; always-success "
             f"{o['f05_base_rate']:.3f} [{ci['base_rate'][0]:.2f}, {ci['base_rate'][1]:.2f}]\n"
             f"  ORACLE (N={args.n} reruns) {o['oracle']:.3f} "

@@ -56,7 +56,8 @@ def cmd_rehearse(args: argparse.Namespace) -> int:
         RehearsalConfig(
             plant_seed=args.plant_seed, objects=parse_object_list(args.objects),
             calibration_experiments=k, runs=args.runs, validation_runs=args.validation_runs,
-            theta_step=args.theta_step, holdout=args.holdout, depths_mm=_depths(args.depths_mm),
+            theta_step=args.theta_step, holdout=args.holdout,
+            test_experiments=args.test_experiments, depths_mm=_depths(args.depths_mm),
             tune_trials=args.tune_trials, seed=args.seed, workers=worker_count(args.workers),
             scene=scene, ablate=tuple(args.ablate or ()), operations=args.operations,
         )
@@ -147,6 +148,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         type=float,
         default=0.3,
         help="share of the K experiments held out for F0.5 (default 0.3)",
+    )
+    p.add_argument(
+        "--test-experiments",
+        type=int,
+        default=0,
+        metavar="H",
+        help="H extra plant experiments only for scoring F0.5 (then all K calibrate, and "
+        "every K of a curve is scored on the same H); default 0: --holdout of the K",
     )
     p.add_argument(
         "--depths-mm",

@@ -158,7 +158,12 @@ class RehearsalConfig:
             full-state prediction.
         validation_runs: Plant experiments (and virtual runs) per best/worst state.
         theta_step: θ grid of the full-state prediction (degrees, divides 360).
-        holdout: Share of the K experiments held out for f05_before/f05_after.
+        holdout: Share of the K experiments held out for f05_before/f05_after (when
+            `test_experiments` is 0).
+        test_experiments: H extra plant experiments, run before the K calibration ones
+            (same design, own random stream), used only to score f05_before/f05_after; all
+            K experiments then calibrate. 0: the K experiments are split (`holdout`). With
+            H > 0 every K of a curve is scored on the same H plant experiments.
         depths_mm: Candidate protrusion depths of the object calibration (0 is added).
         tune_trials: TPE trials over μ and the gap (0: object calibration only).
         seed: Master seed of the twin's side (design, split, simulations).
@@ -177,6 +182,7 @@ class RehearsalConfig:
     validation_runs: int = 10
     theta_step: int = 90
     holdout: float = 0.3
+    test_experiments: int = 0
     depths_mm: tuple[float, ...] = (8.0, 16.0, 24.0, 32.0)
     tune_trials: int = 0
     seed: int = 0
@@ -200,8 +206,12 @@ class RehearsalConfig:
             raise InputError("--tune-trials must be >= 0")
         if not (0 < self.holdout < 1):
             raise InputError(f"--holdout must be in (0, 1), got {self.holdout}")
+        if isinstance(self.test_experiments, bool) or self.test_experiments < 0:
+            raise InputError("--test-experiments must be >= 0")
         n_test = round(self.calibration_experiments * self.holdout)
-        if n_test < 1 or self.calibration_experiments - n_test < 2:
+        if self.test_experiments and self.calibration_experiments < 2:
+            raise InputError("--calibration-experiments must be at least 2")
+        if not self.test_experiments and (n_test < 1 or self.calibration_experiments - n_test < 2):
             raise InputError(
                 "--calibration-experiments too small for the hold-out split "
                 f"({self.calibration_experiments} x {self.holdout})"
@@ -214,10 +224,17 @@ class RehearsalConfig:
             raise InputError("--depths-mm must be in (0, 100]")
 
 
-def calibration_design(objects: Sequence[str], k: int, seed: int) -> list[PlantRequest]:
+#: Random streams of the designs: calibration experiments and held-out test experiments.
+_DESIGN_TAGS = {"calibration": 0x44455349, "test": 0x54455354}
+
+
+def calibration_design(
+    objects: Sequence[str], k: int, seed: int, purpose: str = "calibration"
+) -> list[PlantRequest]:
     """K random pre-transfer states, objects in turn (the study's calibration design): face
-    and θ uniform, the conveyor 'both' where θ allows it (Eq. 6.5), else left or right."""
-    rng = np.random.default_rng([seed, 0x44455349])
+    and θ uniform, the conveyor 'both' where θ allows it (Eq. 6.5), else left or right.
+    `purpose` 'test' draws the held-out test experiments from their own stream."""
+    rng = np.random.default_rng([seed, _DESIGN_TAGS[purpose]])
     single = set(THETA_SINGLE)
     out = []
     for i in range(k):
@@ -546,10 +563,18 @@ def rehearse(
     plant = EmulatedPlant(cfg.plant_seed)
     out.mkdir(parents=True, exist_ok=True)
 
+    test_rows: list[dict[str, object]] = []
+    if cfg.test_experiments:  # first, so that every K of a curve gets the same ones
+        stage(f"plant: {cfg.test_experiments} held-out test experiments")
+        test_design = calibration_design(cfg.objects, cfg.test_experiments, cfg.seed, "test")
+        test_rows = plant.run(test_design, workers=cfg.workers, on_progress=progress)
     stage(f"plant: {cfg.calibration_experiments} calibration experiments")
     design = calibration_design(cfg.objects, cfg.calibration_experiments, cfg.seed)
     plant_rows = plant.run(design, workers=cfg.workers, on_progress=progress)
-    train, test = holdout_split(plant_rows, cfg.holdout, cfg.seed)
+    if cfg.test_experiments:
+        train, test = list(plant_rows), list(test_rows)
+    else:
+        train, test = holdout_split(plant_rows, cfg.holdout, cfg.seed)
     y_test = [int(r["success"]) for r in test]
     run = _Run(cfg, plant, plant_rows, train, test, stage, progress)
 
@@ -599,6 +624,7 @@ def rehearse(
         "f05_delta_ci": ci["after_minus_before"],
         **{k: v for k, v in main.items() if not k.startswith("_")},
         "plant_experiments": len(plant_rows)
+        + len(test_rows)
         + run.plant_validation
         + (operations["plant_experiments"] if operations else 0),
         "virtual_experiments": run.virtual,
@@ -623,6 +649,8 @@ def rehearse(
     }
     doc.pop("variant_virtual_experiments", None)
     write_atomic(out / "plant_calibration.csv", _csv_text(plant_rows, list(PLANT_COLUMNS)))
+    if test_rows:
+        write_atomic(out / "plant_test.csv", _csv_text(test_rows, list(PLANT_COLUMNS)))
     write_atomic(out / "rehearsal.json", json.dumps(doc, indent=2, default=_json) + "\n")
     return doc
 

@@ -208,6 +208,11 @@ BAD: list[tuple[str, list[str]]] = [
     ("rehearse into /sys", [*REH[:-1], "/sys/reh"]),
     ("rehearse unknown ablation", [*REH, "--ablate", "mass,gravity"]),
     ("rehearse negative operations", [*REH, "--operations", "-1"]),
+    ("rehearse negative test experiments", [*REH, "--test-experiments", "-1"]),
+    (
+        "rehearse one experiment with a test set",
+        [*REH[:5], "1", *REH[6:], "--test-experiments", "4"],
+    ),
     ("web off loopback without token", ["web", "--host", "0.0.0.0"]),
     ("web short token", ["web", "--token", "abc"]),
     ("web port out of range", ["web", "--port", "70000"]),

@@ -88,3 +88,34 @@ def test_ablation_and_operations_on_a_tiny_rehearsal(tmp_path: Path) -> None:
     assert ops["twin"]["n"] == ops["random"]["n"] == 2
     assert doc["plant_experiments"] > 4 + ops["plant_experiments"]
     assert json.loads((tmp_path / "operations.json").read_text())["orders"] == 2
+
+
+@pytest.mark.slow
+def test_separate_test_experiments_score_and_never_calibrate(tmp_path: Path) -> None:
+    from dataclasses import replace
+
+    seen: list[tuple[str, list]] = []
+    mp = pytest.MonkeyPatch()
+    for name in ("calibrate", "fit_proxy"):
+        original = getattr(module, name)
+
+        def spy(*args, _name=name, _original=original, **kwargs):
+            seen.append((_name, list(args[0])))
+            return _original(*args, **kwargs)
+
+        mp.setattr(module, name, spy)
+    try:
+        doc = rehearse(replace(TINY, test_experiments=2), tmp_path)
+    finally:
+        mp.undo()
+    assert (doc["held_out"], doc["training"]) == (2, 4)
+    with (tmp_path / "plant_test.csv").open() as fh:
+        test = [int(r["experiment_id"]) for r in csv.DictReader(fh)]
+    with (tmp_path / "plant_calibration.csv").open() as fh:
+        calibration = [int(r["experiment_id"]) for r in csv.DictReader(fh)]
+    assert test == [0, 1] and calibration == [2, 3, 4, 5]  # test experiments run first
+    fitted = {int(r["experiment_id"]) for name, rows in seen if name == "fit_proxy" for r in rows}
+    assert fitted and fitted <= set(calibration)
+    scored = [[int(r["experiment_id"]) for r in rows] for name, rows in seen if name == "calibrate"]
+    assert scored == [test, test]  # before and after calibration, on the test experiments only
+    assert doc["plant_experiments"] >= 6

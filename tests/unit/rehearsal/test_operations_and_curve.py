@@ -114,3 +114,21 @@ def test_curve_points_carry_the_intervals(tmp_path) -> None:
     assert point["f05_after_ci"] == [0.3, 0.9] and point["f05_delta_ci"] == [-0.3, 0.4]
     page = write_rehearsal_curve_report(curve_document([doc]), tmp_path).read_text()
     assert "0.600 [0.30, 0.90]" in page and "[-0.30, 0.40]" in page
+
+
+def test_test_experiments_have_their_own_design_and_lift_the_split_limit() -> None:
+    from transfertwin.rehearsal import RehearsalConfig, calibration_design
+
+    cal = calibration_design(("o3", "o7"), 20, 0)
+    test = calibration_design(("o3", "o7"), 20, 0, "test")
+    assert test == calibration_design(("o3", "o7"), 20, 0, "test")  # reproducible
+    assert [r.object_id for r in test] == [r.object_id for r in cal]  # objects in turn
+    assert [(r.face, r.theta_deg) for r in test] != [(r.face, r.theta_deg) for r in cal]
+    with pytest.raises(InputError):
+        RehearsalConfig(plant_seed=1, objects=("o3",), calibration_experiments=2)
+    cfg = RehearsalConfig(plant_seed=1, objects=("o3",), calibration_experiments=2,
+                          test_experiments=10)  # fmt: skip
+    assert cfg.test_experiments == 10
+    with pytest.raises(InputError):
+        RehearsalConfig(plant_seed=1, objects=("o3",), calibration_experiments=20,
+                        test_experiments=-1)  # fmt: skip

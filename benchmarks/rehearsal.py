@@ -16,8 +16,8 @@ o3 and o7, K = 40 calibration experiments, R = 2, 10 validation runs per best/wo
 With several K (``-k 25,50,100``) it runs one rehearsal per K and prints the curve.
 
     python benchmarks/rehearsal.py [--plant-seed 1] [--objects o3,o7] [-k 40] [--runs 2]
-        [--validation-runs 10] [--workers 2] [--tune-trials 0] [--ablate mass,stability,
-        compliance] [--operations 20] [--out DIR]
+        [--validation-runs 10] [--test-experiments 0] [--workers 2] [--tune-trials 0]
+        [--ablate mass,stability,compliance] [--operations 20] [--out DIR]
 
 Full configuration (hours on 2 cores): `--objects o1,...,o37 -k 200 --runs 4
 --validation-runs 20 --theta-step 30 --tune-trials 20 --operations 200`.
@@ -116,6 +116,7 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=2)
     ap.add_argument("--validation-runs", type=int, default=10)
     ap.add_argument("--theta-step", type=int, default=90)
+    ap.add_argument("--test-experiments", type=int, default=0, help="separate held-out set H")
     ap.add_argument("--tune-trials", type=int, default=0)
     ap.add_argument("--ablate", default=",".join(COUNTER_MEASURES), help="'' for none")
     ap.add_argument("--operations", type=int, default=20)
@@ -130,7 +131,8 @@ def main() -> None:
         cfg = RehearsalConfig(
             plant_seed=args.plant_seed, objects=parse_object_list(args.objects),
             calibration_experiments=k, runs=args.runs, validation_runs=args.validation_runs,
-            theta_step=args.theta_step, tune_trials=args.tune_trials, seed=args.seed,
+            theta_step=args.theta_step, test_experiments=args.test_experiments,
+            tune_trials=args.tune_trials, seed=args.seed,
             workers=args.workers, ablate=(args.ablate,) if args.ablate else (),
             operations=args.operations,
         )  # fmt: skip

@@ -5,7 +5,8 @@ With several ``--calibration-experiments`` (``25,50,100``) each K gets ``--out/K
 ``--out/rehearsal.json`` (and ``curve.json``) collect F0.5 and the significant differences
 against K, and ``--out/report.html`` plots them. ``--ablate mass|stability|compliance``
 (repeatable or a comma list) adds twin variants with one counter-measure switched off;
-``--operations N`` serves N orders with the twin's predictions and N with random placement.
+``--operations N`` serves N orders with the twin's predictions and N with random placement;
+``--test-experiments H`` scores F0.5 on H separate plant experiments (the same for every K).
 """
 
 from __future__ import annotations

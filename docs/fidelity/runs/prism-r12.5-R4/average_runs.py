@@ -1,4 +1,4 @@
-"""Average candidate sets of disjoint runs: combine.py OUT A_DIRS... -- B_DIRS... (equal R each)."""
+"""Average candidate sets of disjoint runs: average_runs.py OUT A_DIRS... -- B_DIRS... (equal R each)."""
 import sys, numpy as np
 from pathlib import Path
 sys.path.insert(0, str(Path(__file__).parent))

@@ -1,7 +1,7 @@
 """Replay extra depth candidates per object/face (same seeds as calibrate object: common
-random numbers), saved as OUT/<obj>.candidates.npz (only the given depths; qeval merges).
+random numbers), saved as OUT/<obj>.candidates.npz (only the given depths; twin_cv.py merges).
 
-usage: cands.py --profile P --out DIR --runs R --spec "o1:front:5.5,6.5;o18:front:6.5" """
+usage: replay_candidates.py --profile P --out DIR --runs R --spec "o1:front:5.5,6.5;o18:front:6.5" """
 import argparse, time
 from pathlib import Path
 import numpy as np

@@ -1,6 +1,6 @@
 """Twin-only CV/in-sample from candidate folders, merged per object/face by depth.
 
-usage: qeval.py [--penalty P] [--drop o1:front:2,...] [--keep-depths 0,4,...] DIR [DIR ...]
+usage: twin_cv.py [--penalty P] [--keep 0,4,...] DIR [DIR ...]
 (shift axis: only shift 0 is used)."""
 import argparse, sys
 import numpy as np

@@ -47,7 +47,7 @@ class PhysicsConfig:
     """MuJoCo solver settings (our analogue of the study's Tables A.3/A.4).
 
     Defaults are the fast settings (5 ms implicitfast steps), validated against the
-    'reference' profile (2 ms steps) in SPEED.md; see `scene_profile`.
+    'reference' profile (2 ms steps), docs/speed.md; see `scene_profile`.
 
     Attributes:
         timestep_s: Physics step (s).
@@ -61,7 +61,7 @@ class PhysicsConfig:
         noslip_iterations: Extra no-slip solver iterations (0 disables).
         multiccd: Multiple contact points per convex pair (MuJoCo 4's default: on). Off
             makes steps ~20 % cheaper, but a single-hull object (a box) then rocks and
-            sinks ~6 mm into the belt; kept on (SPEED.md).
+            sinks ~6 mm into the belt; kept on (docs/speed.md).
         pulley_facets: The end pulleys' collider: 0 (default) uses MuJoCo's cylinder
             primitive, whose contacts with an object's hull depend on the hull's orientation;
             N >= 8 makes each an N-sided prism mesh circumscribing the pulley radius, with a

@@ -19,6 +19,7 @@ from __future__ import annotations
 import logging
 import math
 import sqlite3
+import time
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from datetime import UTC, datetime
@@ -73,6 +74,24 @@ def _first_line(exc: BaseException) -> str:
     return text.splitlines()[0] if text else type(exc).__name__
 
 
+def _journal_wal(conn: sqlite3.Connection) -> str:
+    """Switch to WAL; the journal mode it got.
+
+    Changing the journal mode needs a lock that SQLite does not wait for with the busy
+    timeout: while another process creates the same file (a reader polling a study that is
+    starting), the switch fails with "database is locked" at once. Retried within the busy
+    timeout.
+    """
+    deadline = time.monotonic() + _BUSY_TIMEOUT_S
+    while True:
+        try:
+            return str(conn.execute("PRAGMA journal_mode=WAL").fetchone()[0])
+        except sqlite3.OperationalError as exc:
+            if "locked" not in str(exc) or time.monotonic() > deadline:
+                raise
+            time.sleep(0.02)
+
+
 def _connect(path: Path, create: bool) -> sqlite3.Connection:
     """Open the file in autocommit mode with WAL and synchronous=NORMAL."""
     if path.is_dir():
@@ -88,7 +107,7 @@ def _connect(path: Path, create: bool) -> sqlite3.Connection:
     except sqlite3.Error as exc:
         raise InputError(f"{path}: cannot open result database ({_first_line(exc)})") from None
     try:
-        mode = conn.execute("PRAGMA journal_mode=WAL").fetchone()[0]
+        mode = _journal_wal(conn)
         conn.execute("PRAGMA synchronous=NORMAL")
     except sqlite3.Error as exc:
         conn.close()

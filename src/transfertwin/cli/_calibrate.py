@@ -15,7 +15,13 @@ from rich.console import Console
 
 from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
-from transfertwin.cli._common import add_executor_args, positive_int, with_executor, worker_count
+from transfertwin.cli._common import (
+    add_executor_args,
+    parse_positions,
+    positive_int,
+    with_executor,
+    worker_count,
+)
 from transfertwin.cli._paths import out_dir
 from transfertwin.cli._progress import progress_bar
 
@@ -358,7 +364,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         groups, runs = objects, len(result.runs)
     ev = evaluate_predictions(rows, candidates, folds=args.folds, repeats=args.repeats,
                               seed=args.seed, penalty=args.penalty, groups=groups,
-                              shift_penalty=args.mass_penalty)  # fmt: skip
+                              shift_penalty=args.mass_penalty,
+                              position_penalty=args.position_penalty)  # fmt: skip
     y = np.array([int(r["success"]) for r in rows])
     r = runs or 1
     sim = {o: (round(float(ev.twin_p[objects == o].sum()) * r), int((objects == o).sum()) * r)
@@ -387,7 +394,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
 
 def _check_penalties(args: argparse.Namespace) -> None:
-    for name, value in (("--penalty", args.penalty), ("--mass-penalty", args.mass_penalty)):
+    for name, value in (("--penalty", args.penalty), ("--mass-penalty", args.mass_penalty),
+                        ("--position-penalty", args.position_penalty)):  # fmt: skip
         if not (math.isfinite(value) and value >= 0):
             raise InputError(f"{name} must be >= 0, got {value}")
 
@@ -411,6 +419,7 @@ def cmd_object(args: argparse.Namespace) -> int:
     shifts = [float(v) / 1000 for v in _parse_values(args.com_shifts_mm)]
     if any(not abs(v) <= MAX_COM_SHIFT_M for v in shifts):
         raise InputError(f"--com-shifts-mm must lie in ±{MAX_COM_SHIFT_M * 1000:g}")
+    positions = parse_positions(args.positions)
     _check_penalties(args)
     positive_int("--runs", args.runs)
     rows, scene, _, calib = _common(args)
@@ -422,17 +431,17 @@ def cmd_object(args: argparse.Namespace) -> int:
         fit = fit_proxy(rows, args.object, depths_m=depths, work_dir=out / "candidates",
                         scene=scene, runs=args.runs, seed=args.seed, workers=calib["workers"],
                         penalty=args.penalty, shifts_m=shifts, shift_penalty=args.mass_penalty,
+                        positions=positions, position_penalty=args.position_penalty,
                         on_progress=on_progress, executor=calib["executor"])  # fmt: skip
     proxy = write_proxy(fit.spec, out / f"{args.object}.proxy.json")
     save_candidates(fit, candidates_path(out, args.object))
     j = fit.shift_chosen
     for f in fit.faces:
         at_shift = f.probabilities[j]
-        shares = ", ".join(f"{d * 1000:g} mm {p.mean():.2f}"
-                           for d, p in zip(f.depths_m, at_shift, strict=True))  # fmt: skip
+        shares = ", ".join(f"{f.label(k)} {p.mean():.2f}" for k, p in enumerate(at_shift))
         print(
             f"{args.object} {f.face}: real {f.actual.mean():.2f} (n {len(f.actual)}); "
-            f"simulated by depth: {shares}; chosen {f.depths_m[f.chosen] * 1000:g} mm"
+            f"simulated by depth: {shares}; chosen {f.label(f.chosen)}"
         )
     n = sum(len(f.actual) for f in fit.faces)
     by_shift = ", ".join(
@@ -614,6 +623,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "tried; '0': do not search the mass distribution)")  # fmt: skip
     p.add_argument("--mass-penalty", type=float, default=0.02,
                    help="Brier penalty at the largest |centre-of-mass shift|")  # fmt: skip
+    p.add_argument("--positions", default="0.5",
+                   help="candidate protrusion positions along the object's x axis, fractions of "
+                   "its length (e.g. 0.3,0.5,0.7; default 0.5: centred, not searched)")  # fmt: skip
+    p.add_argument("--position-penalty", type=float, default=0.02,
+                   help="Brier penalty at the position farthest from the centre")  # fmt: skip
     p.set_defaults(func=with_executor(cmd_object), runs=2)
     p = csub.add_parser("evaluate", help="twin vs baselines, in-sample and cross-validated")
     _shared(p)
@@ -625,6 +639,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="Brier penalty at the deepest proxy candidate")  # fmt: skip
     p.add_argument("--mass-penalty", type=float, default=0.02,
                    help="Brier penalty at the largest centre-of-mass shift")  # fmt: skip
+    p.add_argument("--position-penalty", type=float, default=0.02,
+                   help="Brier penalty at the protrusion position farthest from the "
+                   "centre")  # fmt: skip
     p.set_defaults(func=with_executor(cmd_evaluate))
     p = csub.add_parser("sensitivity", help="which gap mechanism changes the outcomes (OAT/Morris)")
     _shared(p)

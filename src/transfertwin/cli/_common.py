@@ -15,10 +15,23 @@ __all__ = [
     "add_state_args",
     "executor_from_args",
     "parse_dock_error",
+    "parse_positions",
     "positive_int",
     "with_executor",
     "worker_count",
 ]
+
+
+def parse_positions(text: str, option: str = "--positions") -> tuple[float, ...]:
+    """Protrusion positions along an object's x axis, ``X1,X2,...`` as fractions of its
+    length in 0..1."""
+    try:
+        values = tuple(float(p) for p in text.split(",") if p.strip())
+    except ValueError:
+        values = ()
+    if not values or not all(0.0 <= v <= 1.0 for v in values):
+        raise InputError(f"{option} expects fractions X1,X2,... in 0..1, got {text!r}")
+    return values
 
 
 class Parser(argparse.ArgumentParser):

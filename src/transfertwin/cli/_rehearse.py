@@ -18,7 +18,7 @@ from rich.console import Console
 
 from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
-from transfertwin.cli._common import worker_count
+from transfertwin.cli._common import parse_positions, worker_count
 from transfertwin.cli._paths import out_dir
 from transfertwin.cli._progress import progress_bar
 
@@ -59,6 +59,7 @@ def cmd_rehearse(args: argparse.Namespace) -> int:
             calibration_experiments=k, runs=args.runs, validation_runs=args.validation_runs,
             theta_step=args.theta_step, holdout=args.holdout,
             test_experiments=args.test_experiments, depths_mm=_depths(args.depths_mm),
+            proxy_positions=parse_positions(args.proxy_positions, "--proxy-positions"),
             tune_trials=args.tune_trials, seed=args.seed, workers=worker_count(args.workers),
             scene=scene, ablate=tuple(args.ablate or ()), operations=args.operations,
         )
@@ -162,6 +163,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--depths-mm",
         default="8,16,24,32",
         help="candidate protrusion depths of the object calibration (mm)",
+    )
+    p.add_argument(
+        "--proxy-positions",
+        default="0.5",
+        metavar="X1,X2,...",
+        help="candidate protrusion positions along the object's x axis searched with the "
+        "depths, fractions of its length (e.g. 0.3,0.5,0.7; default 0.5: centred)",
     )
     p.add_argument(
         "--tune-trials",

@@ -165,6 +165,9 @@ class RehearsalConfig:
             K experiments then calibrate. 0: the K experiments are split (`holdout`). With
             H > 0 every K of a curve is scored on the same H plant experiments.
         depths_mm: Candidate protrusion depths of the object calibration (0 is added).
+        proxy_positions: Candidate protrusion positions along the object's x axis searched
+            with the depths (fractions of its length, 0.5 the centre, which is added);
+            (0.5,), the default: centred protrusions, depth only.
         tune_trials: TPE trials over μ and the gap (0: object calibration only).
         seed: Master seed of the twin's side (design, split, simulations).
         workers: Worker processes.
@@ -184,6 +187,7 @@ class RehearsalConfig:
     holdout: float = 0.3
     test_experiments: int = 0
     depths_mm: tuple[float, ...] = (8.0, 16.0, 24.0, 32.0)
+    proxy_positions: tuple[float, ...] = (0.5,)
     tune_trials: int = 0
     seed: int = 0
     workers: int = 1
@@ -222,6 +226,10 @@ class RehearsalConfig:
             raise InputError("--objects: name at least one object")
         if any(not (0 < d <= 100) for d in self.depths_mm):
             raise InputError("--depths-mm must be in (0, 100]")
+        if not self.proxy_positions or any(
+            not (0.0 <= x <= 1.0) for x in self.proxy_positions
+        ):  # fmt: skip
+            raise InputError("--proxy-positions must be fractions in 0..1")
 
 
 #: Random streams of the designs: calibration experiments and held-out test experiments.
@@ -424,7 +432,8 @@ def _calibrate_objects(
         run.stage(f"object calibration of {oid}")
         fit = fit_proxy(
             run.train, oid, depths_m=[d / 1000 for d in cfg.depths_mm], base=base,
-            work_dir=obj_dir / "candidates", scene=scene, on_progress=run.progress, **run.calib,
+            positions=cfg.proxy_positions, work_dir=obj_dir / "candidates", scene=scene,
+            on_progress=run.progress, **run.calib,
         )  # fmt: skip
         run.virtual += sum(f.probabilities.size for f in fit.faces) * cfg.runs
         spec = ProxySpec(oid, oid, fit.spec.protrusions,
@@ -438,6 +447,8 @@ def _calibrate_objects(
             "depth_mm": {p.face: round(p.depth_m * 1000, 3) for p in fit.spec.protrusions},
             **fit_info,
         }
+        if set(cfg.proxy_positions) != {0.5}:  # searched: where along x (0.5 the centre)
+            fits[oid]["x_frac"] = {p.face: p.x_frac for p in fit.spec.protrusions}
     return object_map, fits
 
 

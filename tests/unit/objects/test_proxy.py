@@ -108,3 +108,38 @@ def test_impossible_mass_distributions_are_input_errors() -> None:
     base = load_builtin("o1", features=False)
     with pytest.raises(InputError, match="two positive densities"):
         mass_split(base, ProxySpec("a", "o1", (), com_shift_m=0.05))
+
+
+def test_the_default_position_is_the_centred_geometry_bit_for_bit(tmp_path) -> None:
+    base = load_builtin("o1", features=False)
+    verts = np.vstack(base.hulls)
+    lo, hi = verts.min(axis=0), verts.max(axis=0)
+    box = Protrusion("front", 0.02).hull(base)
+    assert np.array_equal(box, Protrusion("front", 0.02, x_frac=0.5).hull(base))
+    assert np.array_equal(box[:, 0].reshape(2, 4).mean(axis=1),
+                          [lo[0] + 0.5 * (hi[0] - lo[0]) - 0.003,
+                           lo[0] + 0.5 * (hi[0] - lo[0]) + 0.003])  # fmt: skip
+    # a proxy file written before positions were fitted (no x_frac) loads as centred
+    old = tmp_path / "old.proxy.json"
+    old.write_text(json.dumps({
+        "object_id": "o1", "base": "o1",
+        "protrusions": [{"face": "front", "depth_m": 0.02}],
+    }))  # fmt: skip
+    new = write_proxy(ProxySpec("o1", "o1", (Protrusion("front", 0.02, x_frac=0.5),)),
+                      tmp_path / "new.proxy.json")  # fmt: skip
+    assert read_proxy(old).protrusions[0].x_frac == 0.5
+    a, b = load_object(str(old)), load_object(str(new))
+    assert all(np.array_equal(u, v) for u, v in zip(a.hulls, b.hulls, strict=True))
+
+
+def test_a_position_off_centre_moves_the_feature_along_x_only() -> None:
+    base = load_builtin("o1", features=False)
+    verts = np.vstack(base.hulls)
+    length = np.ptp(verts[:, 0])
+    centre = Protrusion("back", 0.015).hull(base)
+    for x in (0.25, 0.7):
+        moved = Protrusion("back", 0.015, x_frac=x).hull(base)
+        assert np.allclose(moved[:, 0] - centre[:, 0], (x - 0.5) * length)
+        assert np.array_equal(moved[:, 1:], centre[:, 1:])
+    with pytest.raises(InputError, match="x_frac"):
+        Protrusion("back", 0.015, x_frac=1.2)

@@ -191,3 +191,52 @@ def test_joint_and_hybrid_fold_hygiene_nothing_is_fitted_on_the_test_fold(real_r
         flipped[train] = 1 - flipped[train]
         ((_, h3, _),) = hybrid_fold_predictions(cands, groups, flipped, X, [(train, test)])
         assert not np.allclose(h1, h3)
+
+
+def _positioned(y: np.ndarray, best: int) -> JointCandidates:
+    """One face, candidates depth 0, then 10 mm at x 0.5, 0.3, 0.7: candidate `best`
+    predicts `y`, candidate k != best misses every 4th row from row k."""
+    n = len(y)
+    p = np.tile(y.astype(float), (1, 4, 1))
+    for k in range(4):
+        if k != best:
+            p[0, k, k::4] = 1 - y[k::4]
+    depths = np.array([0.0, 0.01, 0.01, 0.01])
+    return JointCandidates(np.array([0.0]), {"front": depths}, {"front": p},
+                           {"front": np.ones(n, bool)},
+                           {"front": np.array([0.5, 0.5, 0.3, 0.7])})  # fmt: skip
+
+
+def test_joint_choice_searches_the_position_with_a_pull_towards_the_centre() -> None:
+    y = np.array([1, 0, 1, 1, 0, 1, 1, 1, 0, 1])
+    rows = np.arange(len(y))
+    cands = _positioned(y, best=2)
+    assert choose_joint(cands, y, rows, penalty=0.02) == {"shift": 0, "front": 2}
+    # misses (Brier 0.3) are cheaper than a strong pull off the centre: back to the prior
+    assert choose_joint(cands, y, rows, penalty=0.02, position_penalty=0.5)["front"] == 0
+    assert choose_joint(cands, y, rows, penalty=0.0, position_penalty=0.5)["front"] == 0
+    # the depth penalty counts distinct depths: all three 10 mm candidates pay the same
+    plain = _positioned(y, best=0)
+    assert choose_joint(plain, y, rows, penalty=0.02) == {"shift": 0, "front": 0}
+    flat = JointCandidates(cands.shifts_m, cands.depths_m, {"front": np.full((1, 4, 10), 0.7)},
+                           cands.masks, cands.positions)  # fmt: skip
+    assert choose_joint(flat, y, rows, penalty=0.0, position_penalty=0.0)["front"] == 0
+    assert choose_joint(flat, y, rows, penalty=0.02)["front"] == 0
+    # without positions the index-based penalty is today's: the same choice bit for bit
+    same = JointCandidates(cands.shifts_m, cands.depths_m, cands.faces, cands.masks)
+    assert choose_joint(same, y, rows, penalty=0.02) == {"shift": 0, "front": 2}
+
+
+def test_the_position_is_chosen_in_the_training_fold_only(real_rows) -> None:
+    y = np.array([int(r["success"]) for r in real_rows[:60]])
+    cands = {"o1": _positioned(y, best=3)}
+    groups = np.array(["o1"] * len(y))
+    for train, test in cv_splits(y, folds=3, repeats=1, seed=4):
+        poisoned = y.copy()
+        poisoned[test] = 1 - poisoned[test]
+        ((_, p1, t1, c1),) = fold_predictions(cands, groups, y, [(train, test)], 0.02, 0.0, 0.02)
+        ((_, p2, t2, c2),) = fold_predictions(cands, groups, poisoned, [(train, test)], 0.02,
+                                              0.0, 0.02)  # fmt: skip
+        assert (c1, t1) == (c2, t2) and np.array_equal(p1, p2)
+    chosen = choose_candidates(cands, groups, y, np.arange(len(y)), 0.02, 0.0, 0.02)
+    assert chosen == {"o1": {"shift": 0, "front": 3}}

@@ -141,12 +141,17 @@ class JointCandidates:
         depths_m: Face → candidate depths (K,), the prior 0 first.
         faces: Face → predictions (S, K, n) for all n rows (NaN off that face's rows).
         masks: Face → that face's rows (n,) bool.
+        positions: Face → each candidate's protrusion position along x (K,), a fraction of
+            the object's length (0.5 the centre), when positions were searched; then a depth
+            repeats once per position and the depth penalty counts distinct depths. None:
+            every candidate is centred (one candidate per depth).
     """
 
     shifts_m: np.ndarray
     depths_m: Mapping[str, np.ndarray]
     faces: Mapping[str, np.ndarray]
     masks: Mapping[str, np.ndarray]
+    positions: Mapping[str, np.ndarray] | None = None
 
     def predictions(self, chosen: Mapping[str, int]) -> np.ndarray:
         """Predictions (n,) of the chosen candidate (NaN off this object's rows)."""
@@ -158,23 +163,44 @@ class JointCandidates:
         return p
 
 
+def _shape_cost(
+    cands: JointCandidates, face: str, k: int, penalty: float, position_penalty: float
+) -> np.ndarray | float:
+    """Penalty (K,) of a face's candidates: `penalty` times the depth's rank among the
+    distinct depths / (D - 1), plus with positions `position_penalty * |x - 0.5| / max`."""
+    if cands.positions is None:
+        return penalty * np.arange(k) / max(k - 1, 1)
+    depths = np.asarray(cands.depths_m[face], dtype=float)
+    distinct, rank = np.unique(depths, return_inverse=True)
+    cost = penalty * rank / max(len(distinct) - 1, 1)
+    off = np.abs(np.asarray(cands.positions[face], dtype=float) - 0.5)
+    if off.max() > 0:
+        cost = cost + position_penalty * off / off.max()
+    return cost
+
+
 def choose_joint(
     cands: JointCandidates,
     y: np.ndarray,
     rows: np.ndarray,
     penalty: float = 0.0,
     shift_penalty: float = 0.0,
+    position_penalty: float = 0.0,
 ) -> dict[str, int]:
-    """The shift and the depth per face with the lowest penalised Brier score on `rows`.
+    """The shift and the depth (and position) per face with the lowest penalised Brier score
+    on `rows`.
 
     The objective of shift s is the sum over faces, weighted by their share of the object's
-    rows among `rows`, of min over depth k of (Brier score of the face's rows +
+    rows among `rows`, of min over candidate k of (Brier score of the face's rows +
     `penalty * k / (K - 1)`), plus `shift_penalty * |s| / max |s|` (regularisation towards
-    the uniform-density prior). For a fixed shift each face's choice is the per-face choice
-    of `choose_candidates`. Ties go to the earlier candidate (the prior first).
+    the uniform-density prior). With searched positions (`JointCandidates.positions`) k's
+    depth penalty uses its depth's rank among the distinct depths instead of k, and
+    `position_penalty * |x - 0.5| / max |x - 0.5|` pulls towards the centre. For a fixed
+    shift each face's choice is the per-face choice of `choose_candidates`. Ties go to the
+    earlier candidate (the prior first).
 
     Returns:
-        {'shift': index into `shifts_m`, face: depth index} (all 0 without rows).
+        {'shift': index into `shifts_m`, face: candidate index} (all 0 without rows).
     """
     y = np.asarray(y, dtype=int)
     shifts = np.asarray(cands.shifts_m, dtype=float)
@@ -192,7 +218,7 @@ def choose_joint(
             continue
         k = pred.shape[1]
         cost = np.mean((pred[:, :, mine] - y[mine]) ** 2, axis=2)  # (S, K)
-        cost = cost + penalty * np.arange(k) / max(k - 1, 1)
+        cost = cost + _shape_cost(cands, face, k, penalty, position_penalty)
         best[face] = np.argmin(cost, axis=1)
         objective = objective + sizes[face] / total * cost.min(axis=1)
     s = int(np.argmin(objective))
@@ -206,6 +232,7 @@ def choose_candidates(
     rows: np.ndarray,
     penalty: float = 0.0,
     shift_penalty: float = 0.0,
+    position_penalty: float = 0.0,
 ) -> dict[str, int | dict[str, int]]:
     """Per object, the candidate proxy with the lowest Brier score on `rows` of that object.
 
@@ -219,6 +246,7 @@ def choose_candidates(
         penalty: Regularisation towards the prior: `penalty * k / (K - 1)` is added to
             candidate k's Brier score (0: none).
         shift_penalty: Regularisation of a joint candidate's centre-of-mass shift.
+        position_penalty: Regularisation of a joint candidate's protrusion position.
 
     Returns:
         Object id → chosen candidate index (a `choose_joint` dict for joint candidates).
@@ -226,7 +254,7 @@ def choose_candidates(
     chosen: dict[str, int | dict[str, int]] = {}
     for obj, pred in candidates.items():
         if isinstance(pred, JointCandidates):
-            chosen[obj] = choose_joint(pred, y, rows, penalty, shift_penalty)
+            chosen[obj] = choose_joint(pred, y, rows, penalty, shift_penalty, position_penalty)
             continue
         mine = rows[objects[rows] == obj]
         if len(mine) == 0:
@@ -266,12 +294,15 @@ def fold_predictions(
     splits: Sequence[tuple[np.ndarray, np.ndarray]],
     penalty: float = 0.0,
     shift_penalty: float = 0.0,
+    position_penalty: float = 0.0,
 ) -> list[tuple[np.ndarray, np.ndarray, float, dict[str, int | dict[str, int]]]]:
     """Per split: (test rows, their predictions, threshold, chosen candidates), where the
     candidates and the threshold are chosen on the training rows only."""
     out = []
     for train, test in splits:
-        chosen = choose_candidates(candidates, objects, y, train, penalty, shift_penalty)
+        chosen = choose_candidates(
+            candidates, objects, y, train, penalty, shift_penalty, position_penalty
+        )
         p = shrink(_assemble(candidates, objects, chosen), y, train)
         out.append((test, p[test], best_threshold(p[train], y[train]), chosen))
     return out
@@ -283,10 +314,13 @@ def in_sample(
     y: np.ndarray,
     penalty: float,
     shift_penalty: float = 0.0,
+    position_penalty: float = 0.0,
 ) -> tuple[np.ndarray, float, dict[str, int | dict[str, int]]]:
     """Predictions, threshold and candidates chosen on all rows (the optimistic figure)."""
     rows = np.arange(len(y))
-    chosen = choose_candidates(candidates, objects, y, rows, penalty, shift_penalty)
+    chosen = choose_candidates(
+        candidates, objects, y, rows, penalty, shift_penalty, position_penalty
+    )
     p = shrink(_assemble(candidates, objects, chosen), y, rows)
     return p, best_threshold(p, y), chosen
 
@@ -367,6 +401,7 @@ def hybrid_fold_predictions(
     splits: Sequence[tuple[np.ndarray, np.ndarray]],
     penalty: float = 0.0,
     shift_penalty: float = 0.0,
+    position_penalty: float = 0.0,
 ) -> list[tuple[np.ndarray, np.ndarray, float]]:
     """Per split: (test rows, their predictions, threshold) of the hybrid, a residual
     classifier — a logistic regression on the twin's output (P_sim, the simulated share of
@@ -379,7 +414,9 @@ def hybrid_fold_predictions(
     """
     out = []
     for train, test in splits:
-        chosen = choose_candidates(candidates, objects, y, train, penalty, shift_penalty)
+        chosen = choose_candidates(
+            candidates, objects, y, train, penalty, shift_penalty, position_penalty
+        )
         Z = hybrid_features(_assemble(candidates, objects, chosen), X)
         q = hybrid_probabilities(Z, y, train)
         out.append((test, q[test], best_threshold(q[train], y[train])))
@@ -448,6 +485,7 @@ def evaluate_predictions(
     penalty: float = 0.0,
     groups: np.ndarray | None = None,
     shift_penalty: float = 0.0,
+    position_penalty: float = 0.0,
 ) -> Evaluation:
     """Score the twin (from candidate predictions per group) against the base-rate and
     logistic baselines, in-sample and in repeated stratified K-fold cross-validation, and
@@ -462,10 +500,12 @@ def evaluate_predictions(
     units = objects if groups is None else np.asarray(groups)
     splits = cv_splits(y, folds, repeats, seed)
     X = logistic_features(rows)
-    folded = fold_predictions(candidates, units, y, splits, penalty, shift_penalty)
+    folded = fold_predictions(
+        candidates, units, y, splits, penalty, shift_penalty, position_penalty
+    )
     twin_parts = [(test, p, thr) for test, p, thr, _ in folded]
     hybrid_parts = hybrid_fold_predictions(candidates, units, y, X, splits, penalty,
-                                           shift_penalty)  # fmt: skip
+                                           shift_penalty, position_penalty)  # fmt: skip
     logit_parts = []
     for train, test in splits:
         q = logistic_probabilities(X, y, train)
@@ -481,7 +521,9 @@ def evaluate_predictions(
         hybrid_rep.append(m3)
         if r == 0:
             oof = {"twin": p_t, "twin_bits": b_t, "logistic": p_l, "hybrid": p_h}
-    p_in, thr_in, chosen_in = in_sample(candidates, units, y, penalty, shift_penalty)
+    p_in, thr_in, chosen_in = in_sample(
+        candidates, units, y, penalty, shift_penalty, position_penalty
+    )
     q_in = logistic_probabilities(X, y, np.arange(len(y)))
     h_in = hybrid_probabilities(
         hybrid_features(_assemble(candidates, units, chosen_in), X), y, np.arange(len(y))

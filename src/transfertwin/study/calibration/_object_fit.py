@@ -8,7 +8,14 @@ prior is the plain body of uniform density (depth 0, shift 0). Every face it was
 the grid of candidates shift × depth; each candidate replays that face's real rows R times
 with the same seeds (common random numbers), which gives P(success) per row and candidate.
 The chosen shift and depths minimise the Brier score plus penalties that grow with the
-distance from the prior (`choose_joint`: jointly, as the shift couples the faces). The
+distance from the prior (`choose_joint`: jointly, as the shift couples the faces).
+
+Opt-in, the protrusion's position along the object's x axis (`Protrusion.x_frac`, a
+fraction of its length; the prior 0.5 is the centre) is searched with the depths: each
+nonzero depth is tried at every position of the grid (depth 0 has no feature and so no
+position), and a penalty growing with |x - 0.5| pulls towards the centre. With the
+default grid (0.5 only) the candidates, their names and the choice are those of a
+depth-only fit. The
 candidates' predictions are kept, so that `calibrate evaluate` can repeat the choice inside
 each cross-validation training fold without simulating again.
 
@@ -44,6 +51,7 @@ __all__ = [
     "FaceFit",
     "ProxyFit",
     "candidates_path",
+    "check_positions",
     "check_shifts",
     "fit_proxy",
     "fitted_candidates",
@@ -54,9 +62,10 @@ __all__ = [
 
 @dataclass(frozen=True)
 class FaceFit:
-    """Candidates of one face: depths (K,) m, P(success) (S, K, n_face) per shift and depth,
-    the real rows' experiment ids (n_face,), their outcomes and the chosen depth index (at
-    the chosen shift)."""
+    """Candidates of one face: depths (K,) m, P(success) (S, K, n_face) per shift and
+    candidate, the real rows' experiment ids (n_face,), their outcomes and the chosen
+    candidate index (at the chosen shift); with searched positions also each candidate's
+    position along x (K,) (None: all centred, one candidate per depth)."""
 
     face: str
     depths_m: np.ndarray
@@ -64,6 +73,14 @@ class FaceFit:
     experiment_ids: np.ndarray
     actual: np.ndarray
     chosen: int
+    positions: np.ndarray | None = None
+
+    def label(self, k: int) -> str:
+        """Candidate `k` in words: '8 mm' or '8 mm @0.3' (position along x)."""
+        text = f"{self.depths_m[k] * 1000:g} mm"
+        if self.positions is not None and self.depths_m[k] > 0:
+            text += f" @{self.positions[k]:g}"
+        return text
 
 
 @dataclass(frozen=True)
@@ -86,14 +103,23 @@ class ProxyFit:
 
 
 def _candidate(
-    work_dir: Path, object_id: str, base: str, face: str, depth_m: float, shift_m: float
+    work_dir: Path,
+    object_id: str,
+    base: str,
+    face: str,
+    depth_m: float,
+    shift_m: float,
+    x_frac: float = 0.5,
 ) -> tuple[str, str]:
-    """(object id, file) of one candidate proxy: `base` with a protrusion on `face` and its
-    centre of mass shifted by `shift_m`."""
+    """(object id, file) of one candidate proxy: `base` with a protrusion on `face` (at
+    `x_frac` along x) and its centre of mass shifted by `shift_m`."""
     name = f"{object_id}~{face}{round(depth_m * 1000, 2):g}"
+    if x_frac != 0.5:
+        name += f"~x{round(x_frac, 4):g}"
     if shift_m != 0:
         name += f"~com{round(shift_m * 1000, 2):+g}"
-    spec = ProxySpec(name, base, (Protrusion(face, depth_m),), com_shift_m=shift_m)
+    prot = Protrusion(face, depth_m, x_frac=x_frac)
+    spec = ProxySpec(name, base, (prot,), com_shift_m=shift_m)
     return name, str(write_proxy(spec, work_dir / f"{name}{PROXY_SUFFIX}"))
 
 
@@ -116,6 +142,26 @@ def _shift_grid(shifts_m: Sequence[float]) -> np.ndarray:
     return np.array(sorted(values, key=lambda v: (abs(v), v)))
 
 
+def check_positions(positions: Sequence[float]) -> None:
+    """InputError unless every protrusion position lies in 0..1 (a fraction of the length)."""
+    for v in positions:
+        if not (isinstance(v, (int, float)) and 0.0 <= float(v) <= 1.0):
+            raise InputError(f"protrusion positions must lie in 0..1, got {v!r}")
+
+
+def _position_grid(positions: Sequence[float]) -> np.ndarray:
+    """Distinct positions, the prior 0.5 first, then by distance from it (rear first)."""
+    values = {0.5, *(float(v) for v in positions)}
+    return np.array(sorted(values, key=lambda v: (abs(v - 0.5), v)))
+
+
+def _face_grid(depths: np.ndarray, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A face's candidates (K,) as depths and positions: depth 0 (no feature) once, then each
+    nonzero depth, ascending, at every position (the centre first)."""
+    pairs = [(0.0, 0.5)] + [(float(d), float(x)) for d in depths[1:] for x in positions]
+    return np.array([d for d, _ in pairs]), np.array([x for _, x in pairs])
+
+
 def fit_proxy(
     rows: Sequence[Mapping[str, object]],
     object_id: str,
@@ -130,11 +176,13 @@ def fit_proxy(
     penalty: float = 0.02,
     shifts_m: Sequence[float] = (),
     shift_penalty: float = 0.02,
+    positions: Sequence[float] = (0.5,),
+    position_penalty: float = 0.02,
     on_progress: Callable[[int, int], None] | None = None,
     executor: Executor | None = None,
 ) -> ProxyFit:
-    """Fit the centre-of-mass shift and the protrusion depth of each face of `object_id` to
-    its real rows, jointly.
+    """Fit the centre-of-mass shift and the protrusion depth (and, opt-in, its position
+    along x) of each face of `object_id` to its real rows, jointly.
 
     Args:
         rows: Real result rows (any objects; those of `object_id` are used). Each needs an
@@ -151,6 +199,10 @@ def fit_proxy(
         shifts_m: Candidate centre-of-mass shifts along x (m); 0 (uniform density, the
             prior) is added. Empty: the mass distribution is not searched.
         shift_penalty: Brier-score penalty at the largest |shift| (linear in |shift|).
+        positions: Candidate protrusion positions along x, fractions of the object's
+            length in 0..1; 0.5 (the centre, the prior) is added. Only 0.5 (the default):
+            the position is not searched, as before.
+        position_penalty: Brier-score penalty at the largest |position - 0.5| (linear).
         on_progress: Called with (done, total) experiments.
         executor: Runs the experiments instead of `workers` local processes (e.g. a
             started `RayExecutor`; candidate files in `work_dir` must then be readable
@@ -166,6 +218,10 @@ def fit_proxy(
         raise InputError(f"runs must be at least 1, got {runs}")
     depths = np.unique(np.r_[0.0, np.asarray(depths_m, dtype=float)])
     shifts = _shift_grid(shifts_m)
+    check_positions(positions)
+    xs = _position_grid(positions)
+    searched = len(xs) > 1
+    grid_d, grid_x = _face_grid(depths, xs)
     base = base or object_id
     check_shifts(base, shifts)  # InputError now, not in a worker
     body = _base_model(base)
@@ -175,16 +231,16 @@ def fit_proxy(
     specs, where = [], {}
     for face in faces:
         for j, shift in enumerate(shifts):
-            for k, depth in enumerate(depths):
+            for k, (depth, x) in enumerate(zip(grid_d, grid_x, strict=True)):
                 name, ref = _candidate(work_dir, object_id, base, face, float(depth),
-                                       float(shift))  # fmt: skip
+                                       float(shift), float(x))  # fmt: skip
                 for run in range(runs):
                     batch = replay_specs(face_rows[face], scene=scene, run=run, seed=seed,
                                          object_map={object_id: ref})  # fmt: skip
                     for i, s in enumerate(batch):
                         where[(name, s.run, s.seed)] = (face, j, k, i)
                     specs += batch
-    wins = {f: np.zeros((len(shifts), len(depths), len(face_rows[f]))) for f in faces}
+    wins = {f: np.zeros((len(shifts), len(grid_d), len(face_rows[f]))) for f in faces}
     for done, row in enumerate(run_rows(specs, workers, executor), start=1):
         face, j, k, i = where[(str(row["object_id"]), int(row["run"]), int(row["seed"]))]
         wins[face][j, k, i] += 1 if row["status"] == "ok" and row["success"] == 1 else 0
@@ -195,18 +251,22 @@ def fit_proxy(
         n_face = len(face_rows[face])
         masks[face] = np.zeros(len(mine), dtype=bool)
         masks[face][start : start + n_face] = True
-        preds[face] = np.full((len(shifts), len(depths), len(mine)), np.nan)
+        preds[face] = np.full((len(shifts), len(grid_d), len(mine)), np.nan)
         preds[face][:, :, masks[face]] = wins[face] / runs
         start += n_face
     y = np.array([int(r["success"]) for f in faces for r in face_rows[f]])
-    joint = JointCandidates(shifts, {f: depths for f in faces}, preds, masks)
-    chosen = choose_joint(joint, y, np.arange(len(y)), penalty, shift_penalty)
+    at = {f: grid_x for f in faces} if searched else None
+    joint = JointCandidates(shifts, {f: grid_d for f in faces}, preds, masks, at)
+    chosen = choose_joint(joint, y, np.arange(len(y)), penalty, shift_penalty, position_penalty)
     fits = []
     for face in faces:
         ids = np.array([int(r["experiment_id"]) for r in face_rows[face]])
-        fits.append(FaceFit(face, depths, wins[face] / runs, ids, y[masks[face]], chosen[face]))
+        fits.append(FaceFit(face, grid_d, wins[face] / runs, ids, y[masks[face]], chosen[face],
+                            grid_x if searched else None))  # fmt: skip
     shift = float(shifts[chosen["shift"]])
-    protrusions = tuple(Protrusion(f.face, float(depths[f.chosen])) for f in fits)
+    protrusions = tuple(
+        Protrusion(f.face, float(grid_d[f.chosen]), x_frac=float(grid_x[f.chosen])) for f in fits
+    )
     spec = ProxySpec(object_id, base, protrusions, com_shift_m=shift)
     split = mass_split(body, spec)
     return ProxyFit(spec, tuple(fits), shifts, chosen["shift"], split.front_fraction,
@@ -220,14 +280,16 @@ def candidates_path(folder: Path, object_id: str) -> Path:
 
 def save_candidates(fit: ProxyFit, path: Path) -> Path:
     """The candidates' predictions as .npz (read back by `load_candidates`): per face the
-    depths, P (S, K, n_face), the experiment ids and the chosen depth; the shifts (S,) and the
-    chosen shift."""
+    depths, P (S, K, n_face), the experiment ids and the chosen depth (and, with searched
+    positions, each candidate's position); the shifts (S,) and the chosen shift."""
     arrays = {"shifts_m": fit.shifts_m, "shift_chosen": np.array(fit.shift_chosen)}
     for f in fit.faces:
         arrays[f"{f.face}_depths_m"] = f.depths_m
         arrays[f"{f.face}_p"] = f.probabilities
         arrays[f"{f.face}_ids"] = f.experiment_ids
         arrays[f"{f.face}_chosen"] = np.array(f.chosen)
+        if f.positions is not None:
+            arrays[f"{f.face}_positions"] = f.positions
     np.savez(path, object_id=np.array(fit.spec.object_id), **arrays)
     return path
 
@@ -248,7 +310,7 @@ def load_candidates(
         obj = str(data["object_id"])
         joint = "shifts_m" in data
         out: dict[str, tuple[np.ndarray | JointCandidates, np.ndarray]] = {}
-        preds, masks, depths = {}, {}, {}
+        preds, masks, depths, positions = {}, {}, {}, {}
         for face in ("front", "back"):
             if f"{face}_p" not in data:
                 continue
@@ -261,11 +323,15 @@ def load_candidates(
             mask = np.zeros(n, dtype=bool)
             mask[cols] = True
             preds[face], masks[face], depths[face] = full, mask, data[f"{face}_depths_m"]
+            if f"{face}_positions" in data:
+                positions[face] = data[f"{face}_positions"]
             if not joint:
                 out[f"{obj}:{face}"] = (full, mask)
         if joint and preds:
             cover = np.any(np.vstack(list(masks.values())), axis=0)
-            out[obj] = (JointCandidates(np.asarray(data["shifts_m"]), depths, preds, masks), cover)
+            at = positions or None  # files without positions: every candidate centred
+            joint_c = JointCandidates(np.asarray(data["shifts_m"]), depths, preds, masks, at)
+            out[obj] = (joint_c, cover)
     return out
 
 

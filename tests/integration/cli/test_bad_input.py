@@ -159,6 +159,22 @@ BAD: list[tuple[str, list[str]]] = [
         "calibrate evaluate negative mass penalty",
         ["calibrate", "evaluate", "--mass-penalty", "-0.1", "--out", "o"],
     ),
+    (
+        "calibrate object position beyond the length",
+        ["calibrate", "object", "--object", "o1", "--positions", "0.3,1.5", "--out", "o"],
+    ),
+    (
+        "calibrate object positions not numbers",
+        ["calibrate", "object", "--object", "o1", "--positions", "rear", "--out", "o"],
+    ),
+    (
+        "calibrate object negative position penalty",
+        ["calibrate", "object", "--object", "o1", "--position-penalty", "-1", "--out", "o"],
+    ),
+    (
+        "calibrate evaluate negative position penalty",
+        ["calibrate", "evaluate", "--position-penalty", "-0.1", "--out", "o"],
+    ),
     ("tune unknown space setting", [*TUNE, "--space", "friction=0:1"]),
     ("tune space low above high", [*TUNE, "--space", "mu=0.8:0.3"]),
     ("tune space not a range", [*TUNE, "--space", "mu=0.3"]),
@@ -209,6 +225,9 @@ BAD: list[tuple[str, list[str]]] = [
     ("rehearse unknown ablation", [*REH, "--ablate", "mass,gravity"]),
     ("rehearse negative operations", [*REH, "--operations", "-1"]),
     ("rehearse negative test experiments", [*REH, "--test-experiments", "-1"]),
+    ("rehearse proxy position below 0", [*REH, "--proxy-positions", "-0.1,0.5"]),
+    ("rehearse proxy positions not numbers", [*REH, "--proxy-positions", "front"]),
+    ("rehearse empty proxy positions", [*REH, "--proxy-positions", ","]),
     (
         "rehearse one experiment with a test set",
         [*REH[:5], "1", *REH[6:], "--test-experiments", "4"],

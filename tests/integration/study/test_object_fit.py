@@ -6,16 +6,26 @@ from __future__ import annotations
 import numpy as np
 
 from transfertwin.data import calibration_csv_path
-from transfertwin.objects import load_builtin, load_object, read_proxy
+from transfertwin.objects import (
+    Protrusion,
+    ProxySpec,
+    load_builtin,
+    load_object,
+    read_proxy,
+    write_proxy,
+)
 from transfertwin.sim import SceneConfig
 from transfertwin.store import read_results
 from transfertwin.study.calibration import (
     JointCandidates,
+    choose_joint,
     fit_proxy,
     fitted_candidates,
     load_candidates,
     save_candidates,
 )
+from transfertwin.study.calibration._replay import replay_specs
+from transfertwin.study.experiment import run_rows
 
 
 def test_deep_protrusion_catches_in_the_gap_and_the_fit_round_trips(tmp_path) -> None:
@@ -29,6 +39,7 @@ def test_deep_protrusion_catches_in_the_gap_and_the_fit_round_trips(tmp_path) ->
     # the plain core crosses every time; a 30 mm feature under the back face catches
     assert face.probabilities[0, 0].mean() > face.probabilities[0, 1].mean()
     assert face.chosen == 1 and fit.spec.protrusions[0].depth_m == 0.03
+    assert face.positions is None and fit.spec.protrusions[0].x_frac == 0.5  # not searched
     assert fit.spec.com_shift_m == 0.0
     assert abs(fit.front_fraction - fit.uniform_front_fraction) < 1e-9
     ids = np.array([int(r["experiment_id"]) for r in read_results(calibration_csv_path())])
@@ -61,3 +72,37 @@ def test_the_mass_distribution_is_searched_jointly_with_the_depths(tmp_path) -> 
     subset = [r for r in real if r in rows]
     cands, groups = fitted_candidates(tmp_path, subset)
     assert list(cands) == ["o1"] and set(groups) == {"o1"}
+
+
+def test_the_fit_finds_a_planted_protrusion_position(tmp_path) -> None:
+    """Synthetic 'real' rows from a proxy with a 20 mm feature at 25 % of the length; the
+    fit, searching 0.25 beside the centre, reproduces them only at the planted position."""
+    real = read_results(calibration_csv_path())
+    back = [r for r in real if r["object_id"] == "o1" and r["face"] == "back"]
+    rows = [back[i] for i in (6, 8, 12, 0)]
+    truth = ProxySpec("o1", "o1", (Protrusion("back", 0.02, x_frac=0.25),))
+    ref = str(write_proxy(truth, tmp_path / "truth.proxy.json"))
+    specs = replay_specs(rows, scene=SceneConfig(), object_map={"o1": ref}, run=0, seed=0)
+    planted = [int(r["status"] == "ok" and r["success"] == 1) for r in run_rows(specs, 1, None)]
+    rows = [{**r, "success": s} for r, s in zip(rows, planted, strict=True)]
+    fit = fit_proxy(rows, "o1", depths_m=[0.02], positions=[0.25], work_dir=tmp_path / "c",
+                    scene=SceneConfig(), runs=1, workers=1, penalty=0.0,
+                    position_penalty=0.0)  # fmt: skip
+    (face,) = fit.faces
+    assert list(face.depths_m) == [0.0, 0.02, 0.02] and list(face.positions) == [0.5, 0.5, 0.25]
+    assert {p.name for p in (tmp_path / "c").iterdir()} == {
+        "o1~back0.proxy.json", "o1~back20.proxy.json", "o1~back20~x0.25.proxy.json"}  # fmt: skip
+    # common random numbers: the planted candidate repeats the rows exactly, the centred
+    # one and the plain body do not
+    assert list(face.probabilities[0, 2]) == planted
+    assert list(face.probabilities[0, 1]) != planted and list(face.probabilities[0, 0]) != planted
+    assert face.chosen == 2 and fit.spec.protrusions == truth.protrusions
+    # the candidates file keeps the positions; `calibrate evaluate` repeats the choice
+    ids = np.array([int(r["experiment_id"]) for r in real])
+    joint, mask = load_candidates(save_candidates(fit, tmp_path / "o1.candidates.npz"), ids)["o1"]
+    assert list(joint.positions["back"]) == [0.5, 0.5, 0.25]
+    y = np.zeros(len(real), dtype=int)
+    y[np.isin(ids, [int(r["experiment_id"]) for r in rows if r["success"] == 1])] = 1
+    assert choose_joint(joint, y, np.flatnonzero(mask))["back"] == 2
+    # a strong pull towards the centre: the data cannot pay for the move
+    assert choose_joint(joint, y, np.flatnonzero(mask), position_penalty=1.0)["back"] != 2

@@ -232,6 +232,15 @@ class RehearsalConfig:
             raise InputError("--proxy-positions must be fractions in 0..1")
 
 
+def _config_record(cfg: RehearsalConfig) -> dict[str, object]:
+    """The configuration for ``rehearsal.json`` (without the scene; `proxy_positions` only
+    when positions were searched, so that a default rehearsal writes what it wrote before)."""
+    out = {k: v for k, v in asdict(cfg).items() if k != "scene"}
+    if set(cfg.proxy_positions) == {0.5}:
+        del out["proxy_positions"]
+    return out
+
+
 #: Random streams of the designs: calibration experiments and held-out test experiments.
 _DESIGN_TAGS = {"calibration": 0x44455349, "test": 0x54455354}
 
@@ -645,7 +654,7 @@ def rehearse(
         "training": len(train),
         "ablations": ablations,
         "operations": operations,
-        "config": {k: v for k, v in asdict(cfg).items() if k != "scene"},
+        "config": _config_record(cfg),
         "seconds": round(time.perf_counter() - t0, 1),
         "note": (
             "f05_* are mean per-run F0.5 of the twin's replay of held-out plant experiments "

@@ -49,6 +49,7 @@ def test_tiny_rehearsal_writes_every_key(tiny) -> None:
     assert 0.0 <= on_disk["f05_before"] <= 1.0 and 0.0 <= on_disk["f05_after"] <= 1.0
     assert set(on_disk["objects"]) == {"o3"}
     assert (out / "objects" / "o3.proxy.json").is_file()
+    assert "x_frac" not in on_disk["objects"]["o3"]["calibration"]  # positions not searched
     assert doc["virtual_experiments"] > 0
 
 
@@ -119,3 +120,29 @@ def test_separate_test_experiments_score_and_never_calibrate(tmp_path: Path) -> 
     scored = [[int(r["experiment_id"]) for r in rows] for name, rows in seen if name == "calibrate"]
     assert scored == [test, test]  # before and after calibration, on the test experiments only
     assert doc["plant_experiments"] >= 6
+
+
+@pytest.mark.slow
+def test_proxy_positions_reach_the_object_calibration(tmp_path: Path) -> None:
+    from dataclasses import replace
+
+    from transfertwin.objects import read_proxy
+
+    seen: list[dict] = []
+    mp = pytest.MonkeyPatch()
+    original = module.fit_proxy
+
+    def spy(*args, **kwargs):
+        seen.append(kwargs)
+        return original(*args, **kwargs)
+
+    mp.setattr(module, "fit_proxy", spy)
+    try:
+        doc = rehearse(replace(TINY, proxy_positions=(0.3, 0.7)), tmp_path)
+    finally:
+        mp.undo()
+    assert [kw["positions"] for kw in seen] == [(0.3, 0.7)]
+    fit = doc["objects"]["o3"]["calibration"]
+    spec = read_proxy(tmp_path / fit["proxy"])
+    assert fit["x_frac"] == {p.face: p.x_frac for p in spec.protrusions}
+    assert all(p.x_frac in (0.3, 0.5, 0.7) for p in spec.protrusions)

@@ -40,3 +40,30 @@ def test_calibrate_object_fits_shape_and_mass_and_evaluate_reports_the_hybrid(
     figures = json.loads((ev / "evaluation.json").read_text())
     assert {"twin_cv", "hybrid_cv", "hybrid_in_sample"} <= set(figures)
     assert set(figures["chosen"]["o1"]) == {"shift", "front", "back"}
+
+
+def test_calibrate_object_searches_the_protrusion_position_on_request(tmp_path, capsys) -> None:
+    lines = calibration_csv_path().read_text().splitlines()
+    real = tmp_path / "real.csv"
+    real.write_text("\n".join([lines[0], *(lines[1 + i] for i in (0, 1, 3, 4, 6))]) + "\n")
+    out = tmp_path / "fit"
+    argv = ["calibrate", "object", "--real", str(real), "--object", "o1", "--depths-mm", "30",
+            "--com-shifts-mm", "0", "--positions", "0.3", "--runs", "1", "--workers", "1",
+            "--out", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "30 mm @0.5 " in text and "30 mm @0.3 " in text  # the centre and x 0.3
+    spec = read_proxy(out / "o1.proxy.json")
+    with np.load(out / "o1.candidates.npz") as data:
+        assert list(data["front_positions"]) == [0.5, 0.5, 0.3]
+        assert list(data["front_depths_m"]) == [0.0, 0.03, 0.03]
+        k = int(data["front_chosen"])
+        front = next(p for p in spec.protrusions if p.face == "front")
+        assert (front.depth_m, front.x_frac) == (data["front_depths_m"][k],
+                                                 data["front_positions"][k])  # fmt: skip
+    ev = tmp_path / "ev"
+    assert main(["calibrate", "evaluate", "--real", str(real), "--objects", str(out),
+                 "--folds", "2", "--repeats", "1", "--position-penalty", "0",
+                 "--out", str(ev)]) == 0  # fmt: skip
+    figures = json.loads((ev / "evaluation.json").read_text())
+    assert set(figures["chosen"]["o1"]) == {"shift", "front", "back"}

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import asyncio
 
+import pytest
 from asyncua import Server, ua
 from asyncua.server.address_space import NodeData
 
@@ -30,12 +31,8 @@ def test_copy_on_access_behaves_like_a_dict_and_never_writes_the_template():
     assert b in template  # the template keeps it for other servers
     nodes[b] = _node(2)
     assert b in nodes and len(nodes) == 4
-    try:
+    with pytest.raises(KeyError):
         del nodes[ua.NodeId(99, 7)]
-    except KeyError:
-        pass
-    else:
-        raise AssertionError("deleting a missing node must raise KeyError")
 
 
 def test_servers_from_the_shared_space_match_asyncua_and_keep_their_writes_apart():

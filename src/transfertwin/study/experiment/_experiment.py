@@ -12,6 +12,7 @@ import functools
 import json
 import logging
 import math
+import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -147,15 +148,32 @@ class ExperimentResult:
         return out
 
 
+def _file_stamp(ref: str) -> tuple[int, int, int] | None:
+    """What tells a changed file from the one cached: inode, size and modification time
+    (None for a built-in id or a path that is not a file)."""
+    try:
+        st = os.stat(ref)
+    except OSError:
+        return None
+    return (st.st_ino, st.st_size, st.st_mtime_ns)
+
+
 @functools.lru_cache(maxsize=4)
-def _object(ref: str, units: str) -> ObjectModel:
+def _object(ref: str, units: str, stamp: tuple[int, int, int] | None) -> ObjectModel:
     return load_object(ref, units=units)
 
 
-@functools.lru_cache(maxsize=2)
 def system_for(ref: str, units: str, scene: SceneConfig) -> VirtualTransferSystem:
-    """The compiled virtual system for an object and scene, cached per process."""
-    obj = _object(ref, units)
+    """The compiled virtual system for an object and scene, cached per process; a mesh or
+    proxy file rewritten since it was cached is loaded again."""
+    return _system_for(ref, units, scene, _file_stamp(ref))
+
+
+@functools.lru_cache(maxsize=2)
+def _system_for(
+    ref: str, units: str, scene: SceneConfig, stamp: tuple[int, int, int] | None
+) -> VirtualTransferSystem:
+    obj = _object(ref, units, stamp)
     return VirtualTransferSystem(
         obj.hulls, obj.mass.mass_kg, obj.mass.com_m, obj.mass.inertia_kg_m2, scene,
         feature_hulls=obj.feature_hulls,

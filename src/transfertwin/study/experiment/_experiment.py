@@ -274,7 +274,7 @@ def run_experiment(
     own_system = system is None
     if system is None:
         system = system_for(spec.object_ref, spec.units, spec.scene)
-        object_id = _object(spec.object_ref, spec.units).object_id
+        object_id = _object(spec.object_ref, spec.units, _file_stamp(spec.object_ref)).object_id
     else:
         object_id = spec.object_ref
     seeing = _Seeing(sensor, perception, perception_seed)

@@ -62,12 +62,12 @@ class PhysicsConfig:
         multiccd: Multiple contact points per convex pair (MuJoCo 4's default: on). Off
             makes steps ~20 % cheaper, but a single-hull object (a box) then rocks and
             sinks ~6 mm into the belt; kept on (docs/speed.md).
-        pulley_facets: The end pulleys' collider: 0 (default) uses MuJoCo's cylinder
-            primitive, whose contacts with an object's hull depend on the hull's orientation;
-            N >= 8 makes each an N-sided prism mesh circumscribing the pulley radius, with a
-            facet on top flush with the deck (32: at most 0.12 mm outside the 25 mm circle),
-            which removes that dependence but lowered the twin's fidelity to the real data
-            (docs/design-choices.md, "Contact asymmetry").
+        pulley_facets: The end pulleys' collider: N >= 8 (default 32) makes each an
+            N-sided prism mesh circumscribing the pulley radius, with a facet on top flush
+            with the deck (32: at most 0.06 mm outside a 12.5 mm circle); 0 uses MuJoCo's
+            cylinder primitive, whose contacts with an object's hull depend on the hull's
+            orientation, so a box turned over behaves differently (docs/design-choices.md,
+            "Contact asymmetry").
         condim: Contact dimensionality of object–belt contacts (3: sliding friction; 4
             adds torsional, 6 adds rolling).
         solref: Contact stiffness/damping time constants (s, -) of object–belt contacts;
@@ -109,7 +109,7 @@ class PhysicsConfig:
     impratio: float = 1.0
     noslip_iterations: int = 0
     multiccd: bool = True
-    pulley_facets: int = 0
+    pulley_facets: int = 32
     condim: int = 3
     solref: tuple[float, float] = (0.02, 1.0)
     solimp: tuple[float, float, float, float, float] = (0.9, 0.95, 0.001, 0.5, 2.0)
@@ -170,7 +170,7 @@ class LayoutConfig:
     TM belts span x in [-tm_length_m, 0], TU belts x in [d_gap, d_gap + tu_length_m]
     (nominal pose). Each unit has a *left* (y > 0) and a *right* (y < 0) belt of width
     `belt_width_m`, separated by `belt_separation_m`. A belt is a flat deck plus a
-    cylinder pulley of radius `pulley_radius_m` at each end, so the belt surface rounds
+    pulley of radius `pulley_radius_m` at each end, so the belt surface rounds
     off at the unit's ends: that rounding and the gap make the hand-over hard.
 
     Attributes:
@@ -178,7 +178,8 @@ class LayoutConfig:
         tu_length_m: Length of the TU belts.
         belt_width_m: Width of one belt.
         belt_separation_m: Free space between a unit's left and right belt.
-        pulley_radius_m: End pulley radius (study: not given; 25 mm chosen).
+        pulley_radius_m: End pulley radius (study: not given; 12.5 mm, the prototype's
+            estimate of 10-15 mm, chosen by the held-out fit in docs/fidelity.md).
         belt_speed_m_s: Surface speed of a running belt (study: not given; 0.15 m/s).
         tip_to_centre_m: Distance from F_T back to the TM centre frame F_D, the point
             the docking error rotates about (study: not given; 0.40 m chosen).
@@ -198,7 +199,7 @@ class LayoutConfig:
     tu_length_m: float = 0.5
     belt_width_m: float = 0.195
     belt_separation_m: float = 0.01
-    pulley_radius_m: float = 0.025
+    pulley_radius_m: float = 0.0125
     belt_speed_m_s: float = 0.15
     tip_to_centre_m: float = 0.40
     barrier_height_m: float = 0.012

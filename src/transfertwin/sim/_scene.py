@@ -3,7 +3,8 @@
 World frame = the TM tip frame F_T. The TM is static in the world; the TU is a mocap body,
 so its docked pose (and thereby the docking error) is set per experiment in `MjData`
 without recompiling. Belts are static geoms with `surfacevel`: a deck box moving its top
-surface along the unit's x, and one pulley cylinder at each end spinning with ω = v/r.
+surface along the unit's x, and one pulley at each end (a prism mesh by default, or a
+cylinder) spinning with ω = v/r.
 Everything is read back by name.
 """
 
@@ -94,8 +95,8 @@ def add_belt(
     because MuJoCo takes *all* contact parameters from the higher-priority geom, also
     `physics`' condim, solref and solimp, which are therefore set on the belt geoms here
     (None: MuJoCo's defaults). The pulleys are prism meshes when `physics.pulley_facets`
-    is set (their meshes are added to `spec`, required then), else MuJoCo cylinders; either
-    way a pulley's axle runs along the unit's y axis and its surface turns with the belt.
+    is set, as by default (their meshes are added to `spec`, required then), else MuJoCo
+    cylinders; either way a pulley's axle runs along the unit's y axis and its surface turns with the belt.
     """
     physics = physics if physics is not None else PhysicsConfig()
     r = layout.pulley_radius_m

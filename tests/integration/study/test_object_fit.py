@@ -79,7 +79,7 @@ def test_the_fit_finds_a_planted_protrusion_position(tmp_path) -> None:
     fit, searching 0.25 beside the centre, reproduces them only at the planted position."""
     real = read_results(calibration_csv_path())
     back = [r for r in real if r["object_id"] == "o1" and r["face"] == "back"]
-    rows = [back[i] for i in (6, 8, 12, 0)]
+    rows = [back[i] for i in (2, 9, 1, 0)]
     truth = ProxySpec("o1", "o1", (Protrusion("back", 0.02, x_frac=0.25),))
     ref = str(write_proxy(truth, tmp_path / "truth.proxy.json"))
     specs = replay_specs(rows, scene=SceneConfig(), object_map={"o1": ref}, run=0, seed=0)

@@ -36,8 +36,8 @@ def test_invalid_values_are_input_errors():
 def test_pulley_facets_are_zero_or_a_prism(facets):
     with pytest.raises(InputError, match="pulley_facets"):
         PhysicsConfig(pulley_facets=facets)
-    assert PhysicsConfig().pulley_facets == 0
-    assert PhysicsConfig(pulley_facets=32).pulley_facets == 32
+    assert PhysicsConfig().pulley_facets == 32  # prism pulleys by default
+    assert PhysicsConfig(pulley_facets=0).pulley_facets == 0  # MuJoCo's cylinders
 
 
 def test_camera_sampling_is_whole_physics_steps():

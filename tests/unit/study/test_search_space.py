@@ -61,8 +61,8 @@ def test_a_shift_dimension_moves_the_proxys_centre_of_mass_and_is_penalised():
     assert scene_with(SceneConfig(), params).mu == 0.5  # the shift is no scene setting
     spec = trial_proxies(params, {"o18": "o18"})["o18"]
     assert spec.com_shift_m == pytest.approx(-0.010)
-    # o18 keeps its shipped feature (back 25 mm) when only its mass is tuned
-    assert [(p.face, p.depth_m) for p in spec.protrusions] == [("front", 0.0), ("back", 0.025)]
+    # o18 keeps its shipped feature (back 26 mm) when only its mass is tuned
+    assert [(p.face, p.depth_m) for p in spec.protrusions] == [("front", 0.0), ("back", 0.026)]
     rows = [{"object_id": "o18", "face": "front"}] * 3 + [{"object_id": "o1", "face": "back"}]
     assert space.depth_penalty(params, rows) == pytest.approx(0.75 * 10.0 / 20.0)
     assert space.depth_penalty({**params, "object.o18.com_shift_mm": 0.0}, rows) == 0.0

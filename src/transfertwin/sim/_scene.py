@@ -96,7 +96,8 @@ def add_belt(
     `physics`' condim, solref and solimp, which are therefore set on the belt geoms here
     (None: MuJoCo's defaults). The pulleys are prism meshes when `physics.pulley_facets`
     is set, as by default (their meshes are added to `spec`, required then), else MuJoCo
-    cylinders; either way a pulley's axle runs along the unit's y axis and its surface turns with the belt.
+    cylinders; either way a pulley's axle runs along the unit's y axis and its surface
+    turns with the belt.
     """
     physics = physics if physics is not None else PhysicsConfig()
     r = layout.pulley_radius_m

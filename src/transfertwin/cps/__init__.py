@@ -3,8 +3,9 @@ served over OPC UA, the knowledge graph and the logical assets; optionally an em
 as the physical assets (`CpsConfig.plant_seed`).
 
 The runtime and the applications (`Cps`, `CpsConfig`, `DOCKING_MODES`, `PoseGraph`,
-`PoseObservation`) load on first use: they bring the simulation and the study stack, which
-a client command (`cps status`, `cps order`) or the web console's gateway does not need.
+`PoseObservation`) and the knowledge graph (`KnowledgeGraph`) load on first use: they bring
+the simulation, the study stack and rdflib/pySHACL, which a client command (`cps status`,
+`cps order`) or the web console's gateway does not need.
 """
 
 from typing import TYPE_CHECKING
@@ -34,7 +35,6 @@ from transfertwin.cps.aas import (
     validate_export,
     wire_signature,
 )
-from transfertwin.cps.kg import KnowledgeGraph
 from transfertwin.cps.opcua import (
     AssetClient,
     AssetServer,
@@ -48,11 +48,13 @@ from transfertwin.cps.opcua import (
 if TYPE_CHECKING:
     from transfertwin.cps._runtime import DOCKING_MODES, Cps, CpsConfig
     from transfertwin.cps.apps import PoseGraph, PoseObservation
+    from transfertwin.cps.kg import KnowledgeGraph
 
 _LAZY = {
     "DOCKING_MODES": "_runtime",
     "Cps": "_runtime",
     "CpsConfig": "_runtime",
+    "KnowledgeGraph": "kg",
     "PoseGraph": "apps",
     "PoseObservation": "apps",
 }

@@ -1,16 +1,23 @@
 """Shared across the CPS tests of one run: credentials, certificates (server and client
-application certificates, the trust list) and one asset server.
+application certificates, the trust list), one asset server and one whole CPS.
 
 RSA key generation and a server's start are the slow parts of a CPS test; every test used
 to make its own. The server runs on an event loop of its own in a thread, so tests that
 each drive their clients with `asyncio.run` can share it over loopback TCP.
+
+The whole CPS is one `cps up --plant-seed` subprocess (`plant_cps`) for the CLI tests and the
+plant tests. It starts when the first test of this folder runs, and the tests that use it run
+after the folder's other tests, so it comes up while they run. The test that stops it
+(SIGTERM) runs last; a test that needs it after that gets a new one.
 """
 
 from __future__ import annotations
 
 import asyncio
+import shutil
 import threading
 from collections.abc import Awaitable, Callable, Iterator
+from contextlib import suppress
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -18,6 +25,8 @@ from typing import Any
 import basyx.aas.model as aas
 import pytest
 
+from tests.integration.cps._cli import PLANT_SEED, RunningCps
+from transfertwin.cps import plant_descriptors
 from transfertwin.cps.aas._demo import demo_descriptors
 from transfertwin.cps.aas._representation import build_representation, externally_synced
 from transfertwin.cps.opcua import (
@@ -29,6 +38,8 @@ from transfertwin.cps.opcua import (
     new_credentials,
     trust_certificate,
 )
+
+_HERE = Path(__file__).resolve().parent
 
 
 @dataclass(frozen=True)
@@ -66,6 +77,27 @@ def pki(tmp_path_factory: pytest.TempPathFactory) -> Pki:
 
     asyncio.run(make())
     return out
+
+
+@pytest.fixture(scope="session")
+def cps_certs(tmp_path_factory: pytest.TempPathFactory) -> Callable[[Path], Path]:
+    """The application certificates of every asset of a CPS (the demo's and the plant's)
+    and of its clients, made once per run: a function that puts a copy of them into a CPS
+    workdir (created) and returns it. The CPS finds them usable and makes no keys."""
+    certs = tmp_path_factory.mktemp("cps-certs") / "certs"
+    names = [d.asset_id for d in (*demo_descriptors(), *plant_descriptors())]
+
+    async def make() -> None:
+        for name in [*names, *(f"client-{role}" for role in ROLES)]:
+            await ensure_certificate(certs, name)
+
+    asyncio.run(make())
+
+    def workdir(path: Path) -> Path:
+        shutil.copytree(certs, path / "certs")
+        return path
+
+    return workdir
 
 
 class ServedAsset:
@@ -134,3 +166,80 @@ def tu_a(_tu_a_server: ServedAsset) -> Iterator[ServedAsset]:
     """The shared TU_A server, its handlers reset after the test."""
     yield _tu_a_server
     _tu_a_server._behaviour.clear()
+
+
+# -- one whole CPS (`cps up --plant-seed`) per test run ---------------------------------------
+class _SharedCps:
+    def __init__(self) -> None:
+        self.factory: pytest.TempPathFactory | None = None
+        self.certs: Callable[[Path], Path] | None = None
+        self.cps: RunningCps | None = None
+        self.stopped = False
+
+    def launch(self) -> RunningCps:
+        """The running CPS; a new one if there is none or a test stopped it."""
+        if self.cps is None or self.stopped:
+            assert self.factory is not None
+            assert self.certs is not None
+            wd = self.certs(self.factory.mktemp("plant-cps") / "wd")
+            self.cps = RunningCps(wd, "--plant-seed", str(PLANT_SEED))
+            self.stopped = False
+        return self.cps
+
+    def close(self) -> None:
+        if self.cps is not None and self.cps.running:
+            with suppress(Exception):
+                self.cps.stop()
+
+
+_SHARED = _SharedCps()
+_USES, _STOPS = "plant_cps", "plant_cps_to_stop"
+
+
+def _in_folder(item: pytest.Item) -> bool:
+    return _HERE in Path(str(item.path)).resolve().parents
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """This folder's tests that use the shared CPS after its other tests (which run while
+    it comes up); the one that stops it after them."""
+    users = [i for i in items if _in_folder(i) and _USES in getattr(i, "fixturenames", ())]
+    if not users:
+        return
+    ids = {id(i) for i in users}
+    rest = [i for i in items if id(i) not in ids]
+    others = [k for k, i in enumerate(rest) if _in_folder(i)]
+    at = others[-1] + 1 if others else items.index(users[0])
+    stoppers = [i for i in users if _STOPS in i.fixturenames]
+    ordered = [i for i in users if _STOPS not in i.fixturenames] + stoppers
+    items[:] = rest[:at] + ordered + rest[at:]
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _shared_cps_launch(
+    request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
+) -> Iterator[None]:
+    """Start the shared CPS (without waiting for it) when the first test here runs, if a
+    selected test uses it; stop it at the end of the run."""
+    _SHARED.factory = tmp_path_factory
+    if any(_USES in getattr(i, "fixturenames", ()) for i in request.session.items):
+        _SHARED.certs = request.getfixturevalue("cps_certs")
+        _SHARED.launch()
+    yield
+    _SHARED.close()
+
+
+@pytest.fixture
+def plant_cps() -> RunningCps:
+    """The shared `cps up --plant-seed PLANT_SEED`, up (14 demo assets and 4 physical
+    units). Tests must leave it usable for the others: orders move objects, and only the
+    test that asks for `plant_cps_to_stop` may stop it."""
+    return _SHARED.launch().wait_up()
+
+
+@pytest.fixture
+def plant_cps_to_stop(plant_cps: RunningCps) -> Iterator[RunningCps]:
+    """The shared CPS, for a test that stops it (ordered last; the next user gets a new
+    one)."""
+    _SHARED.stopped = True
+    yield plant_cps

@@ -1,5 +1,6 @@
-"""`transfertwin cps up/status/order` as a user runs them, against one CPS per module
-(started once: its servers and certificates are shared), and a clean SIGTERM shutdown.
+"""`transfertwin cps up/status/order` as a user runs them, against the test run's one
+`cps up --plant-seed` (conftest.py: `plant_cps`; the plant's units are assets beside the 14
+of the demo), and a clean SIGTERM shutdown of it (the last test to use it).
 
 Item by item (issue 15): refusals reach the client at once with the reason; the TMS knows
 where every object is and refuses impossible or concurrent orders; stderr stays quiet
@@ -11,58 +12,30 @@ from __future__ import annotations
 import asyncio
 import json
 import os
-import signal
-import subprocess
-import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
 
-
-def _tt(*args: str, timeout: float = 300, env: dict | None = None) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "transfertwin", *args], capture_output=True,
-                          text=True, timeout=timeout, env=env)  # fmt: skip
+from tests.integration.cps._cli import RunningCps
+from tests.integration.cps._cli import tt as _tt
 
 
-class RunningCps:
-    """A `cps up` subprocess; stderr goes to a file the tests read."""
-
-    def __init__(self, wd: Path, *extra: str) -> None:
-        self.wd = wd
-        self.stderr_path = wd.parent / "up.stderr"
-        self._err = self.stderr_path.open("w")
-        self.proc = subprocess.Popen(
-            [sys.executable, "-m", "transfertwin", "cps", "up", "--workdir", str(wd),
-             "--time-scale", "0", *extra], stdout=subprocess.PIPE, stderr=self._err, text=True,
-        )  # fmt: skip
-        self.first_line = self.proc.stdout.readline()  # blocks until the CPS reports it is up
-
-    def order(self, source: str, target: str, obj: str, *extra: str):
-        return _tt("cps", "order", "--workdir", str(self.wd), "--from", source, "--to", target,
-                   "--object", obj, *extra)  # fmt: skip
-
-    def stop(self) -> tuple[int, str, float]:
-        self.proc.send_signal(signal.SIGTERM)
-        t0 = time.monotonic()
-        out, _ = self.proc.communicate(timeout=120)
-        self._err.close()
-        return self.proc.returncode, out, time.monotonic() - t0
-
-
-@pytest.fixture(scope="module")
-def cps(tmp_path_factory):
-    running = RunningCps(tmp_path_factory.mktemp("cps") / "wd")
-    yield running
-    if running.proc.poll() is None:
-        running.stop()
+@pytest.fixture
+def cps(plant_cps: RunningCps) -> RunningCps:
+    return plant_cps
 
 
 def test_cps_is_up_and_quiet_without_verbose(cps):
-    assert cps.first_line.startswith("CPS up: 14 assets"), cps.first_line
+    from transfertwin.cps import demo_descriptors, plant_descriptors
+
+    assert cps.first_line.startswith("CPS up: 18 assets"), cps.first_line
     info = json.loads((cps.wd / "cps.json").read_text())
-    assert len(info["assets"]) == 14
+    assert len(info["assets"]) == 18
+    demo = {d.asset_id for d in demo_descriptors()}
+    assert len(demo) == 14  # the demo's 14 assets, and the plant's 4 units
+    assert {a["id"] for a in info["assets"]} == demo | {d.asset_id for d in plant_descriptors()}
     creds = json.loads((cps.wd / "credentials.json").read_text())
     assert set(creds) == {"operator", "viewer"}
     # The log goes to cps.log; stderr has no INFO lines and no asyncua certificate warnings.
@@ -181,7 +154,8 @@ def test_verbose_restores_info_on_stderr(cps):
     assert "INFO" in res.stderr
 
 
-def test_sigterm_shuts_down_cleanly_and_status_then_says_not_running(cps):
+def test_sigterm_shuts_down_cleanly_and_status_then_says_not_running(plant_cps_to_stop):
+    cps = plant_cps_to_stop
     code, out, took = cps.stop()
     assert code == 0 and "CPS down" in out and took < 60
     assert not (cps.wd / "cps.json").exists()

@@ -1,11 +1,11 @@
 """`cps up --plant-seed N`: the emulated plant as the CPS's physical assets (issue 12, item 1).
 
-One `cps up --plant-seed` per module (its start dominates; every test after it takes
-seconds). The Experiment Manager runs E^P on the physical units over OPC UA; the same plant
-seed gives the same E^P rows as a fresh plant fed the same requests; nothing the twin can
-reach — the physical servers' address spaces, the knowledge graph, cps.json, the log, the
-AAS — holds a hidden parameter of the plant, and the CPS touches the plant only through its
-public methods.
+The test run's one `cps up --plant-seed` (conftest.py: `plant_cps`, shared with the CLI
+tests; its start dominates, every test after it takes seconds). The Experiment Manager runs
+E^P on the physical units over OPC UA; the same plant seed gives the same E^P rows as a
+fresh plant fed the same requests; nothing the twin can reach — the physical servers'
+address spaces, the knowledge graph, cps.json, the log, the AAS — holds a hidden parameter
+of the plant, and the CPS touches the plant only through its public methods.
 """
 
 from __future__ import annotations
@@ -22,19 +22,12 @@ from pathlib import Path
 import pytest
 from asyncua import ua
 
-from tests.integration.cps.test_cli_cps import RunningCps, _tt
+from tests.integration.cps._cli import PLANT_SEED as SEED
+from tests.integration.cps._cli import RunningCps
+from tests.integration.cps._cli import tt as _tt
 
-SEED = 913
 PHYSICAL = ("TU_A_P", "TU_B_P", "TU_C_P", "TU_D_P")
 SRC = Path(__file__).resolve().parents[3] / "src" / "transfertwin"
-
-
-@pytest.fixture(scope="module")
-def plant_cps(tmp_path_factory):
-    running = RunningCps(tmp_path_factory.mktemp("plant") / "wd", "--plant-seed", str(SEED))
-    yield running
-    if running.proc.poll() is None:
-        running.stop()
 
 
 def _experiment(cps: RunningCps, *args: str) -> list[dict]:

@@ -22,9 +22,9 @@ def _dedup(states: list[str]) -> list[str]:
     return [s for i, s in enumerate(states) if i == 0 or s != states[i - 1]]
 
 
-def test_a_navigated_order_runs_navigate_dock_scan_transfer_in_order(tmp_path):
+def test_a_navigated_order_runs_navigate_dock_scan_transfer_in_order(tmp_path, cps_certs):
     async def scenario():
-        cfg = CpsConfig(tmp_path, gossip_period_s=10.0, docking="navigated")  # quiet gossip
+        cfg = CpsConfig(cps_certs(tmp_path), gossip_period_s=10.0, docking="navigated")  # quiet
         async with Cps(cfg) as cps:
             seen: list[str] = []
             done = asyncio.Event()

@@ -13,6 +13,7 @@ OPC UA interface; PropS fuses reported poses; the knowledge graph serves SPARQL 
 from __future__ import annotations
 
 import asyncio
+import functools
 import itertools
 import json
 import logging
@@ -106,6 +107,13 @@ class CpsConfig:
             check_plant_seed(self.plant_seed)
 
 
+@functools.cache
+def _docking_model() -> GaussianCopula:
+    """The docking-error generator fitted to the measured errors (deterministic; fitted once
+    per process, ~0.6 s)."""
+    return GaussianCopula.fit(measured_docking_errors())
+
+
 @dataclass
 class _Asset:
     desc: AssetDescriptor
@@ -123,7 +131,7 @@ class Cps(PhysicalAssets, AssetApplications):
         self.kg = KnowledgeGraph()
         self.env = Environment(config.scene, config.time_scale)
         self.poses = PoseGraph()
-        self._docking = GaussianCopula.fit(measured_docking_errors())
+        self._docking = _docking_model()
         self._ops = itertools.count(1)
         self._tasks: set[asyncio.Task] = set()
         self._loop: asyncio.AbstractEventLoop | None = None

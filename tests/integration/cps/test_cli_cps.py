@@ -173,13 +173,19 @@ def test_cps_commands_need_a_running_cps(tmp_path):
 def test_cps_export_writes_valid_aas_in_every_format(tmp_path):
     from transfertwin.cps import read_export
 
-    for suffix in (".json", ".xml", ".aasx"):
-        out = tmp_path / f"demo{suffix}"
-        res = _tt("cps", "export", "--out", str(out), "--with-physical", timeout=120)
+    suffixes = (".json", ".xml", ".aasx")
+    outs = [tmp_path / f"demo{suffix}" for suffix in suffixes]
+    # the commands are independent: run side by side (each is mostly interpreter start)
+    with ThreadPoolExecutor(4) as pool:
+        runs = [pool.submit(_tt, "cps", "export", "--out", str(out), "--with-physical",
+                            timeout=120) for out in outs]  # fmt: skip
+        bad = pool.submit(_tt, "cps", "export", "--out", str(tmp_path / "demo.txt"), timeout=120)
+    for out, run in zip(outs, runs, strict=True):
+        res = run.result()
         assert res.returncode == 0, res.stderr
         assert "valid" in res.stdout
         ids = {obj.id for obj in read_export(out)}
         assert "https://transfertwin.dev/ids/aas/TU_A" in ids
         assert "https://transfertwin.dev/ids/aas/TU_A_P" in ids
-    bad = _tt("cps", "export", "--out", str(tmp_path / "demo.txt"), timeout=120)
+    bad = bad.result()
     assert bad.returncode == 2 and not (tmp_path / "demo.txt").exists()

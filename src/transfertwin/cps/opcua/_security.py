@@ -33,7 +33,8 @@ from asyncua.crypto.cert_gen import setup_self_signed_certificate
 from asyncua.crypto.permission_rules import PermissionRuleset, User, UserRole
 from asyncua.crypto.uacrypto import check_certificate
 from cryptography import x509
-from cryptography.hazmat.primitives.serialization import Encoding
+from cryptography.hazmat.primitives.asymmetric.types import PrivateKeyTypes
+from cryptography.hazmat.primitives.serialization import Encoding, load_pem_private_key
 from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
 
 from transfertwin._atomic import write_atomic
@@ -287,6 +288,24 @@ def _usable(cert: Path, key: Path, uri: str, host: str) -> bool:
         cert.unlink()
         return False
     return not check_certificate(parsed, uri, host)
+
+
+_KEYS: dict[tuple[str, int, int, int], PrivateKeyTypes] = {}
+
+
+def _private_key(path: Path) -> PrivateKeyTypes:
+    """The (unencrypted PEM) private key at `path`, parsed once per process while the file
+    is unchanged. Parsing validates the RSA key (~40 ms); a CPS's servers start with their
+    keys from `ensure_certificate`, and a test run or a restarted CPS starts them again."""
+    st = path.stat()
+    ident = (str(path.resolve()), st.st_ino, st.st_mtime_ns, st.st_size)
+    key = _KEYS.get(ident)
+    if key is None:
+        key = load_pem_private_key(path.read_bytes(), password=None)
+        if len(_KEYS) >= 256:
+            _KEYS.clear()
+        _KEYS[ident] = key
+    return key
 
 
 def free_port(host: str = "127.0.0.1") -> int:

@@ -34,6 +34,7 @@ from transfertwin.cps.opcua._security import (
     RoleRuleset,
     RoleUserManager,
     TrustList,
+    _private_key,
     ensure_certificate,
     free_port,
 )
@@ -202,7 +203,8 @@ class AssetServer:
         else:
             cert, key = await ensure_certificate(cfg.cert_dir, self.asset_id, cfg.host)
             await server.load_certificate(str(cert))
-            await server.load_private_key(str(key))
+            # what Server.load_private_key does, with the key parsed once per process
+            server.iserver.private_key = _private_key(key)
             server.set_security_policy(
                 [ua.SecurityPolicyType.Basic256Sha256_SignAndEncrypt],
                 permission_ruleset=RoleRuleset(),

@@ -1,14 +1,20 @@
-"""The CLI as a user runs it: `transfertwin ...` subprocesses, and a running `cps up`."""
+"""The CLI as a user runs it: `transfertwin ...` in a process of its own (`tt`) or through
+`transfertwin.cli.main` in this one (`run_main`, as tests/integration/cli/test_bad_input.py
+does: the same exit code, stdout and stderr, without an interpreter start and the imports
+of a CLI process, ~1–2 s of CPU each), and a running `cps up`."""
 
 from __future__ import annotations
 
+import logging
 import signal
 import subprocess
 import sys
 import time
 from pathlib import Path
 
-__all__ = ["PLANT_SEED", "RunningCps", "tt"]
+import pytest
+
+__all__ = ["PLANT_SEED", "RunningCps", "run_main", "tt"]
 
 #: Plant seed of the test run's shared CPS (conftest.py: `plant_cps`).
 PLANT_SEED = 913
@@ -18,6 +24,24 @@ def tt(*args: str, timeout: float = 300, env: dict | None = None) -> subprocess.
     """`transfertwin ARGS` in a fresh interpreter."""
     return subprocess.run([sys.executable, "-m", "transfertwin", *args], capture_output=True,
                           text=True, timeout=timeout, env=env)  # fmt: skip
+
+
+def run_main(capfd: pytest.CaptureFixture[str], *args: str) -> subprocess.CompletedProcess:
+    """`transfertwin ARGS` through `main` in this process: exit code, stdout, stderr."""
+    from transfertwin.cli import main
+
+    capfd.readouterr()  # what came before is not this command's
+    root, ua = logging.getLogger(), logging.getLogger("asyncua")
+    levels = root.level, ua.level
+    try:
+        code = main(list(args))
+    finally:  # main's stderr handler and levels are this command's only
+        for h in [h for h in root.handlers if h.get_name() == "transfertwin-cli"]:
+            root.removeHandler(h)
+        root.setLevel(levels[0])
+        ua.setLevel(levels[1])
+    out, err = capfd.readouterr()
+    return subprocess.CompletedProcess(["transfertwin", *args], code, out, err)
 
 
 class RunningCps:
@@ -47,9 +71,13 @@ class RunningCps:
     def running(self) -> bool:
         return self.proc.poll() is None
 
-    def order(self, source: str, target: str, obj: str, *extra: str):
-        return tt("cps", "order", "--workdir", str(self.wd), "--from", source, "--to", target,
-                  "--object", obj, *extra)  # fmt: skip
+    def order_args(self, source: str, target: str, obj: str) -> tuple[str, ...]:
+        return ("cps", "order", "--workdir", str(self.wd), "--from", source, "--to", target,
+                "--object", obj)  # fmt: skip
+
+    def order(self, source: str, target: str, obj: str):
+        """`cps order` in a process of its own."""
+        return tt(*self.order_args(source, target, obj))
 
     def stop(self) -> tuple[int, str, float]:
         """SIGTERM; (exit code, the rest of stdout, seconds to exit)."""

@@ -1,6 +1,8 @@
 """`transfertwin cps up/status/order` as a user runs them, against the test run's one
 `cps up --plant-seed` (conftest.py: `plant_cps`; the plant's units are assets beside the 14
-of the demo), and a clean SIGTERM shutdown of it (the last test to use it).
+of the demo), and a clean SIGTERM shutdown of it (the last test to use it). `cps up`, the two
+concurrent orders and `-v` run in processes of their own; the other commands through
+`transfertwin.cli.main` in the test's process (`run_main`).
 
 Item by item (issue 15): refusals reach the client at once with the reason; the TMS knows
 where every object is and refuses impossible or concurrent orders; stderr stays quiet
@@ -11,14 +13,13 @@ from __future__ import annotations
 
 import asyncio
 import json
-import os
 import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
 
-from tests.integration.cps._cli import RunningCps
+from tests.integration.cps._cli import RunningCps, run_main
 from tests.integration.cps._cli import tt as _tt
 
 
@@ -52,16 +53,16 @@ def test_cps_is_up_and_quiet_without_verbose(cps):
         ("TU_B", "TU_C", "o4", "the TMS refused the order: o4 is at TU_D, not at TU_B"),
     ],
 )
-def test_impossible_orders_are_refused_at_once_with_the_reason(cps, source, target, obj,
+def test_impossible_orders_are_refused_at_once_with_the_reason(cps, capfd, source, target, obj,
                                                                 reason):  # fmt: skip
     t0 = time.monotonic()
-    res = cps.order(source, target, obj)
+    res = run_main(capfd, *cps.order_args(source, target, obj))
     took = time.monotonic() - t0
     assert res.returncode == 2, res.stderr
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"transfertwin: error: {reason}"), res.stderr
     assert "submitted" not in res.stdout
-    assert took < 45  # no wait for a timeout (it was 60 s); includes interpreter start
+    assert took < 45  # no wait for a timeout (it was 60 s)
 
 
 def test_the_tms_refuses_itself_what_a_client_does_not_check(cps):
@@ -88,7 +89,7 @@ def test_the_tms_refuses_itself_what_a_client_does_not_check(cps):
         assert refused.status == status and reason in refused.reason, refused
 
 
-def test_order_moves_the_object_and_concurrent_orders_cannot_both_win(cps):
+def test_order_moves_the_object_and_concurrent_orders_cannot_both_win(cps, capfd):
     # Two orders for o2 (on TU_B) at the same time: exactly one is accepted.
     with ThreadPoolExecutor(2) as pool:
         first, second = pool.map(lambda t: cps.order("TU_B", t, "o2"), ("TU_D", "TU_C"))
@@ -108,13 +109,13 @@ def test_order_moves_the_object_and_concurrent_orders_cannot_both_win(cps):
     assert last.endswith(f"o2 is at {where[status]}"), last
 
     # The location is state of the system: the knowledge graph (status) and the object's AAS.
-    st = _tt("cps", "status", "--workdir", str(cps.wd))
+    st = run_main(capfd, "cps", "status", "--workdir", str(cps.wd))
     assert st.returncode == 0 and st.stderr == "", st.stderr
     row = next(line.split() for line in st.stdout.splitlines() if line.startswith("o2 "))
     assert where[status] in row
     assert _read(cps.wd, "o2", "PossessedBy") == where[status]
     if where[status] != "TU_B":  # o2 has left TU_B: the old route is refused now
-        again = cps.order("TU_B", target, "o2")
+        again = run_main(capfd, *cps.order_args("TU_B", target, "o2"))
         assert again.returncode == 2
         assert f"o2 is at {where[status]}, not at TU_B" in again.stderr
 
@@ -133,9 +134,9 @@ def _read(wd: Path, asset: str, prop: str):
     return asyncio.run(read())
 
 
-def test_status_shows_locations_and_whole_endpoints_at_80_columns(cps):
-    env = {**os.environ, "COLUMNS": "80"}
-    res = _tt("cps", "status", "--workdir", str(cps.wd), env=env)
+def test_status_shows_locations_and_whole_endpoints_at_80_columns(cps, capfd, monkeypatch):
+    monkeypatch.setenv("COLUMNS", "80")
+    res = run_main(capfd, "cps", "status", "--workdir", str(cps.wd))
     assert res.returncode == 0 and res.stderr == "", res.stderr
     info = json.loads((cps.wd / "cps.json").read_text())
     for asset in info["assets"]:
@@ -154,38 +155,32 @@ def test_verbose_restores_info_on_stderr(cps):
     assert "INFO" in res.stderr
 
 
-def test_sigterm_shuts_down_cleanly_and_status_then_says_not_running(plant_cps_to_stop):
+def test_sigterm_shuts_down_cleanly_and_status_then_says_not_running(plant_cps_to_stop, capfd):
     cps = plant_cps_to_stop
     code, out, took = cps.stop()
     assert code == 0 and "CPS down" in out and took < 60
     assert not (cps.wd / "cps.json").exists()
-    res = _tt("cps", "status", "--workdir", str(cps.wd))
+    res = run_main(capfd, "cps", "status", "--workdir", str(cps.wd))
     assert res.returncode == 2
     assert "not running" in res.stderr and len(res.stderr.strip().splitlines()) == 1
 
 
-def test_cps_commands_need_a_running_cps(tmp_path):
-    res = _tt("cps", "status", "--workdir", str(tmp_path))
+def test_cps_commands_need_a_running_cps(tmp_path, capfd):
+    res = run_main(capfd, "cps", "status", "--workdir", str(tmp_path))
     assert res.returncode == 2
     assert "cps up" in res.stderr and len(res.stderr.strip().splitlines()) == 1
 
 
-def test_cps_export_writes_valid_aas_in_every_format(tmp_path):
+def test_cps_export_writes_valid_aas_in_every_format(tmp_path, capfd):
     from transfertwin.cps import read_export
 
-    suffixes = (".json", ".xml", ".aasx")
-    outs = [tmp_path / f"demo{suffix}" for suffix in suffixes]
-    # the commands are independent: run side by side (each is mostly interpreter start)
-    with ThreadPoolExecutor(4) as pool:
-        runs = [pool.submit(_tt, "cps", "export", "--out", str(out), "--with-physical",
-                            timeout=120) for out in outs]  # fmt: skip
-        bad = pool.submit(_tt, "cps", "export", "--out", str(tmp_path / "demo.txt"), timeout=120)
-    for out, run in zip(outs, runs, strict=True):
-        res = run.result()
+    for suffix in (".json", ".xml", ".aasx"):
+        out = tmp_path / f"demo{suffix}"
+        res = run_main(capfd, "cps", "export", "--out", str(out), "--with-physical")
         assert res.returncode == 0, res.stderr
         assert "valid" in res.stdout
         ids = {obj.id for obj in read_export(out)}
         assert "https://transfertwin.dev/ids/aas/TU_A" in ids
         assert "https://transfertwin.dev/ids/aas/TU_A_P" in ids
-    bad = bad.result()
+    bad = run_main(capfd, "cps", "export", "--out", str(tmp_path / "demo.txt"))
     assert bad.returncode == 2 and not (tmp_path / "demo.txt").exists()

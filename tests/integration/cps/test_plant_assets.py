@@ -23,20 +23,19 @@ import pytest
 from asyncua import ua
 
 from tests.integration.cps._cli import PLANT_SEED as SEED
-from tests.integration.cps._cli import RunningCps
-from tests.integration.cps._cli import tt as _tt
+from tests.integration.cps._cli import RunningCps, run_main
 
 PHYSICAL = ("TU_A_P", "TU_B_P", "TU_C_P", "TU_D_P")
 SRC = Path(__file__).resolve().parents[3] / "src" / "transfertwin"
 
 
-def _experiment(cps: RunningCps, *args: str) -> list[dict]:
-    res = _tt("cps", "experiment", "--workdir", str(cps.wd), *args)
+def _experiment(cps: RunningCps, capfd, *args: str) -> list[dict]:
+    res = run_main(capfd, "cps", "experiment", "--workdir", str(cps.wd), *args)
     assert res.returncode == 0 and res.stderr == "", res.stderr
     return [json.loads(line) for line in res.stdout.splitlines()]
 
 
-def test_plant_units_join_beside_the_virtual_models(plant_cps):
+def test_plant_units_join_beside_the_virtual_models(plant_cps, capfd):
     assert plant_cps.first_line.startswith("CPS up: 18 assets"), plant_cps.first_line
     info = json.loads((plant_cps.wd / "cps.json").read_text())
     kinds = {a["id"]: (a["kind"], a["class"], a["type"]) for a in info["assets"]}
@@ -44,26 +43,27 @@ def test_plant_units_join_beside_the_virtual_models(plant_cps):
         assert kinds[unit] == ("physical", "transfer_unit", "D/E")
         assert kinds[unit.removesuffix("_P")][0] == "virtual_model"
     assert plant_cps.stderr_path.read_text() == ""
-    st = _tt("cps", "status", "--workdir", str(plant_cps.wd))
+    st = run_main(capfd, "cps", "status", "--workdir", str(plant_cps.wd))
     assert st.returncode == 0, st.stderr
     rows = {line.split()[0]: line.split() for line in st.stdout.splitlines()[2:]}
     assert rows["TU_C_P"][1] == "PhysicalAsset/TransferUnit"
     # The TMS moves the CPS's (virtual) objects; a physical unit is no place in its ledger.
-    res = plant_cps.order("TU_A_P", "TU_C", "o1")
+    res = run_main(capfd, *plant_cps.order_args("TU_A_P", "TU_C", "o1"))
     assert res.returncode == 2 and "TU_A_P" in res.stderr, res.stderr
 
 
-def test_em_runs_e_p_over_opc_ua_in_the_e_v_record_shape(plant_cps):
+def test_em_runs_e_p_over_opc_ua_in_the_e_v_record_shape(plant_cps, capfd):
     from transfertwin.cps import PHYSICAL_RECORD_EXTRA
     from transfertwin.store import RESULT_COLUMNS
 
-    physical = _experiment(plant_cps, "--unit", "TU_A", "--physical", "--object", "o2",
+    physical = _experiment(plant_cps, capfd, "--unit", "TU_A", "--physical", "--object", "o2",
                            "--face", "front", "--conveyor", "both", "--theta", "30",
                            "--runs", "2")  # fmt: skip
-    physical += _experiment(plant_cps, "--unit", "TU_C_P", "--object", "o3", "--face", "back",
-                            "--conveyor", "left", "--theta", "0")  # fmt: skip
-    (virtual,) = _experiment(plant_cps, "--unit", "TU_A", "--object", "o2", "--face", "front",
-                             "--conveyor", "both", "--theta", "30", "--seed", "4")  # fmt: skip
+    physical += _experiment(plant_cps, capfd, "--unit", "TU_C_P", "--object", "o3", "--face",
+                            "back", "--conveyor", "left", "--theta", "0")  # fmt: skip
+    (virtual,) = _experiment(plant_cps, capfd, "--unit", "TU_A", "--object", "o2", "--face",
+                             "front", "--conveyor", "both", "--theta", "30",
+                             "--seed", "4")  # fmt: skip
     assert list(virtual) == list(RESULT_COLUMNS)  # E^V, unchanged by the plant
     assert virtual["y1"] in (0, 1) and virtual["state_pre"]
     for rec in physical:
@@ -87,10 +87,10 @@ def test_em_runs_e_p_over_opc_ua_in_the_e_v_record_shape(plant_cps):
         assert (row["success"], row["dock_err_x_mm"]) == (rec["success"], rec["dock_err_x_mm"])
 
 
-def test_the_same_plant_seed_gives_the_same_e_p_rows(plant_cps):
+def test_the_same_plant_seed_gives_the_same_e_p_rows(plant_cps, capfd):
     from transfertwin.plant import PLANT_COLUMNS, EmulatedPlant, PlantRequest
 
-    _experiment(plant_cps, "--unit", "TU_B_P", "--object", "o5", "--face", "front",
+    _experiment(plant_cps, capfd, "--unit", "TU_B_P", "--object", "o5", "--face", "front",
                 "--conveyor", "right", "--theta", "0")  # fmt: skip
     with (plant_cps.wd / "plant_experiments.csv").open(newline="") as fh:
         reader = csv.DictReader(fh)
@@ -173,12 +173,12 @@ async def _browse(node, found: dict, skip: set) -> None:
         await _browse(child, found, skip)
 
 
-def test_nothing_the_twin_can_reach_holds_a_hidden_parameter(plant_cps):
+def test_nothing_the_twin_can_reach_holds_a_hidden_parameter(plant_cps, capfd):
     from transfertwin.cps import plant_descriptors
     from transfertwin.cps.aas import build_representation, export_aas
     from transfertwin.cps.opcua import connect, load_credentials
 
-    _experiment(plant_cps, "--unit", "TU_D_P", "--object", "o4", "--face", "back",
+    _experiment(plant_cps, capfd, "--unit", "TU_D_P", "--object", "o4", "--face", "back",
                 "--conveyor", "both", "--theta", "60")  # fmt: skip
     wd = plant_cps.wd
     info = json.loads((wd / "cps.json").read_text())

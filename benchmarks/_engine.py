@@ -50,3 +50,26 @@ def timed_experiments(specs: Sequence[ExperimentSpec]) -> Timed:
         engine += system.engine_seconds - e0
         steps += system.engine_steps - s0
     return Timed(tuple(results), wall, engine, steps)
+
+
+def parse_sets(items: Sequence[str]) -> dict[str, object]:
+    """Scene overrides from ``KEY=VALUE`` strings (`SceneConfig.with_overrides` keys);
+    a value is read as an int, a float, none/true/false, or else kept as text."""
+    out: dict[str, object] = {}
+    for item in items:
+        key, sep, text = item.partition("=")
+        if not sep or not key:
+            raise SystemExit(f"--set needs KEY=VALUE, got {item!r}")
+        value: object = text
+        low = text.lower()
+        if low in ("none", "true", "false"):
+            value = {"none": None, "true": True, "false": False}[low]
+        else:
+            for kind in (int, float):
+                try:
+                    value = kind(text)
+                    break
+                except ValueError:
+                    pass
+        out[key] = value
+    return out

@@ -28,7 +28,7 @@ from transfertwin.ots import (
     run_transfer,
 )
 
-__all__ = ["OTSController", "TransferRecord", "belts_for"]
+__all__ = ["STALL_MODES", "OTSController", "TransferRecord", "belts_for"]
 
 
 def belts_for(conveyor: str) -> tuple[str, ...]:
@@ -70,20 +70,41 @@ class TransferRecord:
         return self.trace.final_state if self.trace is not None else self.start_state
 
 
-class _StallDetector:
-    """True once the AABB centre (x, y, z) stayed within `tol` of one point for `period` s."""
+#: How the early timeout decides that an object is stuck (`OTSController`'s stall_mode).
+STALL_MODES: tuple[str, ...] = ("still", "progress")
 
-    def __init__(self, period: float | None, tol: float, s0: np.ndarray) -> None:
+
+class _StallDetector:
+    """True once the object made no headway for `period` s.
+
+    'still': the AABB centre (x, y, z) stayed within `tol` of one point. 'progress': the
+    centre's x did not get `tol` beyond its best so far in the transfer's direction
+    (`sign` +1: towards the TU, -1: towards the TM), whatever it did sideways.
+    """
+
+    def __init__(
+        self, period: float | None, tol: float, s0: np.ndarray, mode: str = "still",
+        sign: float = 1.0,
+    ) -> None:  # fmt: skip
         self.period, self.tol = period, tol
+        self._progress = mode == "progress"
+        self._sign = sign
+        self._best = sign * float(s0[Col.X])
         self._anchor = (float(s0[Col.X]), float(s0[Col.Y]), float(s0[Col.Z]))
         self._since = float(s0[Col.T])
 
     def __call__(self, s: np.ndarray) -> bool:
-        x, y, z, t = float(s[Col.X]), float(s[Col.Y]), float(s[Col.Z]), float(s[Col.T])
-        ax, ay, az = self._anchor
-        if max(abs(x - ax), abs(y - ay), abs(z - az)) > self.tol:
-            self._anchor, self._since = (x, y, z), t
-            return False
+        x, t = float(s[Col.X]), float(s[Col.T])
+        if self._progress:
+            if self._sign * x > self._best + self.tol:
+                self._best, self._since = self._sign * x, t
+                return False
+        else:
+            y, z = float(s[Col.Y]), float(s[Col.Z])
+            ax, ay, az = self._anchor
+            if max(abs(x - ax), abs(y - ay), abs(z - az)) > self.tol:
+                self._anchor, self._since = (x, y, z), t
+                return False
         return self.period is not None and t - self._since >= self.period - 1e-9
 
 
@@ -102,6 +123,9 @@ class OTSController:
             `stall_tol_m` of one point for this long ends at once as the timeout it would
             become (t_end = the timeout time); None always waits for t_max.
         stall_tol_m: Displacement below which the object counts as immobile (m).
+        stall_mode: 'still' (default): immobile means the AABB centre stays within
+            `stall_tol_m` of one point; 'progress': the centre gets no `stall_tol_m`
+            further towards the receiving unit (sideways creep at the gap does not count).
     """
 
     def __init__(
@@ -117,8 +141,12 @@ class OTSController:
         on_sample: Callable[[], None] | None = None,
         stall_time_s: float | None = None,
         stall_tol_m: float = 0.002,
+        stall_mode: str = "still",
     ) -> None:
+        if stall_mode not in STALL_MODES:
+            raise ValueError(f"stall_mode must be one of {STALL_MODES}, got {stall_mode!r}")
         self.tm, self.tu = tm, tu
+        self.stall_mode = stall_mode
         self.stall_time_s = stall_time_s
         self.stall_tol_m = stall_tol_m
         self.sensor, self.clock = sensor, clock
@@ -185,7 +213,7 @@ class OTSController:
                 stopped[0] = True
             return self.state(face, conveyor)
 
-        stall = _StallDetector(self.stall_time_s, self.stall_tol_m, s0)
+        stall = _StallDetector(self.stall_time_s, self.stall_tol_m, s0, self.stall_mode, sign)
         try:
             trace = run_transfer(
                 s0,

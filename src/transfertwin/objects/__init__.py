@@ -29,7 +29,7 @@ from transfertwin.objects._core_draw import core_spec
 from transfertwin.objects._core_spec import BUILTIN_COUNT, CoreSpec, Dent
 from transfertwin.objects._cores import generate_core
 from transfertwin.objects._features import features_document, prior_features
-from transfertwin.objects._hulls import decompose_hulls, default_cache_dir
+from transfertwin.objects._hulls import decompose_hulls, default_cache_dir, merge_hulls
 from transfertwin.objects._load import export_object, load_object
 from transfertwin.objects._mass import (
     DEFAULT_DENSITY_KG_M3,
@@ -82,6 +82,7 @@ __all__ = [
     "load_object",
     "mass_properties",
     "mass_split",
+    "merge_hulls",
     "prior_features",
     "proxy_model",
     "read_proxy",

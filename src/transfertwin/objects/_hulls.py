@@ -36,6 +36,7 @@ __all__ = [
     "hull_cache_key",
     "hulls_from_npz_bytes",
     "hulls_to_npz_bytes",
+    "merge_hulls",
 ]
 
 logger = logging.getLogger(__name__)
@@ -204,3 +205,56 @@ def _hull_vertices(points: np.ndarray) -> np.ndarray | None:
         return None
     vertices = np.asarray(points[hull.vertices], dtype=np.float64)
     return vertices[np.lexsort(vertices.T[::-1])]
+
+
+def merge_hulls(
+    hulls: Sequence[np.ndarray], budget: int, keep_last: int = 0
+) -> tuple[np.ndarray, ...]:
+    """Merge convex hulls into at most `budget` (a hull budget per object).
+
+    Greedy and deterministic: while too many remain, the pair whose joint convex hull adds
+    the least volume (joint volume minus both volumes; overlapping pairs go first) becomes
+    that joint hull. Fewer hulls make collision detection cheaper but fill the concavities
+    between merged parts. The last `keep_last` hulls (features with their own contact
+    parameters) are kept apart and do not count against the budget.
+
+    Args:
+        hulls: Convex hull vertex arrays, each (k, 3).
+        budget: Most hulls to keep besides the last `keep_last` (>= 1).
+        keep_last: How many trailing hulls stay as they are.
+    """
+    if budget < 1:
+        raise InputError(f"hull budget must be >= 1, got {budget!r}")
+    keep_last = max(0, min(keep_last, len(hulls)))
+    body = [np.asarray(h, dtype=np.float64) for h in hulls[: len(hulls) - keep_last]]
+    kept = tuple(hulls[len(hulls) - keep_last :])
+    if len(body) <= budget:
+        return tuple(hulls)
+
+    def volume(points: np.ndarray) -> float:
+        try:
+            return float(ConvexHull(points).volume)
+        except (QhullError, ValueError):
+            return 0.0
+
+    vols = [volume(h) for h in body]
+    cost: dict[tuple[int, int], float] = {}
+    for i in range(len(body)):
+        for j in range(i + 1, len(body)):
+            cost[i, j] = volume(np.concatenate([body[i], body[j]])) - vols[i] - vols[j]
+    alive = list(range(len(body)))
+    while len(alive) > budget:
+        i, j = min(cost, key=lambda ij: (cost[ij], ij))
+        merged = _hull_vertices(np.concatenate([body[i], body[j]]))
+        body[i] = merged if merged is not None else np.concatenate([body[i], body[j]])
+        vols[i] = volume(body[i])
+        alive.remove(j)
+        cost = {ij: c for ij, c in cost.items() if j not in ij and i not in ij}
+        for k in alive:
+            if k != i:
+                pair = (min(i, k), max(i, k))
+                cost[pair] = volume(np.concatenate([body[i], body[k]])) - vols[i] - vols[k]
+    out = [body[k] for k in alive]
+    for hull in out:
+        hull.setflags(write=False)
+    return (*out, *kept)

@@ -162,6 +162,20 @@ def _apply(u: Transition, state: np.ndarray) -> np.ndarray:
     return new
 
 
+def _first_terminal_index(
+    state: np.ndarray, i: int, n_max: int, t0: float, dt: float, time_index: int | None,
+    success: StateSet, failure: StateSet,
+) -> int:  # fmt: skip
+    """First index in (i, n_max] at which `state`, its time set to t0 + index·dt, is
+    terminal; n_max if none is (one batched set evaluation)."""
+    if time_index is None or n_max <= i:
+        return n_max
+    later = np.repeat(state[None, :], n_max - i, axis=0)
+    later[:, time_index] = t0 + dt * np.arange(i + 1, n_max + 1, dtype=float)
+    terminal = np.flatnonzero(outcome_codes(later, success, failure) != NON_TERMINAL)
+    return i + 1 + int(terminal[0]) if terminal.size else n_max
+
+
 def run_transfer(
     s0: ArrayLike,
     u: Transition,
@@ -192,8 +206,9 @@ def run_transfer(
         stop: Optional early timeout: called with each new non-terminal state; True
             means the state will not change before the timeout (e.g. a stuck object),
             so the trace ends now as the loop would end at the timeout: its last state
-            is the current one carried forward to the last sample time ``t0 + n·dt``
-            (evaluated against S+ and S- like any other state).
+            is the current one carried forward to the first later sample time
+            ``t0 + n·dt`` at which it is in S+ ∪ S- (for the belt sets: the first
+            sample after t_max, as a loop run to the end gives), or to the last one.
 
     Returns:
         The trace, ending at the first state in S+ ∪ S- or at the timeout.
@@ -230,9 +245,10 @@ def run_transfer(
         steps.append(i)
         code = int(outcome_codes(state, success, failure))
         if code == NON_TERMINAL and stop is not None and i < n_max and stop(state.copy()):
-            # Fast-forward: the state stays put until the timeout the loop would reach.
+            # Fast-forward: the state stays put, so the loop would end at the first later
+            # sample at which it is terminal (by time: the timeout), or at n_max.
+            i = _first_terminal_index(state, i, n_max, t0, dt, time_index, success, failure)
             state = state.copy()
-            i = n_max
             if time_index is not None:
                 state[time_index] = t0 + i * dt
             states.append(state)

@@ -13,6 +13,7 @@ import math
 from dataclasses import dataclass, field, fields, replace
 
 from transfertwin._errors import InputError
+from transfertwin.control import STALL_MODES
 
 __all__ = [
     "PROFILES",
@@ -68,6 +69,10 @@ class PhysicsConfig:
             cylinder primitive, whose contacts with an object's hull depend on the hull's
             orientation, so a box turned over behaves differently (docs/design-choices.md,
             "Contact asymmetry").
+        max_hulls: Hull budget per object: None (default) keeps every convex hull of the
+            object; N merges them (`transfertwin.objects.merge_hulls`, least added volume
+            first) into at most N besides its feature hulls. Fewer hulls make steps cheaper
+            but fill concavities between parts (docs/speed.md).
         condim: Contact dimensionality of object–belt contacts (3: sliding friction; 4
             adds torsional, 6 adds rolling).
         solref: Contact stiffness/damping time constants (s, -) of object–belt contacts;
@@ -110,6 +115,7 @@ class PhysicsConfig:
     noslip_iterations: int = 0
     multiccd: bool = True
     pulley_facets: int = 32
+    max_hulls: int | None = None
     condim: int = 3
     solref: tuple[float, float] = (0.02, 1.0)
     solimp: tuple[float, float, float, float, float] = (0.9, 0.95, 0.001, 0.5, 2.0)
@@ -156,6 +162,11 @@ class PhysicsConfig:
             raise InputError(
                 f"PhysicsConfig.pulley_facets must be 0 or an integer 8..256, got {facets!r}"
             )
+        budget = self.max_hulls
+        if budget is not None and (
+            isinstance(budget, bool) or not isinstance(budget, int) or budget < 1
+        ):
+            raise InputError(f"PhysicsConfig.max_hulls must be >= 1 or none, got {budget!r}")
         if self.condim not in (1, 3, 4, 6):
             raise InputError(f"PhysicsConfig.condim must be 1, 3, 4 or 6, got {self.condim!r}")
         if self.iterations < 1 or self.ls_iterations < 1 or self.noslip_iterations < 0:
@@ -288,6 +299,11 @@ class SceneConfig:
             the timeout it would become, with t_end = the timeout time. None waits for
             t_max (the reference behaviour).
         stall_tol_m: Displacement below which the object counts as immobile.
+        stall_mode: What "immobile" means for the early timeout: 'still' (default) — the
+            AABB centre stays within `stall_tol_m` of one point; 'progress' — the centre
+            gets no `stall_tol_m` further towards the receiving unit, so an object stuck
+            at the gap that creeps sideways also ends early. 'progress' is opt-in: a core
+            can creep sideways for 10 s and more and then pass (docs/speed.md).
         feature_mu: Friction coefficient of an object's *features* — the protrusion hulls of
             a calibrated proxy (`transfertwin.objects.ProxySpec`): the steel ears, bolt heads
             and studs a real core rests on — against the belts and pulleys. None uses `mu`
@@ -306,6 +322,7 @@ class SceneConfig:
     t_max_s: float = 30.0
     stall_time_s: float | None = 5.0
     stall_tol_m: float = 0.002
+    stall_mode: str = "still"
     feature_mu: float | None = None
     com_offset_m: float = 0.0
     physics: PhysicsConfig = field(default_factory=PhysicsConfig)
@@ -321,6 +338,10 @@ class SceneConfig:
         _positive("SceneConfig", stall_tol_m=self.stall_tol_m)
         if self.stall_time_s is not None:
             _positive("SceneConfig", stall_time_s=self.stall_time_s)
+        if self.stall_mode not in STALL_MODES:
+            raise InputError(
+                f"SceneConfig.stall_mode must be one of {STALL_MODES}, got {self.stall_mode!r}"
+            )
         if self.feature_mu is not None and not (
             isinstance(self.feature_mu, (int, float))
             and math.isfinite(self.feature_mu)

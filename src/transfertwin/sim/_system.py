@@ -16,6 +16,7 @@ from collections.abc import Callable
 import mujoco
 import numpy as np
 
+from transfertwin.objects import merge_hulls
 from transfertwin.sim._config import DockingError, SceneConfig
 from transfertwin.sim._docking import tu_pose_in_tip_frame
 from transfertwin.sim._names import OBJECT_BODY, OBJECT_JOINT, TU_BODY, barrier_sensor, belt_geom
@@ -182,6 +183,10 @@ class VirtualTransferSystem:
         cfg: Scene configuration.
         feature_hulls: How many of the last `hulls` are features (a proxy's protrusions),
             whose friction is the scene's `feature_mu` when that is set.
+
+    With the scene's hull budget set (`PhysicsConfig.max_hulls`), the hulls are merged
+    down to it first; the readout's AABB then comes from the merged hulls' vertices, which
+    are a subset of the original ones, so it is unchanged.
     """
 
     def __init__(
@@ -194,6 +199,8 @@ class VirtualTransferSystem:
         feature_hulls: int = 0,
     ) -> None:
         self.cfg = cfg
+        if cfg.physics.max_hulls is not None:
+            hulls = merge_hulls(hulls, cfg.physics.max_hulls, keep_last=feature_hulls)
         com_m = np.asarray(com_m, dtype=float) + np.array([cfg.com_offset_m, 0.0, 0.0])
         self.model = build_spec(
             hulls, mass_kg, com_m, inertia_kg_m2, cfg, feature_hulls=feature_hulls

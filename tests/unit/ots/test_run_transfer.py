@@ -180,3 +180,21 @@ def test_eq_5_11_outcome_codes_vectorised() -> None:
     codes = outcome_codes(states, SUCCESS, FAILURE)
     np.testing.assert_array_equal(codes, [1, 0, NON_TERMINAL])
     assert outcome_codes(states[0], SUCCESS, FAILURE).shape == ()
+
+
+def test_early_stop_ends_where_the_loop_run_to_the_end_would() -> None:
+    # A failure set with a time limit (as the belt sets' t > t_max): a stalled state
+    # fast-forwarded by `stop` ends at the first sample past that limit, the sample at
+    # which the loop without `stop` ends, with the same outcome.
+    timed_failure = PredicateSet(lambda s: (s[:, 1] < -1.0) | (s[:, 2] > 3.0))
+    # The controller's loop limit is t_max + dt; with dt = 0.4 the loop's last sample
+    # (3.6 s) lies beyond the first one past 3 s (3.2 s).
+    kw = {**KW, "failure": timed_failure, "dt": 0.4, "t_max": 3.0 + 0.4, "time_index": 2}
+    s0 = np.array([0.0, -0.5, 0.0])
+    full = run_transfer(s0, _stand_still, **kw)
+    calls = []
+    early = run_transfer(s0, _stand_still, stop=lambda s: calls.append(s) or True, **kw)
+    assert len(calls) == 1  # stopped after one transition
+    assert early.t_end == full.t_end == pytest.approx(3.2)
+    assert early.outcome is full.outcome is Outcome.FAILURE
+    np.testing.assert_array_equal(early.final_state, full.final_state)

@@ -92,3 +92,11 @@ def test_unmeasured_mechanisms_default_to_none_and_accept_overrides():
 def test_unmeasured_mechanisms_reject_out_of_range_values(bad):
     with pytest.raises(InputError):
         SceneConfig().with_overrides(**bad)
+
+
+def test_speed_lever_settings_are_validated():
+    assert SceneConfig().stall_mode == "still" and SceneConfig().physics.max_hulls is None
+    assert SceneConfig().with_overrides(stall_mode="progress").stall_mode == "progress"
+    for bad in ({"stall_mode": "soon"}, {"physics.max_hulls": 0}, {"physics.max_hulls": 2.5}):
+        with pytest.raises(InputError):
+            SceneConfig().with_overrides(**bad)

@@ -197,6 +197,7 @@ def scene_controller(
         on_sample=on_sample,
         stall_time_s=scene.stall_time_s,
         stall_tol_m=scene.stall_tol_m,
+        stall_mode=scene.stall_mode,
     )  # fmt: skip
 
 

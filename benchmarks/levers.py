@@ -43,6 +43,20 @@ VARIANTS: dict[str, dict[str, object]] = {
     "hulls8": {"physics.max_hulls": 8},
     "hulls4": {"physics.max_hulls": 4},
     "progress3": {"stall_mode": "progress", "stall_time_s": 3.0},
+    "candidate": {
+        "stall_mode": "progress",
+        "stall_time_s": 3.0,
+        "camera_rate_hz": 7.5,
+        "physics.max_hulls": 8,
+    },
+    "combo": {
+        "stall_mode": "progress",
+        "camera_rate_hz": 7.5,
+        "physics.timestep_s": 0.01,
+        "physics.iterations": 100,
+        "physics.tolerance": 1e-10,
+        "physics.max_hulls": 8,
+    },
 }
 
 

@@ -9,6 +9,7 @@ pass with the belts running, then observe", evaluated against the belt system's 
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -16,6 +17,7 @@ import numpy as np
 
 from transfertwin.control._hal import Clock, ObjectSensor, UnitHAL
 from transfertwin.ots import (
+    N_COLS,
     BeltThresholds,
     Col,
     Conveyor,
@@ -27,6 +29,15 @@ from transfertwin.ots import (
     conveyor_of,
     run_transfer,
 )
+
+_F, _C, _T = int(Col.F), int(Col.C), int(Col.T)
+
+
+@functools.cache
+def _codes(face: str, conveyor: str) -> tuple[int, int]:
+    """State codes of face f and conveyor c (Eq. 5.4)."""
+    return int(Face[face.upper()]), int(Conveyor[conveyor.upper()])
+
 
 __all__ = ["STALL_MODES", "OTSController", "TransferRecord", "belts_for"]
 
@@ -158,11 +169,10 @@ class OTSController:
     def state(self, face: str, conveyor: str) -> np.ndarray:
         """The full state vector (Eq. 5.4) now: sensor reading plus f, c and t."""
         obs = np.asarray(self.sensor.observe(), dtype=float)
-        s = np.empty(len(Col))
-        s[: Col.F] = obs
-        s[Col.F] = Face[face.upper()]
-        s[Col.C] = Conveyor[conveyor.upper()]
-        s[Col.T] = self.clock.now()
+        s = np.empty(N_COLS)
+        s[:_F] = obs
+        s[_F], s[_C] = _codes(face, conveyor)
+        s[_T] = self.clock.now()
         if self.on_sample is not None:
             self.on_sample()
         return s

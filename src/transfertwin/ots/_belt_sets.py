@@ -51,6 +51,11 @@ __all__ = [
 ]
 
 
+# Plain int column indices for the scalar fast paths (an IntEnum index costs a call).
+_A, _X, _Y, _Z = int(Col.A), int(Col.X), int(Col.Y), int(Col.Z)
+_SX, _SY, _SZ, _T = int(Col.SX), int(Col.SY), int(Col.SZ), int(Col.T)
+
+
 def _aabb_within(
     s: np.ndarray, x_min: float, x_max: float, y_min: float, y_max: float
 ) -> np.ndarray:
@@ -97,10 +102,11 @@ class BeltPreTransferSet:
 
     def contains_one(self, s: np.ndarray) -> bool:
         """Scalar fast path of `contains` for one state (11,); same comparisons."""
-        x, y, sx, sy = float(s[Col.X]), float(s[Col.Y]), float(s[Col.SX]), float(s[Col.SY])
+        v = s.tolist()
+        x, y, sx, sy = v[_X], v[_Y], v[_SX], v[_SY]
         return (
-            float(s[Col.A]) == self.asset
-            and abs(float(s[Col.T]) - self.t0) <= self.t0_tol
+            v[_A] == self.asset
+            and abs(v[_T] - self.t0) <= self.t0_tol
             and _within_one(x, y, sx, sy, self.x_min, self.x_max, self.y_min, self.y_max)
         )
 
@@ -140,14 +146,15 @@ class BeltSuccessSet:
 
     def contains_one(self, s: np.ndarray) -> bool:
         """Scalar fast path of `contains` for one state (11,); same comparisons."""
-        x, y, sx, sy = float(s[Col.X]), float(s[Col.Y]), float(s[Col.SX]), float(s[Col.SY])
+        v = s.tolist()
+        x, y, sx, sy = v[_X], v[_Y], v[_SX], v[_SY]
         if self.direction is TransferDirection.TM_TO_TU:
             beyond = x > self.x_threshold
         else:
             beyond = x < self.x_threshold
         return (
-            float(s[Col.A]) == self.asset
-            and float(s[Col.T]) < self.t_max
+            v[_A] == self.asset
+            and v[_T] < self.t_max
             and beyond
             and _within_one(x, y, sx, sy, self.x_min, self.x_max, self.y_min, self.y_max)
         )
@@ -190,15 +197,14 @@ class BeltFailureSet:
 
     def contains_one(self, s: np.ndarray) -> bool:
         """Scalar fast path of `contains` for one state (11,); same comparisons."""
-        x, y, sx, sy = float(s[Col.X]), float(s[Col.Y]), float(s[Col.SX]), float(s[Col.SY])
-        t = float(s[Col.T])
-        values = [x, y, sx, sy, t]
+        v = s.tolist()
+        x, y, sx, sy, t = v[_X], v[_Y], v[_SX], v[_SY], v[_T]
+        isfinite = math.isfinite
         if self.z_fall is not None:
-            z, sz = float(s[Col.Z]), float(s[Col.SZ])
-            values += [z, sz]
-            if z - sz < self.z_fall:
+            z, sz = v[_Z], v[_SZ]
+            if z - sz < self.z_fall or not (isfinite(z) and isfinite(sz)):
                 return True
-        if not all(math.isfinite(v) for v in values):
+        if not (isfinite(x) and isfinite(y) and isfinite(sx) and isfinite(sy) and isfinite(t)):
             return True
         return (
             t > self.t_max

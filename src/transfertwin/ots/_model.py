@@ -60,6 +60,22 @@ class Outcome(Enum):
         return int(self.value)
 
 
+def _scalar_path(states: object, success: StateSet, failure: StateSet) -> bool:
+    """Whether `states` is one float64 state the sets' `contains_one` fast path handles."""
+    return (
+        isinstance(states, np.ndarray)
+        and states.ndim == 1
+        and states.dtype == np.float64
+        and states.shape[0] == getattr(success, "one_dim", None) == getattr(failure, "one_dim", 0)
+    )
+
+
+def _code_one(state: np.ndarray, success: StateSet, failure: StateSet) -> int:
+    """Scalar fast path of `outcome_codes` for sets that offer `contains_one` (e.g. the
+    belt sets): same result as the batch path, without its array overhead per sample."""
+    return 0 if failure.contains_one(state) else (1 if success.contains_one(state) else -1)
+
+
 def outcome_codes(states: ArrayLike, success: StateSet, failure: StateSet) -> np.ndarray:
     """Outcome code of each state (vectorised Eq. 5.11).
 
@@ -72,16 +88,8 @@ def outcome_codes(states: ArrayLike, success: StateSet, failure: StateSet) -> np
         int8 array ``(N,)`` (or shape ``()``): 1 for S+ \\ S-, 0 for S-, and
         `NON_TERMINAL` (-1) for the non-terminal states S' (Eq. 4.7).
     """
-    if (
-        isinstance(states, np.ndarray)
-        and states.ndim == 1
-        and states.dtype == np.float64
-        and states.shape[0] == getattr(success, "one_dim", None) == getattr(failure, "one_dim", 0)
-    ):
-        # Scalar fast path for one state (sets that offer `contains_one`, e.g. the belt
-        # sets): same result as the batch path, without its array overhead per sample.
-        code = 0 if failure.contains_one(states) else (1 if success.contains_one(states) else -1)
-        return np.array(code, dtype=np.int8)
+    if _scalar_path(states, success, failure):
+        return np.array(_code_one(states, success, failure), dtype=np.int8)
     batch, single = as_state_batch(states)
     codes = np.full(batch.shape[0], NON_TERMINAL, dtype=np.int8)
     codes[success.contains(batch)] = 1
@@ -234,6 +242,7 @@ def run_transfer(
         n_max = min(n_max, max_steps)
     states = [state]
     steps = [0]  # transition index of each state (the time is t0 + index * dt)
+    scalar = _scalar_path(state, success, failure)  # every later state has its shape
     code = int(outcome_codes(state, success, failure))
     i = 0
     while code == NON_TERMINAL and i < n_max:
@@ -243,7 +252,10 @@ def run_transfer(
             state[time_index] = t0 + i * dt
         states.append(state)
         steps.append(i)
-        code = int(outcome_codes(state, success, failure))
+        if scalar:
+            code = _code_one(state, success, failure)
+        else:
+            code = int(outcome_codes(state, success, failure))
         if code == NON_TERMINAL and stop is not None and i < n_max and stop(state.copy()):
             # Fast-forward: the state stays put, so the loop would end at the first later
             # sample at which it is terminal (by time: the timeout), or at n_max.

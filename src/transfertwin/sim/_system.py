@@ -216,6 +216,7 @@ class VirtualTransferSystem:
         # transforms only those (exact, typically a quarter of all hull vertices).
         self._aabb_verts_t = np.ascontiguousarray(_outer_vertices(self._verts).T)  # (3, k)
         self._badqacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
+        self._bind_views()
         self._com = np.asarray(com_m, dtype=float)
         self.tm = MujocoUnitHAL(self, "tm")
         self.tu = MujocoUnitHAL(self, "tu")
@@ -235,6 +236,17 @@ class VirtualTransferSystem:
         self._mass = float(self.model.body_mass[self._body])
         self._g = float(-self.model.opt.gravity[2])
         self._guard_reset()
+
+    def _bind_views(self) -> None:
+        """Views into `data` read at every sample (the readout's hot path): MjData's arrays
+        keep their memory for the data's life, so a view made once stays current."""
+        d = self.data
+        self._pos = d.xpos[self._body]
+        self._rot = d.xmat[self._body].reshape(3, 3)
+        self._qpos7 = d.qpos[self._qadr : self._qadr + 7]
+        self._qvel6 = d.qvel[self._vadr : self._vadr + 6]
+        self._warning = d.warning[self._badqacc]
+        self._pts = np.empty_like(self._aabb_verts_t)
 
     def _guard_reset(self) -> None:
         self._z_top = -math.inf
@@ -292,9 +304,9 @@ class VirtualTransferSystem:
         self.engine_seconds += time.perf_counter() - t0
         self.engine_steps += n
         self.steps_taken += n
-        bad = self.data.warning[self._badqacc].number > 0
+        bad = self._warning.number > 0
         # A non-finite coordinate makes the sum non-finite (cheaper than np.isfinite().all()).
-        if bad or not math.isfinite(float(self.data.qpos[self._qadr : self._qadr + 7].sum())):
+        if bad or not math.isfinite(float(self._qpos7.sum())):
             raise SimulationUnstable(f"physics diverged at t={self.data.time:.3f} s")
         if self._guard:
             self._check_plausible()
@@ -363,9 +375,8 @@ class VirtualTransferSystem:
 
         The AABB comes from the hull vertices; θ is the yaw of the object's x axis (rad).
         """
-        pos = self.data.xpos[self._body]
-        rot = self.data.xmat[self._body].reshape(3, 3)
-        pts = rot @ self._aabb_verts_t  # (3, k): contiguous rows reduce fast
+        pos, rot = self._pos, self._rot
+        pts = np.matmul(rot, self._aabb_verts_t, out=self._pts)  # (3, k): rows reduce fast
         lo, hi = pts.min(axis=1), pts.max(axis=1)
         centre, half = 0.5 * (lo + hi) + pos, 0.5 * (hi - lo)
         com = rot @ self._com + pos
@@ -380,7 +391,7 @@ class VirtualTransferSystem:
 
     def object_rest_speed(self) -> float:
         """Body-origin speed plus 0.1 m x angular speed (m/s): 0 only for an object at rest."""
-        v = self.data.qvel[self._vadr : self._vadr + 6]
+        v = self._qvel6
         return math.hypot(v[0], v[1], v[2]) + 0.1 * math.hypot(v[3], v[4], v[5])
 
     def object_speed(self) -> float:

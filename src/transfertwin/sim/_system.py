@@ -242,7 +242,8 @@ class VirtualTransferSystem:
         keep their memory for the data's life, so a view made once stays current."""
         d = self.data
         self._pos = d.xpos[self._body]
-        self._rot = d.xmat[self._body].reshape(3, 3)
+        self._xmat = d.xmat[self._body]
+        self._rot = self._xmat.reshape(3, 3)
         self._qpos7 = d.qpos[self._qadr : self._qadr + 7]
         self._qvel6 = d.qvel[self._vadr : self._vadr + 6]
         self._warning = d.warning[self._badqacc]
@@ -305,8 +306,7 @@ class VirtualTransferSystem:
         self.engine_steps += n
         self.steps_taken += n
         bad = self._warning.number > 0
-        # A non-finite coordinate makes the sum non-finite (cheaper than np.isfinite().all()).
-        if bad or not math.isfinite(float(self._qpos7.sum())):
+        if bad or not all(map(math.isfinite, self._qpos7.tolist())):
             raise SimulationUnstable(f"physics diverged at t={self.data.time:.3f} s")
         if self._guard:
             self._check_plausible()
@@ -375,19 +375,26 @@ class VirtualTransferSystem:
 
         The AABB comes from the hull vertices; θ is the yaw of the object's x axis (rad).
         """
-        pos, rot = self._pos, self._rot
+        rot = self._rot
         pts = np.matmul(rot, self._aabb_verts_t, out=self._pts)  # (3, k): rows reduce fast
-        lo, hi = pts.min(axis=1), pts.max(axis=1)
-        centre, half = 0.5 * (lo + hi) + pos, 0.5 * (hi - lo)
-        com = rot @ self._com + pos
-        theta = math.atan2(rot[1, 0], rot[0, 0])
-        a = self.possessing_unit(com[:2])
-        out = np.empty(8)
-        out[0] = a
-        out[1:4] = centre
-        out[4:7] = half
-        out[7] = theta
-        return out
+        # The rest in Python floats: the same IEEE operations as on arrays, fewer calls.
+        lo, hi = pts.min(axis=1).tolist(), pts.max(axis=1).tolist()
+        p = self._pos.tolist()
+        c = (rot @ self._com).tolist()
+        com_xy = (c[0] + p[0], c[1] + p[1])
+        r = self._xmat.tolist()
+        return np.array(
+            [
+                self.possessing_unit(com_xy),
+                0.5 * (lo[0] + hi[0]) + p[0],
+                0.5 * (lo[1] + hi[1]) + p[1],
+                0.5 * (lo[2] + hi[2]) + p[2],
+                0.5 * (hi[0] - lo[0]),
+                0.5 * (hi[1] - lo[1]),
+                0.5 * (hi[2] - lo[2]),
+                math.atan2(r[3], r[0]),
+            ]
+        )
 
     def object_rest_speed(self) -> float:
         """Body-origin speed plus 0.1 m x angular speed (m/s): 0 only for an object at rest."""

@@ -43,6 +43,8 @@ VARIANTS: dict[str, dict[str, object]] = {
     "hulls8": {"physics.max_hulls": 8},
     "hulls4": {"physics.max_hulls": 4},
     "progress3": {"stall_mode": "progress", "stall_time_s": 3.0},
+    "progress-cam7.5": {"stall_mode": "progress", "camera_rate_hz": 7.5},
+    "progress3-cam7.5": {"stall_mode": "progress", "stall_time_s": 3.0, "camera_rate_hz": 7.5},
     "candidate": {
         "stall_mode": "progress",
         "stall_time_s": 3.0,

@@ -9,7 +9,11 @@ runs three ways:
 - `run_study` with N worker processes (`--workers 0` skips it; keep it short on 2 cores).
 
     PYTHONPATH=src .venv/bin/python benchmarks/study_throughput.py \
-        [--objects o1,o18] [--theta-step 45] [--runs 2] [--workers 2] [--profiles fast,reference]
+        [--objects o1,o18] [--theta-step 45] [--runs 2] [--workers 2] [--profiles fast,reference] \
+        [--set physics.pulley_facets=32 --set layout.pulley_radius_m=0.0125]
+
+A profile is a built-in name or a profile TOML file (`transfertwin.study.load_profile`);
+`--set KEY=VALUE` overrides are applied to every profile.
 """
 
 from __future__ import annotations
@@ -18,10 +22,9 @@ import argparse
 import tempfile
 from pathlib import Path
 
-from _engine import timed_experiments
-from transfertwin.sim import scene_profile
+from _engine import parse_sets, timed_experiments
 from transfertwin.store import SQLiteResultStore
-from transfertwin.study import ResampledDockingErrors, StudyPlan, run_study
+from transfertwin.study import ResampledDockingErrors, StudyPlan, load_profile, run_study
 
 
 def _study_rate(plan: StudyPlan, workers: int, tmp: Path) -> float:
@@ -36,15 +39,19 @@ def main() -> None:
     parser.add_argument("--theta-step", type=int, default=45)
     parser.add_argument("--runs", type=int, default=2)
     parser.add_argument("--workers", type=int, default=2, help="0 skips the pool run")
-    parser.add_argument("--profiles", default="fast,reference")
+    parser.add_argument("--profiles", default="fast,reference", help="names or TOML files")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     args = parser.parse_args()
+    extra = parse_sets(args.set)
     docking = ResampledDockingErrors.from_csv()
     objects = tuple(args.objects.split(","))
     rows = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for name in args.profiles.split(","):
+        for profile in args.profiles.split(","):
+            name, scene = load_profile(profile)
+            scene = scene.with_overrides(**extra) if extra else scene
             plan = StudyPlan(objects, args.theta_step, args.runs, 0, docking,
-                             scene=scene_profile(name), profile_name=name)  # fmt: skip
+                             scene=scene, profile_name=name)  # fmt: skip
             specs = [spec for _, spec in plan.specs({o: o for o in objects})]
             timed = timed_experiments(specs)
             rate1 = _study_rate(plan, 1, Path(tmp))

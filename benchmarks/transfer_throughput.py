@@ -5,14 +5,14 @@ and prints experiments/s, physics steps per experiment, the raw `mj_step` rate o
 experiments' own steps and the overhead ratio (wall time / time inside `mj_step`).
 
     PYTHONPATH=src .venv/bin/python benchmarks/transfer_throughput.py \
-        [--object o1] [--step 30] [--profile fast]
+        [--object o1] [--step 30] [--profile fast] [--set KEY=VALUE ...]
 """
 
 from __future__ import annotations
 
 import argparse
 
-from _engine import timed_experiments
+from _engine import parse_sets, timed_experiments
 from transfertwin.ots import experiment_states, filter_theta_step
 from transfertwin.sim import DockingError, scene_profile
 from transfertwin.study import ExperimentSpec
@@ -23,9 +23,11 @@ def main() -> None:
     parser.add_argument("--object", default="o1")
     parser.add_argument("--step", type=int, default=30, help="θ step of the states run")
     parser.add_argument("--profile", default="fast", help="built-in profile (fast, reference)")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="scene override, e.g. physics.pulley_facets=32")  # fmt: skip
     args = parser.parse_args()
     error = DockingError.from_mm_deg(-8.55, 2.84, 1.44)  # real experiment 0
-    scene = scene_profile(args.profile)
+    scene = scene_profile(args.profile, **parse_sets(args.set))
     states = filter_theta_step(experiment_states(), args.step)
     specs = [ExperimentSpec(args.object, s.face, s.conveyor, s.theta_deg, docking_error=error,
                             scene=scene) for s in states]  # fmt: skip

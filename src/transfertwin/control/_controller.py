@@ -18,6 +18,7 @@ import numpy as np
 from transfertwin.control._hal import Clock, ObjectSensor, UnitHAL
 from transfertwin.ots import (
     N_COLS,
+    BeltSets,
     BeltThresholds,
     Col,
     Conveyor,
@@ -31,6 +32,12 @@ from transfertwin.ots import (
 )
 
 _F, _C, _T = int(Col.F), int(Col.C), int(Col.T)
+
+
+@functools.lru_cache(maxsize=16)
+def _sets(direction: TransferDirection, thresholds: BeltThresholds) -> BeltSets:
+    """`belt_sets`, built once per direction and thresholds (frozen, so shareable)."""
+    return belt_sets(direction, thresholds)
 
 
 @functools.cache
@@ -198,7 +205,7 @@ class OTSController:
             conveyor: Conveyor position c; None derives it from the observed AABB's
                 overlap with the belts (Eq. 5.6).
         """
-        sets = belt_sets(direction, self.thresholds)
+        sets = _sets(direction, self.thresholds)
         self.clock.start()
         if conveyor is None:
             obs = np.asarray(self.sensor.observe(), dtype=float)

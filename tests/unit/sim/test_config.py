@@ -95,8 +95,8 @@ def test_unmeasured_mechanisms_reject_out_of_range_values(bad):
 
 
 def test_speed_lever_settings_are_validated():
-    assert SceneConfig().stall_mode == "still" and SceneConfig().physics.max_hulls is None
-    assert SceneConfig().with_overrides(stall_mode="progress").stall_mode == "progress"
+    assert SceneConfig().stall_mode == "progress" and SceneConfig().physics.max_hulls is None
+    assert SceneConfig().with_overrides(stall_mode="still").stall_mode == "still"
     for bad in ({"stall_mode": "soon"}, {"physics.max_hulls": 0}, {"physics.max_hulls": 2.5}):
         with pytest.raises(InputError):
             SceneConfig().with_overrides(**bad)

@@ -180,6 +180,12 @@ def _system_for(
     )  # fmt: skip
 
 
+@functools.lru_cache(maxsize=8)
+def _thresholds(t_max_s: float) -> BeltThresholds:
+    """The belt thresholds with a scene's t_max (frozen: built and validated once)."""
+    return BeltThresholds(t_max=t_max_s)
+
+
 def scene_controller(
     scene: SceneConfig,
     tm: UnitHAL,
@@ -191,7 +197,7 @@ def scene_controller(
     """The OTS controller configured by a scene: its t_max, belt speed and camera rate."""
     return OTSController(
         tm, tu, sensor, clock,
-        thresholds=BeltThresholds(t_max=scene.t_max_s),
+        thresholds=_thresholds(scene.t_max_s),
         belt_speed_m_s=scene.layout.belt_speed_m_s,
         sample_period_s=scene.steps_per_sample() * scene.physics.timestep_s,
         on_sample=on_sample,

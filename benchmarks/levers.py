@@ -5,14 +5,15 @@ overrides to all variants and to the reference, e.g. the prism-pulley scene). Th
 experiments (objects x states every `--theta-step` degrees x `--runs` seeds, real
 experiment 0's docking error) run under every variant, interleaved experiment by
 experiment so that a shared machine's load falls on all variants alike. Per variant it
-prints physics steps per experiment, exp/s and its ratio to the fast defaults, the
-overhead (wall time / time inside `mj_step`), the success share with its Clopper–Pearson
-95 % interval, the share of experiments with the reference's outcome, and whether the
-shares agree (each inside the other's interval).
+prints physics steps per experiment, exp/s and its ratio to `--baseline` (default 'still',
+the stall rule the defaults had before), experiments per CPU second (what one core gives
+when it is not shared), the overhead (wall time / time inside `mj_step`), the success
+share with its Clopper–Pearson 95 % interval, the share of experiments with the
+reference's outcome, and whether the shares agree (each inside the other's interval).
 
     PYTHONPATH=src .venv/bin/python benchmarks/levers.py --objects o1,o18 --theta-step 90 \
         --set physics.pulley_facets=32 --set layout.pulley_radius_m=0.0125 \
-        [--variants fast,camera7.5,dt10] [--runs 1]
+        [--variants still,fast,stall3,camera7.5,dt10] [--runs 1]
 """
 
 from __future__ import annotations
@@ -29,6 +30,8 @@ from transfertwin.study.validation import Agreement, SideOutcome
 #: Variant name -> overrides of the fast defaults ('reference' is the reference profile).
 VARIANTS: dict[str, dict[str, object]] = {
     "fast": {},
+    "still": {"stall_mode": "still"},  # the stall rule before 'progress' became the default
+    "stall3": {"stall_time_s": 3.0},
     "camera7.5": {"camera_rate_hz": 7.5},
     "camera5": {"camera_rate_hz": 5.0},
     "dt8": {"physics.timestep_s": 0.008},
@@ -38,21 +41,11 @@ VARIANTS: dict[str, dict[str, object]] = {
         "physics.iterations": 100,
         "physics.tolerance": 1e-10,
     },
-    "stall3": {"stall_time_s": 3.0},
-    "progress": {"stall_mode": "progress"},
     "hulls8": {"physics.max_hulls": 8},
     "hulls4": {"physics.max_hulls": 4},
-    "progress3": {"stall_mode": "progress", "stall_time_s": 3.0},
-    "progress-cam7.5": {"stall_mode": "progress", "camera_rate_hz": 7.5},
-    "progress3-cam7.5": {"stall_mode": "progress", "stall_time_s": 3.0, "camera_rate_hz": 7.5},
-    "candidate": {
-        "stall_mode": "progress",
-        "stall_time_s": 3.0,
-        "camera_rate_hz": 7.5,
-        "physics.max_hulls": 8,
-    },
+    "stall3-cam7.5": {"stall_time_s": 3.0, "camera_rate_hz": 7.5},
     "combo": {
-        "stall_mode": "progress",
+        "stall_time_s": 3.0,
         "camera_rate_hz": 7.5,
         "physics.timestep_s": 0.01,
         "physics.iterations": 100,
@@ -68,6 +61,7 @@ def main() -> None:
     parser.add_argument("--theta-step", type=int, default=90)
     parser.add_argument("--runs", type=int, default=1, help="seeds per state")
     parser.add_argument("--variants", default=",".join(VARIANTS))
+    parser.add_argument("--baseline", default="still", help="variant the ratios refer to")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="scene override for every variant and the reference")  # fmt: skip
     args = parser.parse_args()
@@ -89,7 +83,7 @@ def main() -> None:
         for i, s in enumerate(states)
     ]
     print(f"{len(specs)} experiments per variant; overrides {base or 'none'}", flush=True)
-    systems, tally = {}, {n: [[], 0, 0, 0.0, 0.0] for n in scenes}  # outcomes, not ok, ...
+    systems, tally = {}, {n: [[], 0, 0, 0.0, 0.0, 0.0] for n in scenes}  # outcomes, not ok, ...
     for spec in specs:
         for name, scene in scenes.items():
             key = (spec.object_ref, name)
@@ -97,25 +91,29 @@ def main() -> None:
                 systems[key] = _fresh(spec.object_ref, scene)
             system = systems[key]
             s0, e0 = system.engine_steps, system.engine_seconds
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             res = run_experiment(_with(spec, scene), system=system)
             row = tally[name]
             row[3] += time.perf_counter() - t0
+            row[5] += time.process_time() - c0
             row[4] += system.engine_seconds - e0
             row[2] += system.engine_steps - s0
             row[0].append(int(res.status == "ok" and res.success == 1))
             row[1] += res.status != "ok"
     sides = {n: SideOutcome(sum(r[0]), len(r[0]), r[1], r[2], r[3], tuple(r[0]))
              for n, r in tally.items()}  # fmt: skip
-    fast_rate = sides["fast"].rate if "fast" in sides else None
-    print(f"\n{'variant':<12} {'steps/exp':>9} {'exp/s':>7} {'x fast':>6} {'overhead':>8} "
-          f"{'success':>18} {'same as ref':>11}  agreement")  # fmt: skip
+    base_name = args.baseline if args.baseline in sides else next(iter(sides))
+    base_rate = sides[base_name].rate
+    print(f"\n{'variant':<14} {'steps/exp':>9} {'exp/s':>7} {'x ' + base_name:>8} "
+          f"{'exp/CPU-s':>9} {'overhead':>8} {'success':>18} {'same as ref':>11}  "
+          "agreement")  # fmt: skip
     for name, side in sides.items():
         agree = Agreement(name, side, sides["reference"])
         ci = side.interval
-        ratio = f"{side.rate / fast_rate:6.2f}" if fast_rate else f"{'-':>6}"
         overhead = tally[name][3] / tally[name][4]
-        print(f"{name:<12} {side.steps / side.n:9.0f} {side.rate:7.2f} {ratio} {overhead:8.3f} "
+        cpu_rate = side.n / tally[name][5]
+        print(f"{name:<14} {side.steps / side.n:9.0f} {side.rate:7.2f} "
+              f"{side.rate / base_rate:8.2f} {cpu_rate:9.2f} {overhead:8.3f} "
               f"{side.share:6.1%} [{ci.low:.2f},{ci.high:.2f}] "
               f"{agree.paired_same / side.n:11.1%}  {'AGREE' if agree.agree else 'DIFFER'}"
               f"{'' if side.not_ok == 0 else f' ({side.not_ok} not ok)'}")  # fmt: skip

@@ -41,6 +41,8 @@ VARIANTS: dict[str, dict[str, object]] = {
         "physics.iterations": 100,
         "physics.tolerance": 1e-10,
     },
+    "tol1e-6": {"physics.tolerance": 1e-6},
+    "it20": {"physics.iterations": 20, "physics.ls_iterations": 10},
     "hulls8": {"physics.max_hulls": 8},
     "hulls4": {"physics.max_hulls": 4},
     "stall3-cam7.5": {"stall_time_s": 3.0, "camera_rate_hz": 7.5},

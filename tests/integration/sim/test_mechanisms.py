@@ -87,10 +87,11 @@ def test_a_downhill_pitch_changes_the_outcome():
 
 
 def test_roll_drifts_the_object_sideways_on_the_tu():
-    # (-10 deg tips it off the belt; -6 deg lets it cross, slid sideways)
-    flat, roll = _run({}, conveyor="right"), _run({"layout.tu_roll_deg": -6.0}, conveyor="right")
+    # +6 deg raises the left belt: an object on it crosses, slid down towards the centre
+    # (+8 deg stalls it at the gap)
+    flat, roll = _run({}, conveyor="left"), _run({"layout.tu_roll_deg": 6.0}, conveyor="left")
     assert flat.y1 == 1 and roll.y1 == 1
-    assert roll.state_end_1[2] - flat.state_end_1[2] > 0.02  # y: slid towards the centre
+    assert flat.state_end_1[2] - roll.state_end_1[2] > 0.02  # y: slid towards the centre
 
 
 def test_com_offset_shifts_the_body_inertial_frame():

@@ -80,23 +80,37 @@ def worker_count(value: int | None) -> int:
     return positive_int("--workers", value)
 
 
-def add_executor_args(p: argparse.ArgumentParser) -> None:
-    """``--executor local|ray``, ``--address`` and ``--chunk-size`` (docs/scaling.md)."""
-    p.add_argument("--executor", choices=("local", "ray"), default="local",
-                   help="local processes (default) or Ray tasks (docs/scaling.md)")  # fmt: skip
+def add_executor_args(p: argparse.ArgumentParser, warp: bool = False) -> None:
+    """``--executor local|ray`` (and ``warp`` where `warp`), ``--address`` and
+    ``--chunk-size`` (docs/scaling.md)."""
+    choices = ("local", "ray", "warp") if warp else ("local", "ray")
+    extra = "; warp: batched MuJoCo Warp worlds on a CUDA GPU" if warp else ""
+    p.add_argument("--executor", choices=choices, default="local",
+                   help=f"local processes (default) or Ray tasks{extra} "
+                   "(docs/scaling.md)")  # fmt: skip
     p.add_argument("--address", help="with --executor ray: auto or HOST:PORT of a running "
                    "Ray cluster (default: start a local Ray with --workers CPUs)")  # fmt: skip
+    chunk = "; with --executor warp: worlds per batch (default 1024)" if warp else ""
     p.add_argument("--chunk-size", type=int, help="with --executor ray: experiments per "
-                   "Ray task (default 8)")  # fmt: skip
+                   f"Ray task (default 8){chunk}")  # fmt: skip
 
 
-def executor_from_args(args: argparse.Namespace, workers: int):  # -> RayExecutor | None
+def executor_from_args(args: argparse.Namespace, workers: int):  # -> RayExecutor | ... | None
     """The executor `add_executor_args` chose, not started; None for local processes (Ray
-    is then neither imported nor started)."""
+    is then neither imported nor started, nor is Warp)."""
     if args.executor == "local":
         if args.address is not None or args.chunk_size is not None:
-            raise InputError("--address and --chunk-size need --executor ray")
+            raise InputError("--address and --chunk-size need --executor ray or warp")
         return None
+    if args.executor == "warp":
+        if args.address is not None:
+            raise InputError("--address needs --executor ray")
+        from transfertwin.study.experiment import WarpExecutor
+
+        worlds = (
+            positive_int("--chunk-size", args.chunk_size) if args.chunk_size is not None else 1024
+        )
+        return WarpExecutor(worlds=worlds)
     from transfertwin.study.experiment import RayExecutor
 
     chunk = positive_int("--chunk-size", args.chunk_size) if args.chunk_size is not None else 8

@@ -90,9 +90,12 @@ def cmd_study_run(args: argparse.Namespace) -> int:
     console = Console(stderr=True)
     with ExitStack() as stack:
         if executor is not None:
-            stack.enter_context(executor)  # Ray reachable before the db is created
-            where = args.address or "local Ray"
-            runner = f"Ray ({where}, {executor.cpus} CPUs, {executor.chunk_size} per task)"
+            stack.enter_context(executor)  # Ray or a GPU reachable before the db is created
+            if args.executor == "warp":
+                runner = f"MuJoCo Warp ({executor.device}, {executor.worlds} worlds per batch)"
+            else:
+                where = args.address or "local Ray"
+                runner = f"Ray ({where}, {executor.cpus} CPUs, {executor.chunk_size} per task)"
         else:
             runner = f"{workers} workers"
         store = stack.enter_context(SQLiteResultStore(db))
@@ -231,7 +234,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "intervals (default 0.9)")  # fmt: skip
     p.add_argument("--adaptive-epsilon", type=float, help="indifference zone in success "
                    "share (default 0.1)")  # fmt: skip
-    add_executor_args(p)
+    add_executor_args(p, warp=True)
     p.set_defaults(func=cmd_study_run)
     p = ssub.add_parser("status", help="done/planned and rows by status")
     p.add_argument("--db", required=True)

@@ -54,6 +54,8 @@ BAD: list[tuple[str, list[str]]] = [
     ("zero ray chunk size", [*STUDY, "--executor", "ray", "--chunk-size", "0"]),
     ("ray address without port", [*STUDY, "--executor", "ray", "--address", "headnode"]),
     ("unreachable ray cluster", [*STUDY, "--executor", "ray", "--address", "127.0.0.1:1"]),
+    ("address with warp executor", [*STUDY, "--executor", "warp", "--address", "auto"]),
+    ("zero warp worlds", [*STUDY, "--executor", "warp", "--chunk-size", "0"]),
     ("zero runs", [*STUDY, "--runs", "0"]),
     ("unknown docking model", [*STUDY, "--docking", "bogus"]),
     ("missing profile", [*STUDY, "--profile", "missing.toml"]),

@@ -38,6 +38,7 @@ from transfertwin.study.experiment._runner import (
     run_tagged,
     summarize,
 )
+from transfertwin.study.experiment._warp import WarpExecutor, warp_available
 
 __all__ = [
     "PRESETS",
@@ -53,6 +54,7 @@ __all__ = [
     "RayExecutor",
     "StudyOutcome",
     "StudyPlan",
+    "WarpExecutor",
     "check_plan",
     "experiment_seeds",
     "load_profile",
@@ -71,4 +73,5 @@ __all__ = [
     "scene_to_dict",
     "summarize",
     "system_for",
+    "warp_available",
 ]

@@ -25,8 +25,11 @@ from the CLI): Warp's CPU device runs the same kernels for tests, far slower tha
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import math
+import os
+import sys
 import threading
 import warnings
 from collections.abc import Iterable, Iterator
@@ -62,15 +65,30 @@ NO_CUDA = (
 def _import_warp() -> tuple[Any, Any]:
     """(warp, mujoco_warp), Warp initialised quietly; InputError if they are missing."""
     try:
-        import warp as wp
-
-        wp.config.quiet = True  # no banner
-        wp.config.log_level = wp.LOG_WARNING  # no per-kernel compile lines
         import mujoco_warp as mjw
+        import warp as wp
     except ImportError:
         raise InputError(f"--executor warp needs MuJoCo Warp: {_INSTALL}") from None
-    wp.init()
+    # No banner, no per-kernel compile lines; Warp's native CUDA probe writes a warning
+    # straight to fd 2 when no driver is found, which `NO_CUDA` says in one line instead.
+    wp.config.log_level = wp.LOG_WARNING
+    with _stderr_silenced():
+        wp.init()
     return wp, mjw
+
+
+@contextlib.contextmanager
+def _stderr_silenced() -> Iterator[None]:
+    """Send file descriptor 2 to the null device for the duration (native writes too)."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 2)
+            yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
 
 
 def warp_available() -> str | None:
@@ -82,7 +100,7 @@ def warp_available() -> str | None:
     return None if wp.is_cuda_available() else NO_CUDA
 
 
-class _Cancelled(BaseException):  # noqa: N818 - not an error: the batch was abandoned
+class _Cancelled(BaseException):
     """Raised in a parked lane's thread when the batch stops early (not an Exception, so
     the experiment code does not turn it into a result)."""
 

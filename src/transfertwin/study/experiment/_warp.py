@@ -162,6 +162,11 @@ class _Lanes:
             # The object's hulls carry friction 0 on purpose (the belts' priority governs).
             warnings.simplefilter("ignore", UserWarning)
             self.m = mjw.put_model(self.model)
+            # MuJoCo caps solver and line-search iterations silently; MuJoCo Warp prints a
+            # line per capped step from its kernels. Buffer overflows still print (and
+            # `_advance` raises on them).
+            capped = mjw.OverflowType.ITERATIONS | mjw.OverflowType.LS_ITERATIONS
+            self.m.opt.warn_overflow &= ~capped
             self.d = mjw.put_data(self.model, template.data, nworld=n, nconmax=nconmax,
                                   njmax=njmax)  # fmt: skip
             self.sv = np.tile(self.model.geom_surfacevel, (n, 1, 1))

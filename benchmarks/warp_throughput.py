@@ -64,6 +64,12 @@ def main() -> None:
         print(f"warp ({ex.device}, {args.worlds} worlds): {len(specs) / warp_s:.2f} exp/s "
               f"({warp_s:.1f} s incl. kernel compilation/loading, {ex.batch_steps} batch "
               f"steps)")  # fmt: skip
+        host_s = ex.seconds - ex.device_seconds
+        print(f"  device (upload, step, download) {ex.device_seconds:.1f} s; host {host_s:.1f} s "
+              f"for {ex.resumes} lane turns = {host_s / max(1, ex.resumes) * 1e3:.2f} ms per "
+              f"turn, {ex.resumes / len(specs):.0f} turns per experiment")  # fmt: skip
+        print(f"  host-bound ceiling of one driver process: {len(specs) / host_s:.1f} exp/s "
+              f"(however fast the device)")  # fmt: skip
     for spec in specs[:1]:
         run_experiment(spec)  # compile the CPU scene outside the timing
     t0 = time.perf_counter()

@@ -31,6 +31,7 @@ import math
 import os
 import sys
 import threading
+import time
 import warnings
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
@@ -179,6 +180,8 @@ class _Lanes:
         self.up = {k: np.array(getattr(self.d, k).numpy()) for k in _UPLOAD}
         self.down = {k: np.array(getattr(self.d, k).numpy()) for k in _DOWNLOAD}
         self.batch_steps = 0  # calls of mjw.step (each advances every lane by one step)
+        self.resumes = 0  # lane turns on the host (controller, placement, readout)
+        self.device_seconds = 0.0  # in `_advance`: upload, steps, download
 
     # -- lane side (runs in a lane's thread) ----------------------------------------------
     def park(self, i: int, n: int) -> None:
@@ -205,6 +208,7 @@ class _Lanes:
         """Let lane i run until it parks again or finishes (the only thread running)."""
         lane = self.lanes[i]
         world = lane.world
+        self.resumes += 1
         if lane.stepped:
             _to_host(self.down, self.up, i, world.data)
             lane.stepped = False
@@ -217,6 +221,7 @@ class _Lanes:
     def _start(self, i: int, spec: ExperimentSpec, object_id: str, seeing: _Seeing) -> None:
         lane = self.lanes[i]
         lane.spec, lane.result, lane.spec_done = spec, None, False
+        self.resumes += 1
         lane.thread = threading.Thread(target=self._body, args=(i, object_id, seeing),
                                        name=f"warp-lane-{i}", daemon=True)  # fmt: skip
         lane.thread.start()
@@ -273,6 +278,7 @@ class _Lanes:
     def _advance(self, k: int) -> None:
         """Upload the staged state, step every world `k` times, read the state back."""
         wp, d = self.wp, self.d
+        t0 = time.perf_counter()
         with wp.ScopedDevice(self.device):
             for name, host in self.up.items():
                 getattr(d, name).assign(host)
@@ -285,6 +291,7 @@ class _Lanes:
             for name in _UPLOAD:
                 self.up[name] = self.down[name] if name in self.down else self.up[name]
             nacon, nefc = int(d.nacon.numpy()[0]), int(d.nefc.numpy().max())
+        self.device_seconds += time.perf_counter() - t0
         if nacon > d.naconmax or nefc > self.njmax:
             raise RuntimeError(
                 f"MuJoCo Warp buffers overflowed ({nacon} contacts for {d.naconmax}, "
@@ -336,6 +343,9 @@ class WarpExecutor:
 
     Consecutive experiments of the same object, units and scene share one batch (a study
     plan lists each object's experiments together). Rows come back as experiments finish.
+    Counters over the executor's life: `batch_steps` (device steps of the whole batch),
+    `resumes` (lane turns on the host), `device_seconds` (uploads, steps and downloads) and
+    `seconds` (all time spent producing rows, set-up included; the rest is host time).
 
     Args:
         worlds: Lanes per batch (worlds stepped together); a group with fewer experiments
@@ -362,6 +372,9 @@ class WarpExecutor:
         self.chunk_size = worlds
         self.cpus = 1
         self.batch_steps = 0
+        self.resumes = 0
+        self.device_seconds = 0.0
+        self.seconds = 0.0
         self._wp: Any = None
         self._mjw: Any = None
 
@@ -398,10 +411,17 @@ class WarpExecutor:
             group = list(group)
             lanes = _Lanes(template, min(self.worlds, len(group)), self.device,
                            (self.nconmax, self.njmax), self._wp, self._mjw)  # fmt: skip
+            t0 = time.perf_counter()
             try:
-                yield from lanes.run(group, object_id)
+                for rows in lanes.run(group, object_id):
+                    self.seconds += time.perf_counter() - t0
+                    yield rows
+                    t0 = time.perf_counter()
             finally:
+                self.seconds += time.perf_counter() - t0
                 self.batch_steps += lanes.batch_steps
+                self.resumes += lanes.resumes
+                self.device_seconds += lanes.device_seconds
 
     def close(self) -> None:
         """Nothing to release (kept for the executor protocol of the CLI)."""

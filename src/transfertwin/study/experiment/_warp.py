@@ -118,6 +118,7 @@ class _World(VirtualTransferSystem):
     def __init__(self, template: VirtualTransferSystem, lanes: _Lanes, lane: int) -> None:
         self.__dict__.update(template.__dict__)
         self.data = mujoco.MjData(template.model)
+        self._bind_views()  # the readout's views must look into this lane's data
         self.tm = MujocoUnitHAL(self, "tm")
         self.tu = MujocoUnitHAL(self, "tu")
         self.clock = SimClock(self)

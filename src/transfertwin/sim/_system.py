@@ -216,25 +216,31 @@ class VirtualTransferSystem:
         # transforms only those (exact, typically a quarter of all hull vertices).
         self._aabb_verts_t = np.ascontiguousarray(_outer_vertices(self._verts).T)  # (3, k)
         self._badqacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
-        self._bind_views()
         self._com = np.asarray(com_m, dtype=float)
+        self.tu_pose = (cfg.gap_m, 0.0, 0.0)
+        # Implausible-event guard (PhysicsConfig.guard): highest COM height and mechanical
+        # energy at the last check, cleared whenever the object is placed or the TU moves.
+        self._guard = bool(cfg.physics.guard)
+        self._inertia = self.model.body_inertia[self._body].copy()
+        self._mass = float(self.model.body_mass[self._body])
+        self._g = float(-self.model.opt.gravity[2])
+        self._attach_data(self.data)
+
+    def _attach_data(self, data: mujoco.MjData) -> None:
+        """Make `data` this system's state: the readout's views, the units' HALs, the clock
+        and the per-run counters all refer to it (a batch lane attaches its own)."""
+        self.data = data
+        self._bind_views()
         self.tm = MujocoUnitHAL(self, "tm")
         self.tu = MujocoUnitHAL(self, "tu")
         self.clock = SimClock(self)
-        self.tu_pose = (cfg.gap_m, 0.0, 0.0)
         self.steps_taken = 0
         # Engine accounting over the system's life (benchmarks: overhead vs raw mj_step).
         self.engine_steps = 0
         self.engine_seconds = 0.0
         # Called after every clock wait: lets a live CPS publish sensor values (barriers).
         self.step_listeners: list[Callable[[], None]] = []
-        # Implausible-event guard (PhysicsConfig.guard): highest COM height and mechanical
-        # energy at the last check, cleared whenever the object is placed or the TU moves.
-        self._guard = bool(cfg.physics.guard)
         self._vel6 = np.zeros(6)
-        self._inertia = self.model.body_inertia[self._body].copy()
-        self._mass = float(self.model.body_mass[self._body])
-        self._g = float(-self.model.opt.gravity[2])
         self._guard_reset()
 
     def _bind_views(self) -> None:

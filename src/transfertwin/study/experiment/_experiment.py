@@ -280,8 +280,9 @@ def run_experiment(
         raise InputError(f"sensor must be one of {', '.join(SENSORS)}, got {sensor!r}")
     own_system = system is None
     if system is None:
-        system = system_for(spec.object_ref, spec.units, spec.scene)
-        object_id = _object(spec.object_ref, spec.units, _file_stamp(spec.object_ref)).object_id
+        stamp = _file_stamp(spec.object_ref)  # one look at the file for system and id
+        system = _system_for(spec.object_ref, spec.units, spec.scene, stamp)
+        object_id = _object(spec.object_ref, spec.units, stamp).object_id
     else:
         object_id = spec.object_ref
     seeing = _Seeing(sensor, perception, perception_seed)

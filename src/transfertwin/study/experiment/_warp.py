@@ -41,7 +41,7 @@ import mujoco
 import numpy as np
 
 from transfertwin._errors import InputError
-from transfertwin.sim import MujocoUnitHAL, SimClock, SimulationUnstable, VirtualTransferSystem
+from transfertwin.sim import SimulationUnstable, VirtualTransferSystem
 from transfertwin.study.experiment._experiment import (
     ExperimentResult,
     ExperimentSpec,
@@ -112,22 +112,12 @@ class _World(VirtualTransferSystem):
     Everything but `step` is the CPU system's: placement, docking and readout work on the
     host `data`, which the batch fills with the lane's device state before it resumes the
     lane's thread. Not constructed through `VirtualTransferSystem.__init__`: it copies the
-    template's attributes (model, hull vertices, ids) and replaces the per-run ones.
+    template's attributes (model, hull vertices, ids) and attaches its own `MjData`.
     """
 
     def __init__(self, template: VirtualTransferSystem, lanes: _Lanes, lane: int) -> None:
         self.__dict__.update(template.__dict__)
-        self.data = mujoco.MjData(template.model)
-        self._bind_views()  # the readout's views must look into this lane's data
-        self.tm = MujocoUnitHAL(self, "tm")
-        self.tu = MujocoUnitHAL(self, "tu")
-        self.clock = SimClock(self)
-        self.step_listeners = []
-        self.steps_taken = 0
-        self.engine_steps = 0
-        self.engine_seconds = 0.0
-        self._vel6 = np.zeros(6)
-        self._guard_reset()
+        self._attach_data(mujoco.MjData(template.model))
         self._lanes = lanes
         self._lane = lane
 

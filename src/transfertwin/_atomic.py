@@ -2,7 +2,8 @@
 
 A temporary file is written next to the target, flushed and fsync'ed, then renamed over it
 (`write_atomic`) or hard-linked to it (`write_bytes_exclusive`, first writer wins), so
-readers see the old file or the whole new one, never a part.
+readers see the old file or the whole new one, never a part. `file_stamp` tells a file
+rewritten in place (or renamed over, as here) from the one a cache read.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["write_atomic", "write_bytes_atomic", "write_bytes_exclusive"]
+__all__ = ["file_stamp", "write_atomic", "write_bytes_atomic", "write_bytes_exclusive"]
 
 
 def _temporary_copy(path: Path, data: bytes, mode: int = 0o644) -> Path:
@@ -93,3 +94,13 @@ def write_atomic(path: str | Path, data: bytes | str, mode: int = 0o644) -> Path
     path.parent.mkdir(parents=True, exist_ok=True)
     write_bytes_atomic(path, data.encode("utf-8") if isinstance(data, str) else data, mode)
     return path
+
+
+def file_stamp(path: str | os.PathLike[str]) -> tuple[int, int, int] | None:
+    """(inode, size, modification time in ns) of the file at `path`, None where there is
+    none: a cache keyed by it loads a rewritten file again."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return (st.st_ino, st.st_size, st.st_mtime_ns)

@@ -37,7 +37,7 @@ from cryptography.hazmat.primitives.asymmetric.types import PrivateKeyTypes
 from cryptography.hazmat.primitives.serialization import Encoding, load_pem_private_key
 from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
 
-from transfertwin._atomic import write_atomic
+from transfertwin._atomic import file_stamp, write_atomic
 
 __all__ = [
     "ROLES",
@@ -290,15 +290,14 @@ def _usable(cert: Path, key: Path, uri: str, host: str) -> bool:
     return not check_certificate(parsed, uri, host)
 
 
-_KEYS: dict[tuple[str, int, int, int], PrivateKeyTypes] = {}
+_KEYS: dict[tuple[str, tuple[int, int, int] | None], PrivateKeyTypes] = {}
 
 
 def _private_key(path: Path) -> PrivateKeyTypes:
     """The (unencrypted PEM) private key at `path`, parsed once per process while the file
     is unchanged. Parsing validates the RSA key (~40 ms); a CPS's servers start with their
     keys from `ensure_certificate`, and a test run or a restarted CPS starts them again."""
-    st = path.stat()
-    ident = (str(path.resolve()), st.st_ino, st.st_mtime_ns, st.st_size)
+    ident = (str(path.resolve()), file_stamp(path))
     key = _KEYS.get(ident)
     if key is None:
         key = load_pem_private_key(path.read_bytes(), password=None)

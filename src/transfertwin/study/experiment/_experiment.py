@@ -12,13 +12,13 @@ import functools
 import json
 import logging
 import math
-import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from transfertwin._atomic import file_stamp
 from transfertwin._errors import InputError
 from transfertwin.control import Clock, ObjectSensor, OTSController, TransferRecord, UnitHAL
 from transfertwin.objects import ObjectModel, load_object
@@ -148,16 +148,6 @@ class ExperimentResult:
         return out
 
 
-def _file_stamp(ref: str) -> tuple[int, int, int] | None:
-    """What tells a changed file from the one cached: inode, size and modification time
-    (None for a built-in id or a path that is not a file)."""
-    try:
-        st = os.stat(ref)
-    except OSError:
-        return None
-    return (st.st_ino, st.st_size, st.st_mtime_ns)
-
-
 @functools.lru_cache(maxsize=4)
 def _object(ref: str, units: str, stamp: tuple[int, int, int] | None) -> ObjectModel:
     return load_object(ref, units=units)
@@ -166,7 +156,7 @@ def _object(ref: str, units: str, stamp: tuple[int, int, int] | None) -> ObjectM
 def system_for(ref: str, units: str, scene: SceneConfig) -> VirtualTransferSystem:
     """The compiled virtual system for an object and scene, cached per process; a mesh or
     proxy file rewritten since it was cached is loaded again."""
-    return _system_for(ref, units, scene, _file_stamp(ref))
+    return _system_for(ref, units, scene, file_stamp(ref))
 
 
 @functools.lru_cache(maxsize=2)
@@ -280,7 +270,7 @@ def run_experiment(
         raise InputError(f"sensor must be one of {', '.join(SENSORS)}, got {sensor!r}")
     own_system = system is None
     if system is None:
-        stamp = _file_stamp(spec.object_ref)  # one look at the file for system and id
+        stamp = file_stamp(spec.object_ref)  # one look at the file for system and id
         system = _system_for(spec.object_ref, spec.units, spec.scene, stamp)
         object_id = _object(spec.object_ref, spec.units, stamp).object_id
     else:

@@ -247,3 +247,43 @@ def test_a_usable_certificate_is_kept_and_a_wrong_one_is_made_anew(tmp_path):
     cert.write_bytes(b"not a certificate")
     asyncio.run(ensure_certificate(tmp_path, "TU_A"))
     assert cert.read_bytes() != b"not a certificate" and key.read_bytes() == first[1]
+
+
+def test_a_clients_key_is_parsed_once_and_a_rewritten_key_is_read_again(tu_a, pki, monkeypatch):
+    import transfertwin.cps.opcua._security as security
+
+    parsed: list[bytes] = []
+    real = security.load_pem_private_key
+
+    def counting(data, password=None, **kw):
+        parsed.append(data)
+        return real(data, password=password, **kw)
+
+    monkeypatch.setattr(security, "load_pem_private_key", counting)
+    monkeypatch.setattr(security, "_KEYS", {})
+
+    async def session() -> float:
+        async with connect(tu_a.endpoint, "TU_A", role="viewer", **pki.client_kw()) as c:
+            return await c.read("OperationalData", "BeltSpeedLeft")
+
+    for _ in range(3):
+        _run(session())
+    assert len(parsed) == 1  # three secure sessions, one parse
+    key = pki.cert_dir / "client-viewer.pem"
+    assert parsed[0] == key.read_bytes()
+    key.write_bytes(key.read_bytes())  # rewritten (a new mtime): parsed again
+    _run(session())
+    assert len(parsed) == 2
+
+
+def test_a_stopped_server_leaves_no_task_behind(pki):
+    from transfertwin.cps.opcua import AssetServer
+
+    async def scenario() -> list[asyncio.Task]:
+        before = asyncio.all_tasks()
+        async with AssetServer("TU_Z", (), pki.config(port=0)) as server:
+            assert server._server.iserver.time_task is not None  # asyncua's clock runs
+        await asyncio.sleep(0)
+        return [t for t in asyncio.all_tasks() - before if not t.done()]
+
+    assert _run(scenario()) == []

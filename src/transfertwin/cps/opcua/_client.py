@@ -8,9 +8,10 @@ from pathlib import Path
 from typing import Any
 
 from asyncua import Client, ua
+from asyncua.crypto import uacrypto
 from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
 
-from transfertwin.cps.opcua._security import Credentials, ensure_certificate
+from transfertwin.cps.opcua._security import Credentials, ensure_certificate, parsed_private_key
 from transfertwin.cps.opcua._server import NAMESPACE, OperationRefused, node_id
 
 __all__ = ["AssetClient", "connect"]
@@ -108,6 +109,24 @@ class AssetClient:
         return sub
 
 
+async def _secure(client: Client, cert: Path, key: Path) -> None:
+    """What `Client.set_security(Basic256Sha256, cert, key)` does in SignAndEncrypt mode,
+    with the private key parsed once per process: asyncua parses the key file on every
+    connection, and an RSA key's validation costs ~45 ms (a CPS's applications, discovery
+    and console open hundreds of sessions). `ensure_certificate` has made the certificate
+    current and checked its URI and host, which asyncua would check here."""
+    mode = ua.MessageSecurityMode.SignAndEncrypt
+    endpoints = await client.connect_and_get_server_endpoints()  # over SecurityPolicy None
+    endpoint = Client.find_endpoint(endpoints, mode, SecurityPolicyBasic256Sha256.URI)
+    der = endpoint.ServerCertificate  # the server's certificate, maybe followed by its chain
+    server_cert = uacrypto.x509_from_der(der[: int.from_bytes(der[2:4], "big") + 4])
+    policy = SecurityPolicyBasic256Sha256(
+        server_cert, uacrypto.x509_from_der(cert.read_bytes()), parsed_private_key(key), mode
+    )
+    client.security_policy = policy
+    client.uaclient.set_security(policy)
+
+
 @asynccontextmanager
 async def connect(
     endpoint: str,
@@ -136,10 +155,7 @@ async def connect(
     client.application_uri = f"urn:transfertwin:client-{role}"
     if not insecure:
         cert, key = await ensure_certificate(cert_dir, f"client-{role}")
-        await client.set_security(
-            SecurityPolicyBasic256Sha256, str(cert), str(key),
-            mode=ua.MessageSecurityMode.SignAndEncrypt,
-        )  # fmt: skip
+        await _secure(client, cert, key)
     if credentials is not None:
         user, password = credentials.for_role(role)
         client.set_user(user)

@@ -49,6 +49,7 @@ __all__ = [
     "free_port",
     "load_credentials",
     "new_credentials",
+    "parsed_private_key",
     "read_certificate",
     "trust_certificate",
     "write_credentials",
@@ -293,7 +294,7 @@ def _usable(cert: Path, key: Path, uri: str, host: str) -> bool:
 _KEYS: dict[tuple[str, tuple[int, int, int] | None], PrivateKeyTypes] = {}
 
 
-def _private_key(path: Path) -> PrivateKeyTypes:
+def parsed_private_key(path: Path) -> PrivateKeyTypes:
     """The (unencrypted PEM) private key at `path`, parsed once per process while the file
     is unchanged. Parsing validates the RSA key (~40 ms); a CPS's servers start with their
     keys from `ensure_certificate`, and a test run or a restarted CPS starts them again."""

@@ -17,8 +17,10 @@ through `set`.
 
 from __future__ import annotations
 
+import asyncio
 import logging
 from collections.abc import Awaitable, Callable, Mapping
+from contextlib import suppress
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -34,9 +36,9 @@ from transfertwin.cps.opcua._security import (
     RoleRuleset,
     RoleUserManager,
     TrustList,
-    _private_key,
     ensure_certificate,
     free_port,
+    parsed_private_key,
 )
 
 __all__ = ["NAMESPACE", "AssetServer", "Handler", "OperationRefused", "ServerConfig", "node_id"]
@@ -204,7 +206,7 @@ class AssetServer:
             cert, key = await ensure_certificate(cfg.cert_dir, self.asset_id, cfg.host)
             await server.load_certificate(str(cert))
             # what Server.load_private_key does, with the key parsed once per process
-            server.iserver.private_key = _private_key(key)
+            server.iserver.private_key = parsed_private_key(key)
             server.set_security_policy(
                 [ua.SecurityPolicyType.Basic256Sha256_SignAndEncrypt],
                 permission_ruleset=RoleRuleset(),
@@ -222,6 +224,14 @@ class AssetServer:
 
     async def __aexit__(self, *exc: object) -> None:
         if self._server is not None:
+            # asyncua's stop waits for its clock task to finish its 1 s sleep (each server,
+            # each stop); the task only writes CurrentTime, so it is cancelled instead.
+            iserver = self._server.iserver
+            if iserver.time_task is not None:
+                iserver.time_task.cancel()
+                with suppress(asyncio.CancelledError):
+                    await iserver.time_task
+                iserver.time_task = None
             await self._server.stop()
             self._server = None
 

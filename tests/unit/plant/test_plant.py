@@ -13,7 +13,7 @@ from transfertwin._layers import LAYERS
 from transfertwin.objects._builtin import cores_data_dir
 from transfertwin.objects._features import read_features
 from transfertwin.plant import PLANT_COLUMNS, EmulatedPlant, PlantRequest
-from transfertwin.plant._truth import draw_object, draw_scene
+from transfertwin.plant._truth import FEATURE_DEPTH_M, P_PLAIN_FACE, draw_object, draw_scene
 
 REQUEST = [PlantRequest("o3", "back", "both", 90)]
 
@@ -42,6 +42,19 @@ def test_hidden_draws_depend_on_the_seed_and_differ_from_the_twin() -> None:
         plant = draw_object(seed, "o3")
         assert set(plant.protrusions) != set(shipped)
         assert plant.com_offset_m != (0.0, 0.0, 0.0) and plant.mass_scale != 1.0
+
+
+def test_feature_depths_follow_the_prior() -> None:
+    from scipy.stats import binomtest
+
+    faces = [p for seed in range(6) for i in range(1, 38)
+             for p in draw_object(seed, f"o{i}").protrusions]  # fmt: skip
+    plain = sum(p.depth_m == 0.0 for p in faces)
+    assert binomtest(plain, len(faces), P_PLAIN_FACE).pvalue > 0.01
+    depths = [p.depth_m for p in faces if p.depth_m]
+    low, high = FEATURE_DEPTH_M
+    assert all(low <= d <= high for d in depths)
+    assert min(depths) < low + 0.002 and max(depths) > high - 0.002  # the whole range
 
 
 def test_the_plant_exposes_no_hidden_parameter() -> None:

@@ -43,9 +43,9 @@ from transfertwin.sim import DockingError, SceneConfig
 from transfertwin.store import DOCKING_ERROR_COLUMNS
 from transfertwin.study.calibration import (
     CalibrationResult,
-    best_trial,
     calibrate,
     fit_proxy,
+    parse_space,
     scene_with,
     tune_tpe,
 )
@@ -88,6 +88,10 @@ REHEARSAL_KEYS = (
 #: guard (launches, energy jumps, deep penetration, NaN: the run is marked 'unstable' and
 #: re-run once at half the timestep), compliant features (a proxy's protrusions yield).
 COUNTER_MEASURES = ("mass", "stability", "compliance")
+
+#: What `--tune-trials` searches (TPE, `tune_tpe`) once the objects are calibrated: the
+#: scene's friction and the gap between the docked belts.
+TUNED_SPACE = "mu=0.3:0.7,gap_mm=8.0:18.0"
 
 #: Contact time constant and damping ratio the twin gives a proxy's features when they are
 #: marked compliant: nominal values of a soft part (the middle of the emulated plant's prior,
@@ -474,13 +478,14 @@ def _twin(run: _Run, measures: frozenset[str], out: Path) -> dict[str, object]:
     tuned = None
     if cfg.tune_trials:
         run.stage(f"scene tuning: {cfg.tune_trials} TPE trials over mu and gap")
-        trials = tune_tpe(
-            run.train, {"mu": (0.3, 0.7), "gap_mm": (8.0, 18.0)}, base=scene,
+        study = tune_tpe(
+            run.train, parse_space(TUNED_SPACE, scene), base=scene,
             n_trials=cfg.tune_trials, object_map=object_map, **run.calib,
         )  # fmt: skip
         run.virtual += cfg.tune_trials * len(run.train) * cfg.runs
-        best = best_trial(trials)
-        scene, tuned = scene_with(scene, best.params), {**best.params, "f05": best.score}
+        best = study.best()
+        scene = scene_with(scene, best.params)
+        tuned = {**best.params, "f05": best.metrics["f05"]}
 
     run.stage("calibrated twin: replay of the held-out experiments")
     after_result = run.replay(run.test, scene, object_map)

@@ -14,7 +14,7 @@ from transfertwin.rehearsal import _rehearse as module
 
 TINY = RehearsalConfig(
     plant_seed=2, objects=("o3",), calibration_experiments=4, runs=1, validation_runs=1,
-    theta_step=180, depths_mm=(16.0,),
+    theta_step=180, depths_mm=(16.0,), tune_trials=1,
 )  # fmt: skip
 
 
@@ -51,6 +51,9 @@ def test_tiny_rehearsal_writes_every_key(tiny) -> None:
     assert (out / "objects" / "o3.proxy.json").is_file()
     assert "x_frac" not in on_disk["objects"]["o3"]["calibration"]  # positions not searched
     assert doc["virtual_experiments"] > 0
+    tuned = on_disk["tuned_scene"]  # one TPE trial over mu and gap, inside their bounds
+    assert set(tuned) == {"mu", "gap_mm", "f05"}
+    assert 0.3 <= tuned["mu"] <= 0.7 and 8.0 <= tuned["gap_mm"] <= 18.0
 
 
 @pytest.mark.slow
@@ -59,7 +62,7 @@ def test_the_twin_sees_only_plant_rows(tiny) -> None:
     with (out / "plant_calibration.csv").open() as fh:
         logged = [tuple(r.values()) for r in csv.DictReader(fh)]
     names = {name for name, _ in seen}
-    assert {"calibrate", "fit_proxy", "_docking_model"} <= names
+    assert {"calibrate", "fit_proxy", "tune_tpe", "_docking_model"} <= names
     for name, (args, kwargs) in seen:
         rows = args[0]
         assert rows, name

@@ -11,7 +11,12 @@ from asyncua import Client, ua
 from asyncua.crypto import uacrypto
 from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
 
-from transfertwin.cps.opcua._security import Credentials, ensure_certificate, parsed_private_key
+from transfertwin.cps.opcua._security import (
+    Credentials,
+    ensure_certificate,
+    parsed_private_key,
+    read_certificate,
+)
 from transfertwin.cps.opcua._server import NAMESPACE, OperationRefused, node_id
 
 __all__ = ["AssetClient", "connect"]
@@ -118,10 +123,10 @@ async def _secure(client: Client, cert: Path, key: Path) -> None:
     mode = ua.MessageSecurityMode.SignAndEncrypt
     endpoints = await client.connect_and_get_server_endpoints()  # over SecurityPolicy None
     endpoint = Client.find_endpoint(endpoints, mode, SecurityPolicyBasic256Sha256.URI)
-    der = endpoint.ServerCertificate  # the server's certificate, maybe followed by its chain
-    server_cert = uacrypto.x509_from_der(der[: int.from_bytes(der[2:4], "big") + 4])
+    # x509_from_der takes the server's certificate, also where its chain follows it
+    server_cert = uacrypto.x509_from_der(endpoint.ServerCertificate)
     policy = SecurityPolicyBasic256Sha256(
-        server_cert, uacrypto.x509_from_der(cert.read_bytes()), parsed_private_key(key), mode
+        server_cert, read_certificate(cert), parsed_private_key(key), mode
     )
     client.security_policy = policy
     client.uaclient.set_security(policy)

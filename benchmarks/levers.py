@@ -45,6 +45,7 @@ VARIANTS: dict[str, dict[str, object]] = {
     "it20": {"physics.iterations": 20, "physics.ls_iterations": 10},
     "hulls8": {"physics.max_hulls": 8},
     "hulls4": {"physics.max_hulls": 4},
+    "nomulticcd": {"physics.multiccd": False},
     "stall3-cam7.5": {"stall_time_s": 3.0, "camera_rate_hz": 7.5},
     "combo": {
         "stall_time_s": 3.0,

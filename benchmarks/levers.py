@@ -46,6 +46,8 @@ VARIANTS: dict[str, dict[str, object]] = {
     "hulls8": {"physics.max_hulls": 8},
     "hulls4": {"physics.max_hulls": 4},
     "nomulticcd": {"physics.multiccd": False},
+    "hulls8-nomulticcd": {"physics.max_hulls": 8, "physics.multiccd": False},
+    "hulls4-nomulticcd": {"physics.max_hulls": 4, "physics.multiccd": False},
     "stall3-cam7.5": {"stall_time_s": 3.0, "camera_rate_hz": 7.5},
     "combo": {
         "stall_time_s": 3.0,

@@ -119,9 +119,12 @@ def _object_model(obj: ObjectTruth):
 def _scene_config(scene: SceneTruth, obj: ObjectTruth, refine: int = 0) -> SceneConfig:
     """The plant's scene for one object. Its physics is trusted only where it is plausible:
     the guard is on, and a run it marks 'unstable' is run again at half, then a quarter of
-    the timestep (`refine`)."""
+    the timestep (`refine`). The plant stands in for reality, so it takes none of the
+    twin's contact shortcuts: every hull of the object, multi-CCD on."""
     physics = SceneConfig().physics
     return SceneConfig().with_overrides(**{
+        "physics.multiccd": True,
+        "physics.max_hulls": None,
         "physics.feature_solref": obj.feature_solref,
         "physics.guard": True,
         "physics.guard_retry_timestep_factor": None,

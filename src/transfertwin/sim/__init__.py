@@ -1,6 +1,7 @@
 """MuJoCo virtual models of the belt transfer system and their virtual HAL (Sec. 5.2.1)."""
 
 from transfertwin.sim._config import (
+    MULTICCD_HULLS,
     PROFILES,
     DockingError,
     LayoutConfig,
@@ -37,6 +38,7 @@ from transfertwin.sim._system import (
 )
 
 __all__ = [
+    "MULTICCD_HULLS",
     "OBJECT_BODY",
     "OBJECT_JOINT",
     "PROFILES",

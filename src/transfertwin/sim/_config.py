@@ -16,6 +16,7 @@ from transfertwin._errors import InputError
 from transfertwin.control import STALL_MODES
 
 __all__ = [
+    "MULTICCD_HULLS",
     "PROFILES",
     "DockingError",
     "LayoutConfig",
@@ -26,6 +27,10 @@ __all__ = [
 ]
 
 _SOLVERS = ("PGS", "CG", "Newton")
+
+#: `PhysicsConfig.multiccd` None: objects of fewer convex hulls keep multi-CCD (a box of one
+#: hull needs it to rest flat); the built-in cores have 12-26 hulls, 8 after the budget.
+MULTICCD_HULLS = 8
 _CONES = ("pyramidal", "elliptic")
 _INTEGRATORS = ("Euler", "RK4", "implicit", "implicitfast")
 
@@ -60,19 +65,22 @@ class PhysicsConfig:
         tolerance: Solver tolerance.
         impratio: Frictional-to-normal impedance ratio (>1 reduces slip).
         noslip_iterations: Extra no-slip solver iterations (0 disables).
-        multiccd: Multiple contact points per convex pair (MuJoCo 4's default: on). Off
-            makes steps ~20 % cheaper, but a single-hull object (a box) then rocks and
-            sinks ~6 mm into the belt; kept on (docs/speed.md).
+        multiccd: Multiple contact points per convex pair (MuJoCo 4's default: on). None
+            (default) decides by the object (`multiccd_for`): on for an object of fewer
+            than `MULTICCD_HULLS` convex hulls, off for more. Off makes steps ~20 %
+            cheaper; an object of several hulls keeps its support polygon (several hulls
+            touch the belt), but a single-hull box rocks and sinks ~6 mm into the belt
+            without it (docs/speed.md).
         pulley_facets: The end pulleys' collider: N >= 8 (default 32) makes each an
             N-sided prism mesh circumscribing the pulley radius, with a facet on top flush
             with the deck (32: at most 0.06 mm outside a 12.5 mm circle); 0 uses MuJoCo's
             cylinder primitive, whose contacts with an object's hull depend on the hull's
             orientation, so a box turned over behaves differently (docs/design-choices.md,
             "Contact asymmetry").
-        max_hulls: Hull budget per object: None (default) keeps every convex hull of the
-            object; N merges them (`transfertwin.objects.merge_hulls`, least added volume
-            first) into at most N besides its feature hulls. Fewer hulls make steps cheaper
-            but fill concavities between parts (docs/speed.md).
+        max_hulls: Hull budget per object: N (default 8) merges an object's convex hulls
+            (`transfertwin.objects.merge_hulls`, least added volume first) into at most N
+            besides its feature hulls; None keeps every hull. Fewer hulls make steps
+            cheaper but fill concavities between parts (docs/speed.md).
         condim: Contact dimensionality of object–belt contacts (3: sliding friction; 4
             adds torsional, 6 adds rolling).
         solref: Contact stiffness/damping time constants (s, -) of object–belt contacts;
@@ -113,9 +121,9 @@ class PhysicsConfig:
     tolerance: float = 1e-8
     impratio: float = 1.0
     noslip_iterations: int = 0
-    multiccd: bool = True
+    multiccd: bool | None = None
     pulley_facets: int = 32
-    max_hulls: int | None = None
+    max_hulls: int | None = 8
     condim: int = 3
     solref: tuple[float, float] = (0.02, 1.0)
     solimp: tuple[float, float, float, float, float] = (0.9, 0.95, 0.001, 0.5, 2.0)
@@ -167,10 +175,21 @@ class PhysicsConfig:
             isinstance(budget, bool) or not isinstance(budget, int) or budget < 1
         ):
             raise InputError(f"PhysicsConfig.max_hulls must be >= 1 or none, got {budget!r}")
+        if self.multiccd is not None and not isinstance(self.multiccd, bool):
+            raise InputError(
+                f"PhysicsConfig.multiccd must be true, false or none, got {self.multiccd!r}"
+            )
         if self.condim not in (1, 3, 4, 6):
             raise InputError(f"PhysicsConfig.condim must be 1, 3, 4 or 6, got {self.condim!r}")
         if self.iterations < 1 or self.ls_iterations < 1 or self.noslip_iterations < 0:
             raise InputError("PhysicsConfig iteration counts must be >= 1 (noslip >= 0)")
+
+    def multiccd_for(self, n_hulls: int) -> bool:
+        """Whether multi-CCD is on for an object of `n_hulls` convex hulls (after the hull
+        budget, features included): `multiccd` when set, else on below `MULTICCD_HULLS`."""
+        if self.multiccd is not None:
+            return self.multiccd
+        return n_hulls < MULTICCD_HULLS
 
 
 @dataclass(frozen=True)
@@ -417,7 +436,7 @@ class DockingError:
 
 def _reference() -> SceneConfig:
     return SceneConfig(
-        physics=PhysicsConfig(timestep_s=0.002, multiccd=True, condim=3),
+        physics=PhysicsConfig(timestep_s=0.002, multiccd=True, max_hulls=None, condim=3),
         placement=PlacementConfig(settle_time_s=0.6, rest_speed_m_s=None),
         camera_rate_hz=30.0,
         stall_time_s=None,

@@ -60,8 +60,9 @@ class UnitGeometry:
     x_end: float
 
 
-def configure_physics(spec: mujoco.MjSpec, physics: PhysicsConfig) -> None:
-    """Write the solver settings of `physics` into `spec.option`."""
+def configure_physics(spec: mujoco.MjSpec, physics: PhysicsConfig, n_hulls: int = 1) -> None:
+    """Write the solver settings of `physics` into `spec.option` (for an object of
+    `n_hulls` convex hulls: multi-CCD may depend on it, `PhysicsConfig.multiccd_for`)."""
     opt = spec.option
     opt.timestep = physics.timestep_s
     opt.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{physics.integrator.upper()}")
@@ -73,7 +74,7 @@ def configure_physics(spec: mujoco.MjSpec, physics: PhysicsConfig) -> None:
     opt.impratio = physics.impratio
     opt.noslip_iterations = physics.noslip_iterations
     # MuJoCo >= 4 generates multiple contacts per convex pair by default; opt out here.
-    if not physics.multiccd:
+    if not physics.multiccd_for(n_hulls):
         opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_MULTICCD)
 
 
@@ -294,7 +295,7 @@ def build_spec(
     """
     spec = mujoco.MjSpec()
     spec.modelname = "transfertwin_ots"
-    configure_physics(spec, cfg.physics)
+    configure_physics(spec, cfg.physics, len(hulls))
     spec.visual.global_.offwidth = 1920
     spec.visual.global_.offheight = 1080
     spec.worldbody.add_geom(

@@ -132,3 +132,12 @@ def test_plant_features_are_compliant_and_a_named_station_is_used() -> None:
     assert set(rows[0]) == {*PLANT_COLUMNS, "transfer_time_s"}
     with pytest.raises(InputError, match="no station"):
         plant.run([PlantRequest("o3", "back", "both", 90, "TU_Z")])
+
+
+def test_the_plant_takes_none_of_the_twins_contact_shortcuts() -> None:
+    from transfertwin.plant._plant import _scene_config
+
+    obj, scene = draw_object(3, "o3"), draw_scene(3)
+    physics = _scene_config(scene, obj).physics
+    assert physics.max_hulls is None and physics.multiccd is True
+    assert physics.multiccd_for(40) and physics.guard

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from transfertwin import InputError
-from transfertwin.sim import PhysicsConfig, SceneConfig
+from transfertwin.sim import MULTICCD_HULLS, PhysicsConfig, SceneConfig, scene_profile
 
 
 def test_overrides_accept_dotted_names_and_keep_the_original():
@@ -95,8 +95,21 @@ def test_unmeasured_mechanisms_reject_out_of_range_values(bad):
 
 
 def test_speed_lever_settings_are_validated():
-    assert SceneConfig().stall_mode == "progress" and SceneConfig().physics.max_hulls is None
+    assert SceneConfig().stall_mode == "progress" and SceneConfig().physics.max_hulls == 8
     assert SceneConfig().with_overrides(stall_mode="still").stall_mode == "still"
-    for bad in ({"stall_mode": "soon"}, {"physics.max_hulls": 0}, {"physics.max_hulls": 2.5}):
+    for bad in ({"stall_mode": "soon"}, {"physics.max_hulls": 0}, {"physics.max_hulls": 2.5},
+                {"physics.multiccd": "yes"}, {"physics.multiccd": 1}):  # fmt: skip
         with pytest.raises(InputError):
             SceneConfig().with_overrides(**bad)
+
+
+def test_multiccd_by_default_depends_on_the_objects_hull_count():
+    physics = SceneConfig().physics
+    assert physics.multiccd is None
+    assert physics.multiccd_for(1) and physics.multiccd_for(MULTICCD_HULLS - 1)
+    assert not physics.multiccd_for(MULTICCD_HULLS) and not physics.multiccd_for(26)
+    forced = SceneConfig().with_overrides(**{"physics.multiccd": True}).physics
+    assert forced.multiccd_for(26)
+    assert not SceneConfig().with_overrides(**{"physics.multiccd": False}).physics.multiccd_for(1)
+    reference = scene_profile("reference").physics
+    assert reference.multiccd_for(26) and reference.max_hulls is None

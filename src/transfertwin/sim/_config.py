@@ -29,7 +29,7 @@ __all__ = [
 _SOLVERS = ("PGS", "CG", "Newton")
 
 #: `PhysicsConfig.multiccd` None: objects of fewer convex hulls keep multi-CCD (a box of one
-#: hull needs it to rest flat); the built-in cores have 12-26 hulls, 8 after the budget.
+#: hull needs it to rest flat); the built-in cores have 12-26 hulls, 8 after the 'lean' budget.
 MULTICCD_HULLS = 8
 _CONES = ("pyramidal", "elliptic")
 _INTEGRATORS = ("Euler", "RK4", "implicit", "implicitfast")
@@ -66,21 +66,21 @@ class PhysicsConfig:
         impratio: Frictional-to-normal impedance ratio (>1 reduces slip).
         noslip_iterations: Extra no-slip solver iterations (0 disables).
         multiccd: Multiple contact points per convex pair (MuJoCo 4's default: on). None
-            (default) decides by the object (`multiccd_for`): on for an object of fewer
-            than `MULTICCD_HULLS` convex hulls, off for more. Off makes steps ~20 %
+            decides by the object (`multiccd_for`; the 'lean' profile): on for an object of
+            fewer than `MULTICCD_HULLS` convex hulls, off for more. Off makes steps ~20 %
             cheaper; an object of several hulls keeps its support polygon (several hulls
             touch the belt), but a single-hull box rocks and sinks ~6 mm into the belt
-            without it (docs/speed.md).
+            without it, and the held-out F0.5 drops (docs/speed.md).
         pulley_facets: The end pulleys' collider: N >= 8 (default 32) makes each an
             N-sided prism mesh circumscribing the pulley radius, with a facet on top flush
             with the deck (32: at most 0.06 mm outside a 12.5 mm circle); 0 uses MuJoCo's
             cylinder primitive, whose contacts with an object's hull depend on the hull's
             orientation, so a box turned over behaves differently (docs/design-choices.md,
             "Contact asymmetry").
-        max_hulls: Hull budget per object: N (default 8) merges an object's convex hulls
-            (`transfertwin.objects.merge_hulls`, least added volume first) into at most N
-            besides its feature hulls; None keeps every hull. Fewer hulls make steps
-            cheaper but fill concavities between parts (docs/speed.md).
+        max_hulls: Hull budget per object: None (default) keeps every convex hull of the
+            object; N (the 'lean' profile: 8) merges them (`transfertwin.objects.merge_hulls`,
+            least added volume first) into at most N besides its feature hulls. Fewer hulls
+            make steps cheaper but fill concavities between parts (docs/speed.md).
         condim: Contact dimensionality of object–belt contacts (3: sliding friction; 4
             adds torsional, 6 adds rolling).
         solref: Contact stiffness/damping time constants (s, -) of object–belt contacts;
@@ -121,9 +121,9 @@ class PhysicsConfig:
     tolerance: float = 1e-8
     impratio: float = 1.0
     noslip_iterations: int = 0
-    multiccd: bool | None = None
+    multiccd: bool | None = True
     pulley_facets: int = 32
-    max_hulls: int | None = 8
+    max_hulls: int | None = None
     condim: int = 3
     solref: tuple[float, float] = (0.02, 1.0)
     solimp: tuple[float, float, float, float, float] = (0.9, 0.95, 0.001, 0.5, 2.0)
@@ -443,14 +443,21 @@ def _reference() -> SceneConfig:
     )
 
 
+def _lean() -> SceneConfig:
+    return SceneConfig().with_overrides(**{"physics.max_hulls": 8, "physics.multiccd": None})
+
+
 #: Named scenes. 'fast' is `SceneConfig()` (the defaults); 'reference' is the settings the
 #: fast defaults were validated against (2 ms steps, multi-CCD, fixed 0.6 s settling, no
-#: early timeout: every transfer runs to its terminal state or t_max).
-PROFILES = {"fast": SceneConfig, "reference": _reference}
+#: early timeout: every transfer runs to its terminal state or t_max); 'lean' is the fast
+#: defaults with cheaper contacts (a core's hulls merged to 8, multi-CCD off for 8+ hulls):
+#: ~1.46x the throughput, agreeing with 'reference', at a small cost in held-out F0.5
+#: (docs/speed.md).
+PROFILES = {"fast": SceneConfig, "reference": _reference, "lean": _lean}
 
 
 def scene_profile(name: str, **changes: object) -> SceneConfig:
-    """The named scene of `PROFILES` ('fast', 'reference'), with dotted overrides."""
+    """The named scene of `PROFILES` ('fast', 'reference', 'lean'), with dotted overrides."""
     try:
         base = PROFILES[name]()
     except KeyError:

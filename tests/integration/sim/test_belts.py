@@ -7,7 +7,7 @@ import pytest
 
 from tests.conftest import box_hulls, box_inertia
 from transfertwin.control import Clock, ObjectSensor, UnitHAL
-from transfertwin.sim import DockingError, SceneConfig, VirtualTransferSystem
+from transfertwin.sim import DockingError, SceneConfig, VirtualTransferSystem, scene_profile
 
 MASS = 3.0
 
@@ -129,23 +129,27 @@ def test_controller_stops_belts_at_the_receivers_far_barrier():
     assert z - sz > -0.005
 
 
-def test_multiccd_follows_the_objects_hull_count_and_a_box_rests_flat():
+def test_lean_multiccd_follows_the_objects_hull_count_and_a_box_rests_flat():
     import mujoco  # after transfertwin, which picks the headless GL backend
 
     from transfertwin.objects import load_object
 
     off = int(mujoco.mjtDisableBit.mjDSBL_MULTICCD)
-    box = _system()  # one hull: multi-CCD stays on, so the box rests still on its face
+    lean = {"physics.max_hulls": 8, "physics.multiccd": None}  # the 'lean' profile
+    box = _system(**lean)  # one hull: multi-CCD stays on, so the box rests still on its face
     assert not box.model.opt.disableflags & off
     box.place("front", 0.0, -0.45, 0.0)
     box.clock.wait(0.3)
     assert box.object_speed() < 0.01
     core = load_object("o1")  # 12+ hulls, merged to the budget: multi-CCD off
     system = VirtualTransferSystem(core.hulls, core.mass.mass_kg, core.mass.com_m,
-                                   core.mass.inertia_kg_m2, SceneConfig(),
+                                   core.mass.inertia_kg_m2, scene_profile("lean"),
                                    feature_hulls=core.feature_hulls)  # fmt: skip
     assert system.model.ngeom - box.model.ngeom == 8 + core.feature_hulls - 1
     assert system.model.opt.disableflags & off
-    forced = SceneConfig().with_overrides(**{"physics.multiccd": True})
-    assert not _system(**{"physics.multiccd": True}).model.opt.disableflags & off
-    assert forced.physics.multiccd_for(8 + core.feature_hulls)
+    assert not _system().model.opt.disableflags & off  # the defaults keep it on
+    rocking = _system(**{"physics.multiccd": False})  # why the box keeps it: without,
+    assert rocking.model.opt.disableflags & off  # one contact per pair, and it rocks
+    rocking.place("front", 0.0, -0.45, 0.0)
+    rocking.clock.wait(0.3)
+    assert rocking.object_speed() > 0.01

@@ -95,7 +95,7 @@ def test_unmeasured_mechanisms_reject_out_of_range_values(bad):
 
 
 def test_speed_lever_settings_are_validated():
-    assert SceneConfig().stall_mode == "progress" and SceneConfig().physics.max_hulls == 8
+    assert SceneConfig().stall_mode == "progress" and SceneConfig().physics.max_hulls is None
     assert SceneConfig().with_overrides(stall_mode="still").stall_mode == "still"
     for bad in ({"stall_mode": "soon"}, {"physics.max_hulls": 0}, {"physics.max_hulls": 2.5},
                 {"physics.multiccd": "yes"}, {"physics.multiccd": 1}):  # fmt: skip
@@ -103,9 +103,10 @@ def test_speed_lever_settings_are_validated():
             SceneConfig().with_overrides(**bad)
 
 
-def test_multiccd_by_default_depends_on_the_objects_hull_count():
-    physics = SceneConfig().physics
-    assert physics.multiccd is None
+def test_multiccd_of_the_lean_profile_depends_on_the_objects_hull_count():
+    assert SceneConfig().physics.multiccd is True and SceneConfig().physics.multiccd_for(26)
+    physics = scene_profile("lean").physics
+    assert physics.multiccd is None and physics.max_hulls == 8
     assert physics.multiccd_for(1) and physics.multiccd_for(MULTICCD_HULLS - 1)
     assert not physics.multiccd_for(MULTICCD_HULLS) and not physics.multiccd_for(26)
     forced = SceneConfig().with_overrides(**{"physics.multiccd": True}).physics

@@ -195,11 +195,11 @@ SIM_PARAMETER_SETS: tuple[tuple[str, dict[str, object]], ...] = (
     ("S6", {"physics.iterations": 20}),
     ("S7", {"physics.impratio": 10.0}),
     ("S8", {"physics.noslip_iterations": 5}),
-    ("S9", {"physics.multiccd": True}),
+    ("S9", {"physics.multiccd": False}),
     ("S10", {"physics.condim": 4}),
     ("S11", {"physics.condim": 6}),
     ("S12", {"physics.integrator": "RK4"}),
-    ("S13", {"physics.max_hulls": None}),
+    ("S13", {"physics.max_hulls": 8}),
 )
 
 

@@ -14,7 +14,7 @@ setting that differs from the defaults, e.g.::
 Files are parsed here, at the edge; the rest of the code sees frozen configs only. A setting
 that is off (None, e.g. ``stall_time_s`` of the 'reference' profile) is written as "none".
 `load_profile` also accepts the name of a built-in profile (`transfertwin.sim.PROFILES`:
-'fast', the defaults, and 'reference') instead of a path.
+'fast', the defaults, 'reference' and 'lean') instead of a path.
 """
 
 from __future__ import annotations

@@ -57,3 +57,12 @@ def test_profile_round_trips_the_unmeasured_mechanisms(tmp_path):
     assert load_profile(path) == ("mech", cfg)
     # Off (None) is written as "none" and read back as today's behaviour.
     assert load_profile(save_profile(tmp_path / "d.toml", "d", SceneConfig()))[1] == SceneConfig()
+
+
+def test_the_lean_profile_loads_by_name_with_its_cheaper_contacts():
+    name, cfg = load_profile("lean")
+    assert name == "lean" and cfg.physics.max_hulls == 8 and cfg.physics.multiccd is None
+    assert (
+        cfg.with_overrides(**{"physics.max_hulls": None, "physics.multiccd": True})
+        == (load_profile("fast")[1])
+    )

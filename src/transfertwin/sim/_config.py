@@ -27,12 +27,12 @@ __all__ = [
 ]
 
 _SOLVERS = ("PGS", "CG", "Newton")
+_CONES = ("pyramidal", "elliptic")
+_INTEGRATORS = ("Euler", "RK4", "implicit", "implicitfast")
 
 #: `PhysicsConfig.multiccd` None: objects of fewer convex hulls keep multi-CCD (a box of one
 #: hull needs it to rest flat); the built-in cores have 12-26 hulls, 8 after the 'lean' budget.
 MULTICCD_HULLS = 8
-_CONES = ("pyramidal", "elliptic")
-_INTEGRATORS = ("Euler", "RK4", "implicit", "implicitfast")
 
 
 def _positive(owner: str, **values: float) -> None:

@@ -25,12 +25,14 @@ from transfertwin.ots import (
     Face,
     Outcome,
     TransferDirection,
+    TransferProcess,
     TransferTrace,
     belt_sets,
+    contains_state,
     conveyor_of,
-    run_transfer,
 )
 
+_X, _Y, _Z = int(Col.X), int(Col.Y), int(Col.Z)
 _F, _C, _T = int(Col.F), int(Col.C), int(Col.T)
 
 
@@ -112,13 +114,14 @@ class _StallDetector:
         self._since = float(s0[Col.T])
 
     def __call__(self, s: np.ndarray) -> bool:
-        x, t = float(s[Col.X]), float(s[Col.T])
+        v = s.tolist()
+        x, t = v[_X], v[_T]
         if self._progress:
             if self._sign * x > self._best + self.tol:
                 self._best, self._since = self._sign * x, t
                 return False
         else:
-            y, z = float(s[Col.Y]), float(s[Col.Z])
+            y, z = v[_Y], v[_Z]
             ax, ay, az = self._anchor
             if max(abs(x - ax), abs(y - ay), abs(z - az)) > self.tol:
                 self._anchor, self._since = (x, y, z), t
@@ -175,9 +178,8 @@ class OTSController:
 
     def state(self, face: str, conveyor: str) -> np.ndarray:
         """The full state vector (Eq. 5.4) now: sensor reading plus f, c and t."""
-        obs = np.asarray(self.sensor.observe(), dtype=float)
         s = np.empty(N_COLS)
-        s[:_F] = obs
+        s[:_F] = self.sensor.observe()
         s[_F], s[_C] = _codes(face, conveyor)
         s[_T] = self.clock.now()
         if self.on_sample is not None:
@@ -212,7 +214,7 @@ class OTSController:
             code = int(conveyor_of(obs[Col.Y], obs[Col.SY]))
             conveyor = Conveyor(code).name.lower()
         s0 = self.state(face, conveyor)
-        if not bool(sets.pre.contains(s0)):
+        if not contains_state(sets.pre, s0):
             return TransferRecord(direction, conveyor, False, s0, None)
         sign = 1.0 if direction is TransferDirection.TM_TO_TU else -1.0
         for hal in (self.tm, self.tu):
@@ -220,29 +222,29 @@ class OTSController:
                 hal.set_belt_speed(belt, sign * self.speed)
 
         receiver = self.tu if direction is TransferDirection.TM_TO_TU else self.tm
-        stopped = [False]
-
-        def u(_: np.ndarray) -> np.ndarray:
-            self.clock.wait(self.dt)
-            if not stopped[0] and receiver.barriers()["far"]:
-                # Safety stop: the object reached the receiver's far edge.
-                self.stop_all()
-                stopped[0] = True
-            return self.state(face, conveyor)
-
-        stall = _StallDetector(self.stall_time_s, self.stall_tol_m, s0, self.stall_mode, sign)
+        stopped = False
+        stall = (
+            _StallDetector(self.stall_time_s, self.stall_tol_m, s0, self.stall_mode, sign)
+            if self.stall_time_s is not None
+            else None
+        )
         try:
-            trace = run_transfer(
-                s0,
-                u,
-                pre=sets.pre,
-                success=sets.success,
-                failure=sets.failure,
-                dt=self.dt,
-                t_max=self.thresholds.t_max + self.dt,
-                time_index=int(Col.T),
-                stop=stall if self.stall_time_s is not None else None,
-            )
+            # Eq. 4.11 with u = wait one sample period, then observe (the process owns the
+            # clock and the termination); no per-sample closure around that work.
+            process = TransferProcess(
+                s0, pre=sets.pre, success=sets.success, failure=sets.failure, dt=self.dt,
+                t_max=self.thresholds.t_max + self.dt, time_index=_T,
+            )  # fmt: skip
+            while process.running:
+                self.clock.wait(self.dt)
+                if not stopped and receiver.barriers()["far"]:
+                    # Safety stop: the object reached the receiver's far edge.
+                    self.stop_all()
+                    stopped = True
+                process.advance(self.state(face, conveyor))
+                if stall is not None and process.running and stall(process.state):
+                    process.fast_forward()
+            trace = process.trace()
         finally:
             self.stop_all()
         return TransferRecord(direction, conveyor, True, s0, trace)

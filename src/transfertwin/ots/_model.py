@@ -1,7 +1,9 @@
 """Transfer process and outcome of a generic OTS (Eq. 4.8–4.11, 5.11).
 
 `run_transfer` iterates a pure state transition function ``u`` (Eq. 4.10) from
-a pre-transfer state until the first terminal state (Eq. 4.9) or a timeout.
+a pre-transfer state until the first terminal state (Eq. 4.9) or a timeout;
+`TransferProcess` is that loop one transition at a time, for a caller that makes each
+new state itself (a controller stepping a plant).
 
 Decisions the equations leave open:
 
@@ -36,8 +38,10 @@ from transfertwin.ots._sets import StateSet, as_state_batch
 __all__ = [
     "NON_TERMINAL",
     "Outcome",
+    "TransferProcess",
     "TransferTrace",
     "Transition",
+    "contains_state",
     "ots_outcome",
     "outcome_codes",
     "run_transfer",
@@ -68,6 +72,15 @@ def _scalar_path(states: object, success: StateSet, failure: StateSet) -> bool:
         and states.dtype == np.float64
         and states.shape[0] == getattr(success, "one_dim", None) == getattr(failure, "one_dim", 0)
     )
+
+
+def contains_state(states: StateSet, state: np.ndarray) -> bool:
+    """Whether one float state ``(d,)`` is in `states`: through the set's scalar
+    `contains_one` where it has one for this length, else its batched `contains`."""
+    one = state.ndim == 1 and state.dtype == np.float64
+    if one and getattr(states, "one_dim", None) == state.shape[0]:
+        return bool(states.contains_one(state))  # type: ignore[attr-defined]
+    return bool(states.contains(state))
 
 
 def _code_one(state: np.ndarray, success: StateSet, failure: StateSet) -> int:
@@ -184,6 +197,121 @@ def _first_terminal_index(
     return i + 1 + int(terminal[0]) if terminal.size else n_max
 
 
+class TransferProcess:
+    """The discrete transfer process of Eq. 4.11, one transition at a time.
+
+    `run_transfer` drives it with a transition function; a controller that produces each
+    new state itself (by stepping a plant and observing it) drives it directly, without
+    wrapping that work in a function of the previous state. Either way the clock, the
+    termination (Eq. 4.9), the timeout and the early timeout are decided here.
+
+    Args:
+        s0: Pre-transfer state ``(d,)``; must be in ``pre`` (Eq. 4.8).
+        pre, success, failure: S_pre, S+ and S- (Eq. 4.4–4.6).
+        dt: Time step in seconds (> 0).
+        t_max: Timeout in seconds on the loop clock (absolute, > t0).
+        time_index: Component of the state that holds time in seconds, or ``None`` if
+            the state has no time (then ``t0 = 0``).
+        max_steps: Optional cap on the number of transitions.
+
+    Raises:
+        InputError: If ``s0`` is not a pre-transfer state or the clock parameters are
+            invalid.
+    """
+
+    def __init__(
+        self,
+        s0: ArrayLike,
+        *,
+        pre: StateSet,
+        success: StateSet,
+        failure: StateSet,
+        dt: float,
+        t_max: float,
+        time_index: int | None = None,
+        max_steps: int | None = None,
+    ) -> None:
+        batch, single = as_state_batch(s0)
+        if not single:
+            raise InputError(f"Eq. 4.8: s0 must be one state (d,), got shape {batch.shape}")
+        state = batch[0].copy()
+        d = state.shape[0]
+        if time_index is not None and not -d <= time_index < d:
+            raise InputError(f"time_index {time_index} is out of range for d = {d}")
+        self.t0 = float(state[time_index]) if time_index is not None else 0.0
+        _check_clock(dt, self.t0, t_max, max_steps)
+        if not contains_state(pre, state):
+            raise InputError("Eq. 4.8: s0 is not a pre-transfer state (not in S_pre)")
+        n_max = max(1, math.ceil((t_max - self.t0) / dt - 1e-9))
+        self.n_max = min(n_max, max_steps) if max_steps is not None else n_max
+        self.dt, self.time_index = dt, time_index
+        self.success, self.failure = success, failure
+        self.state = state  # the latest state s[t_i]
+        self.i = 0  # transitions so far
+        self._states = [state]
+        self._steps = [0]  # transition index of each state (its time is t0 + index * dt)
+        self._scalar = _scalar_path(state, success, failure)  # every later state has its shape
+        self.code = int(outcome_codes(state, success, failure))
+
+    @property
+    def running(self) -> bool:
+        """Whether the latest state is non-terminal and the timeout is not reached."""
+        return self.code == NON_TERMINAL and self.i < self.n_max
+
+    def advance(self, new: np.ndarray) -> int:
+        """Append the next state (Eq. 4.10's u(s)) and return its outcome code (1, 0 or
+        `NON_TERMINAL`). `new` must be a fresh float array ``(d,)``: the process keeps it
+        and writes the loop clock into its time component."""
+        self.i += 1
+        if self.time_index is not None:
+            new[self.time_index] = self.t0 + self.i * self.dt
+        self.state = new
+        self._states.append(new)
+        self._steps.append(self.i)
+        if self._scalar:
+            self.code = _code_one(new, self.success, self.failure)
+        else:
+            self.code = int(outcome_codes(new, self.success, self.failure))
+        return self.code
+
+    def fast_forward(self) -> None:
+        """End now for a state that stays put (an early timeout): the latest state is carried
+        forward to the first later sample time ``t0 + n·dt`` at which it is in S+ ∪ S-
+        (for the belt sets: the first sample after t_max, as a loop run to the end gives),
+        or to the last one."""
+        if not self.running:
+            return
+        i = _first_terminal_index(
+            self.state, self.i, self.n_max, self.t0, self.dt, self.time_index,
+            self.success, self.failure,
+        )  # fmt: skip
+        state = self.state.copy()
+        if self.time_index is not None:
+            state[self.time_index] = self.t0 + i * self.dt
+        self.i, self.state = i, state
+        self._states.append(state)
+        self._steps.append(i)
+        self.code = int(outcome_codes(state, self.success, self.failure))
+        self.n_max = i  # nothing follows
+
+    def trace(self) -> TransferTrace:
+        """The trace so far (Eq. 4.11); FAILURE with ``timed_out`` if it did not end in
+        S+ ∪ S-."""
+        times = self.t0 + self.dt * np.asarray(self._steps, dtype=float)
+        # One concatenation of the (d,) rows: np.stack's checks cost more than the copy.
+        stacked = np.concatenate(self._states).reshape(len(self._states), -1)
+        stacked.setflags(write=False)
+        times.setflags(write=False)
+        timed_out = self.code == NON_TERMINAL
+        return TransferTrace(
+            states=stacked,
+            times=times,
+            t_end=float(times[-1]),
+            outcome=Outcome.FAILURE if timed_out else Outcome(self.code),
+            timed_out=timed_out,
+        )
+
+
 def run_transfer(
     s0: ArrayLike,
     u: Transition,
@@ -213,10 +341,8 @@ def run_transfer(
         max_steps: Optional cap on the number of transitions.
         stop: Optional early timeout: called with each new non-terminal state; True
             means the state will not change before the timeout (e.g. a stuck object),
-            so the trace ends now as the loop would end at the timeout: its last state
-            is the current one carried forward to the first later sample time
-            ``t0 + n·dt`` at which it is in S+ ∪ S- (for the belt sets: the first
-            sample after t_max, as a loop run to the end gives), or to the last one.
+            so the trace ends now as the loop would end at the timeout
+            (`TransferProcess.fast_forward`).
 
     Returns:
         The trace, ending at the first state in S+ ∪ S- or at the timeout.
@@ -225,58 +351,12 @@ def run_transfer(
         InputError: If ``s0`` is not a pre-transfer state, the clock parameters
             are invalid, or ``u`` returns a malformed state.
     """
-    batch, single = as_state_batch(s0)
-    if not single:
-        raise InputError(f"Eq. 4.8: s0 must be one state (d,), got shape {batch.shape}")
-    state = batch[0].copy()
-    d = state.shape[0]
-    if time_index is not None and not -d <= time_index < d:
-        raise InputError(f"time_index {time_index} is out of range for d = {d}")
-    t0 = float(state[time_index]) if time_index is not None else 0.0
-    _check_clock(dt, t0, t_max, max_steps)
-    if not bool(pre.contains(state)):
-        raise InputError("Eq. 4.8: s0 is not a pre-transfer state (not in S_pre)")
-
-    n_max = max(1, math.ceil((t_max - t0) / dt - 1e-9))
-    if max_steps is not None:
-        n_max = min(n_max, max_steps)
-    states = [state]
-    steps = [0]  # transition index of each state (the time is t0 + index * dt)
-    scalar = _scalar_path(state, success, failure)  # every later state has its shape
-    code = int(outcome_codes(state, success, failure))
-    i = 0
-    while code == NON_TERMINAL and i < n_max:
-        i += 1
-        state = _apply(u, state)
-        if time_index is not None:
-            state[time_index] = t0 + i * dt
-        states.append(state)
-        steps.append(i)
-        if scalar:
-            code = _code_one(state, success, failure)
-        else:
-            code = int(outcome_codes(state, success, failure))
-        if code == NON_TERMINAL and stop is not None and i < n_max and stop(state.copy()):
-            # Fast-forward: the state stays put, so the loop would end at the first later
-            # sample at which it is terminal (by time: the timeout), or at n_max.
-            i = _first_terminal_index(state, i, n_max, t0, dt, time_index, success, failure)
-            state = state.copy()
-            if time_index is not None:
-                state[time_index] = t0 + i * dt
-            states.append(state)
-            steps.append(i)
-            code = int(outcome_codes(state, success, failure))
-            break
-
-    times = t0 + dt * np.asarray(steps, dtype=float)
-    stacked = np.stack(states)
-    stacked.setflags(write=False)
-    times.setflags(write=False)
-    timed_out = code == NON_TERMINAL
-    return TransferTrace(
-        states=stacked,
-        times=times,
-        t_end=float(times[-1]),
-        outcome=Outcome.FAILURE if timed_out else Outcome(code),
-        timed_out=timed_out,
-    )
+    process = TransferProcess(
+        s0, pre=pre, success=success, failure=failure, dt=dt, t_max=t_max,
+        time_index=time_index, max_steps=max_steps,
+    )  # fmt: skip
+    while process.running:
+        process.advance(_apply(u, process.state))
+        if stop is not None and process.running and stop(process.state.copy()):
+            process.fast_forward()
+    return process.trace()

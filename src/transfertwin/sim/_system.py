@@ -87,6 +87,7 @@ class SimClock:
     def __init__(self, system: VirtualTransferSystem) -> None:
         self._system = system
         self._t0 = 0.0
+        self._last, self._steps = (math.nan, math.nan), 1  # wait's last (dt, timestep), steps
 
     def now(self) -> float:
         """Seconds since the clock was last started."""
@@ -98,9 +99,12 @@ class SimClock:
 
     def wait(self, dt_s: float) -> None:
         """Advance the simulation by `dt_s` (rounded to whole physics steps, at least 1)."""
-        steps = max(1, round(dt_s / self._system.model.opt.timestep))
-        self._system.step(steps)
-        for listener in self._system.step_listeners:
+        system = self._system
+        timestep = system.model.opt.timestep
+        if (dt_s, timestep) != self._last:  # a controller waits the same period each sample
+            self._last, self._steps = (dt_s, timestep), max(1, round(dt_s / timestep))
+        system.step(self._steps)
+        for listener in system.step_listeners:
             listener()
 
 
@@ -214,11 +218,15 @@ class VirtualTransferSystem:
         self._vadr = int(joint.dofadr[0])
         self._tu_mocap = int(self.model.body(TU_BODY).mocapid[0])
         self._verts = np.concatenate([np.asarray(h, dtype=float) for h in hulls], axis=0)
-        # The AABB of a point set is the AABB of its convex hull's vertices: the readout
-        # transforms only those (exact, typically a quarter of all hull vertices).
-        self._aabb_verts_t = np.ascontiguousarray(_outer_vertices(self._verts).T)  # (3, k)
         self._badqacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
         self._com = np.asarray(com_m, dtype=float)
+        # The readout's one product per sample, R @ columns (3, k + 2): the AABB of a point
+        # set is the AABB of its convex hull's vertices, so the first k columns are only
+        # those (exact, typically a quarter of all hull vertices); then the COM (R c) and
+        # the body's x axis (R e_x: the first column of R, whose yaw is θ).
+        outer = _outer_vertices(self._verts)
+        self._n_outer = len(outer)
+        self._readout_t = np.ascontiguousarray(np.vstack([outer, self._com, (1.0, 0.0, 0.0)]).T)
         self.tu_pose = (cfg.gap_m, 0.0, 0.0)
         # Implausible-event guard (PhysicsConfig.guard): highest COM height and mechanical
         # energy at the last check, cleared whenever the object is placed or the TU moves.
@@ -250,12 +258,13 @@ class VirtualTransferSystem:
         keep their memory for the data's life, so a view made once stays current."""
         d = self.data
         self._pos = d.xpos[self._body]
-        self._xmat = d.xmat[self._body]
-        self._rot = self._xmat.reshape(3, 3)
+        self._rot = d.xmat[self._body].reshape(3, 3)
         self._qpos7 = d.qpos[self._qadr : self._qadr + 7]
         self._qvel6 = d.qvel[self._vadr : self._vadr + 6]
         self._warning = d.warning[self._badqacc]
-        self._pts = np.empty_like(self._aabb_verts_t)
+        self._pts = np.empty_like(self._readout_t)
+        self._pts_outer = self._pts[:, : self._n_outer]
+        self._pts_extra = self._pts[:, self._n_outer :]
 
     def _guard_reset(self) -> None:
         self._z_top = -math.inf
@@ -394,24 +403,22 @@ class VirtualTransferSystem:
 
         The AABB comes from the hull vertices; θ is the yaw of the object's x axis (rad).
         """
-        rot = self._rot
-        pts = np.matmul(rot, self._aabb_verts_t, out=self._pts)  # (3, k): rows reduce fast
+        np.matmul(self._rot, self._readout_t, out=self._pts)
+        outer = self._pts_outer  # (3, k): rows reduce fast
         # The rest in Python floats: the same IEEE operations as on arrays, fewer calls.
-        lo, hi = pts.min(axis=1).tolist(), pts.max(axis=1).tolist()
-        p = self._pos.tolist()
-        c = (rot @ self._com).tolist()
-        com_xy = (c[0] + p[0], c[1] + p[1])
-        r = self._xmat.tolist()
+        lo, hi = outer.min(axis=1).tolist(), outer.max(axis=1).tolist()
+        (cx, ex), (cy, ey), _ = self._pts_extra.tolist()  # R c and R e_x
+        px, py, pz = self._pos.tolist()
         return np.array(
             [
-                self.possessing_unit(com_xy),
-                0.5 * (lo[0] + hi[0]) + p[0],
-                0.5 * (lo[1] + hi[1]) + p[1],
-                0.5 * (lo[2] + hi[2]) + p[2],
+                self.possessing_unit((cx + px, cy + py)),
+                0.5 * (lo[0] + hi[0]) + px,
+                0.5 * (lo[1] + hi[1]) + py,
+                0.5 * (lo[2] + hi[2]) + pz,
                 0.5 * (hi[0] - lo[0]),
                 0.5 * (hi[1] - lo[1]),
                 0.5 * (hi[2] - lo[2]),
-                math.atan2(r[3], r[0]),
+                math.atan2(ey, ex),
             ]
         )
 

@@ -27,6 +27,7 @@ from transfertwin.ots import (
     BeltThresholds,
     TransferDirection,
     check_theta_deg,
+    contains_state,
     experiment_pre_transfer_set,
     parse_conveyor,
     parse_face,
@@ -342,7 +343,7 @@ def _run(
         controller = scene_controller(spec.scene, system.tm, tu, seen, system.clock, record)
         system.clock.start()
         s_pre = controller.state(spec.face, spec.conveyor)
-        if not bool(experiment_pre_transfer_set(controller.thresholds).contains(s_pre)):
+        if not contains_state(experiment_pre_transfer_set(controller.thresholds), s_pre):
             return ExperimentResult(
                 object_id, **base, y1=None, y2=None, success=None, t_end_s=math.nan,
                 status="invalid", message="settled state is not a pre-transfer state (Eq. 6.1)",

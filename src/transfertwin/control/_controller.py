@@ -178,10 +178,16 @@ class OTSController:
 
     def state(self, face: str, conveyor: str) -> np.ndarray:
         """The full state vector (Eq. 5.4) now: sensor reading plus f, c and t."""
+        s = self._observed(_codes(face, conveyor))
+        s[_T] = self.clock.now()
+        return s
+
+    def _observed(self, codes: tuple[int, int]) -> np.ndarray:
+        """A new state vector with the sensor reading and the codes of f and c (its time
+        component left for the caller: the transfer process writes its own clock there)."""
         s = np.empty(N_COLS)
         s[:_F] = self.sensor.observe()
-        s[_F], s[_C] = _codes(face, conveyor)
-        s[_T] = self.clock.now()
+        s[_F], s[_C] = codes
         if self.on_sample is not None:
             self.on_sample()
         return s
@@ -223,6 +229,7 @@ class OTSController:
 
         receiver = self.tu if direction is TransferDirection.TM_TO_TU else self.tm
         stopped = False
+        codes = _codes(face, conveyor)
         stall = (
             _StallDetector(self.stall_time_s, self.stall_tol_m, s0, self.stall_mode, sign)
             if self.stall_time_s is not None
@@ -241,7 +248,7 @@ class OTSController:
                     # Safety stop: the object reached the receiver's far edge.
                     self.stop_all()
                     stopped = True
-                process.advance(self.state(face, conveyor))
+                process.advance(self._observed(codes))
                 if stall is not None and process.running and stall(process.state):
                     process.fast_forward()
             trace = process.trace()

@@ -142,6 +142,9 @@ class MujocoUnitHAL:
             which: int(model.sensor(barrier_sensor(unit, which)).adr[0]) for which in BARRIERS
         }
         self._beam_m = 2 * system.cfg.layout.belt_width_m + system.cfg.layout.belt_separation_m
+        # A view made once stays current: MjData's arrays keep their memory (the system
+        # makes new HALs when it attaches other data).
+        self._sensordata = system.data.sensordata
         # A pulley spins about its axle (the unit's y axis), in its compiled geom frame: the
         # geom's z for a cylinder, wherever MuJoCo's principal axes put it for a prism mesh.
         self._axles = {
@@ -149,20 +152,26 @@ class MujocoUnitHAL:
             for belt in BELTS
             for gid in (self._geoms[belt]["pulley_start"], self._geoms[belt]["pulley_end"])
         }
+        self._belt_rows = {
+            belt: (
+                [self._geoms[belt][part] for part in ("deck", "pulley_start", "pulley_end")],
+                np.array(
+                    [self._axles[self._geoms[belt][p]] for p in ("pulley_start", "pulley_end")]
+                ),
+            )
+            for belt in BELTS
+        }
         self._speeds = dict.fromkeys(BELTS, 0.0)
 
     def set_belt_speed(self, belt: str, speed_m_s: float) -> None:
         """Drive `belt` ('left'/'right') at `speed_m_s`; 0 stops it."""
         if belt not in BELTS:
             raise ValueError(f"unknown belt {belt!r}")
-        sv = self._system.model.geom_surfacevel
-        ids = self._geoms[belt]
-        sv[ids["deck"]] = (speed_m_s, 0, 0, 0, 0, 0)
-        omega = speed_m_s / self._r
-        for part in ("pulley_start", "pulley_end"):
-            gid = ids[part]
-            sv[gid, :3] = 0.0
-            sv[gid, 3:] = omega * self._axles[gid]
+        rows, axles = self._belt_rows[belt]
+        values = np.zeros((3, 6))  # deck, start pulley, end pulley
+        values[0, 0] = speed_m_s
+        values[1:, 3:] = (speed_m_s / self._r) * axles  # ω about each pulley's axle
+        self._system.model.geom_surfacevel[rows] = values
         self._speeds[belt] = float(speed_m_s)
 
     def belt_speed(self, belt: str) -> float:
@@ -171,12 +180,9 @@ class MujocoUnitHAL:
 
     def barriers(self) -> dict[str, bool]:
         """Whether the 'near' and 'far' light barriers are interrupted."""
-        data = self._system.data.sensordata
-        out = {}
-        for which, adr in self._sensors.items():
-            dist = float(data[adr])
-            out[which] = 0.0 <= dist < self._beam_m
-        return out
+        data = self._sensordata
+        beam = self._beam_m
+        return {which: 0.0 <= float(data[adr]) < beam for which, adr in self._sensors.items()}
 
 
 class VirtualTransferSystem:

@@ -21,7 +21,7 @@ import numpy as np
 from transfertwin._atomic import file_stamp
 from transfertwin._errors import InputError
 from transfertwin.control import Clock, ObjectSensor, OTSController, TransferRecord, UnitHAL
-from transfertwin.objects import ObjectModel, load_object
+from transfertwin.objects import ObjectModel, is_builtin_id, load_object
 from transfertwin.ots import (
     POSITIONS,
     BeltThresholds,
@@ -157,7 +157,13 @@ def _object(ref: str, units: str, stamp: tuple[int, int, int] | None) -> ObjectM
 def system_for(ref: str, units: str, scene: SceneConfig) -> VirtualTransferSystem:
     """The compiled virtual system for an object and scene, cached per process; a mesh or
     proxy file rewritten since it was cached is loaded again."""
-    return _system_for(ref, units, scene, file_stamp(ref))
+    return _system_for(ref, units, scene, _stamp(ref))
+
+
+def _stamp(ref: str) -> tuple[int, int, int] | None:
+    """The file stamp the caches key on; none for a built-in id, which wins over a file of
+    the same name (`load_object`), so no look at the disk per experiment."""
+    return None if is_builtin_id(ref) else file_stamp(ref)
 
 
 @functools.lru_cache(maxsize=2)
@@ -271,7 +277,7 @@ def run_experiment(
         raise InputError(f"sensor must be one of {', '.join(SENSORS)}, got {sensor!r}")
     own_system = system is None
     if system is None:
-        stamp = file_stamp(spec.object_ref)  # one look at the file for system and id
+        stamp = _stamp(spec.object_ref)  # one look at the file for system and id
         system = _system_for(spec.object_ref, spec.units, spec.scene, stamp)
         object_id = _object(spec.object_ref, spec.units, stamp).object_id
     else:

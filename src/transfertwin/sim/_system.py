@@ -32,6 +32,8 @@ __all__ = [
 ]
 
 _SENSORS_OFF = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+# The ufuncs' reductions themselves: ndarray.min/max first pass through a Python wrapper.
+_MIN, _MAX = np.minimum.reduce, np.maximum.reduce
 
 
 def _outer_vertices(verts: np.ndarray) -> np.ndarray:
@@ -409,10 +411,10 @@ class VirtualTransferSystem:
 
         The AABB comes from the hull vertices; θ is the yaw of the object's x axis (rad).
         """
-        np.matmul(self._rot, self._readout_t, out=self._pts)
+        np.dot(self._rot, self._readout_t, out=self._pts)  # BLAS gemm, less dispatch than matmul
         outer = self._pts_outer  # (3, k): rows reduce fast
         # The rest in Python floats: the same IEEE operations as on arrays, fewer calls.
-        lo, hi = outer.min(axis=1).tolist(), outer.max(axis=1).tolist()
+        lo, hi = _MIN(outer, axis=1).tolist(), _MAX(outer, axis=1).tolist()
         (cx, ex), (cy, ey), _ = self._pts_extra.tolist()  # R c and R e_x
         px, py, pz = self._pos.tolist()
         return np.array(

@@ -12,8 +12,6 @@ shifts the tip sideways. The simulation world frame is the TM tip frame F_T, whi
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 
 from transfertwin.sim._config import DockingError
@@ -44,7 +42,6 @@ def compose(*ts: np.ndarray) -> np.ndarray:
     return out
 
 
-@functools.lru_cache(maxsize=1024)  # a study resamples a few hundred measured errors
 def tu_pose_in_tip_frame(
     error: DockingError, gap_m: float, tip_to_centre_m: float
 ) -> tuple[float, float, float]:

@@ -64,21 +64,25 @@ class Outcome(Enum):
         return int(self.value)
 
 
-def _scalar_path(states: object, success: StateSet, failure: StateSet) -> bool:
-    """Whether `states` is one float64 state the sets' `contains_one` fast path handles."""
+def _takes_one(states: object, state_set: StateSet) -> bool:
+    """Whether `states` is one float64 state the set's `contains_one` fast path handles."""
     return (
         isinstance(states, np.ndarray)
         and states.ndim == 1
         and states.dtype == np.float64
-        and states.shape[0] == getattr(success, "one_dim", None) == getattr(failure, "one_dim", 0)
+        and states.shape[0] == getattr(state_set, "one_dim", None)
     )
+
+
+def _scalar_path(states: object, success: StateSet, failure: StateSet) -> bool:
+    """Whether `states` is one float64 state both sets' `contains_one` fast path handles."""
+    return _takes_one(states, success) and _takes_one(states, failure)
 
 
 def contains_state(states: StateSet, state: np.ndarray) -> bool:
     """Whether one float state ``(d,)`` is in `states`: through the set's scalar
     `contains_one` where it has one for this length, else its batched `contains`."""
-    one = state.ndim == 1 and state.dtype == np.float64
-    if one and getattr(states, "one_dim", None) == state.shape[0]:
+    if _takes_one(state, states):
         return bool(states.contains_one(state))  # type: ignore[attr-defined]
     return bool(states.contains(state))
 

@@ -32,6 +32,7 @@ __all__ = [
 ]
 
 _SENSORS_OFF = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+_PULLEYS = ("pulley_start", "pulley_end")
 # The ufuncs' reductions themselves: ndarray.min/max first pass through a Python wrapper.
 _MIN, _MAX = np.minimum.reduce, np.maximum.reduce
 
@@ -133,13 +134,6 @@ class MujocoUnitHAL:
         self._system = system
         model = system.model
         self._r = system.cfg.layout.pulley_radius_m
-        self._geoms = {
-            belt: {
-                part: model.geom(belt_geom(unit, belt, part)).id
-                for part in ("deck", "pulley_start", "pulley_end")
-            }
-            for belt in BELTS
-        }
         self._sensors = {
             which: int(model.sensor(barrier_sensor(unit, which)).adr[0]) for which in BARRIERS
         }
@@ -147,22 +141,14 @@ class MujocoUnitHAL:
         # A view made once stays current: MjData's arrays keep their memory (the system
         # makes new HALs when it attaches other data).
         self._sensordata = system.data.sensordata
-        # A pulley spins about its axle (the unit's y axis), in its compiled geom frame: the
-        # geom's z for a cylinder, wherever MuJoCo's principal axes put it for a prism mesh.
-        self._axles = {
-            gid: _axle_in_geom_frame(model, gid)
-            for belt in BELTS
-            for gid in (self._geoms[belt]["pulley_start"], self._geoms[belt]["pulley_end"])
-        }
-        self._belt_rows = {
-            belt: (
-                [self._geoms[belt][part] for part in ("deck", "pulley_start", "pulley_end")],
-                np.array(
-                    [self._axles[self._geoms[belt][p]] for p in ("pulley_start", "pulley_end")]
-                ),
-            )
-            for belt in BELTS
-        }
+        # Per belt: its geoms (deck, start and end pulley) and each pulley's axle (the unit's
+        # y axis) in its compiled geom frame — the geom's z for a cylinder, wherever
+        # MuJoCo's principal axes put it for a prism mesh.
+        self._belt_rows: dict[str, tuple[list[int], np.ndarray]] = {}
+        for belt in BELTS:
+            rows = [model.geom(belt_geom(unit, belt, p)).id for p in ("deck", *_PULLEYS)]
+            axles = np.array([_axle_in_geom_frame(model, gid) for gid in rows[1:]])
+            self._belt_rows[belt] = (rows, axles)
         self._speeds = dict.fromkeys(BELTS, 0.0)
 
     def set_belt_speed(self, belt: str, speed_m_s: float) -> None:

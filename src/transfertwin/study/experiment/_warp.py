@@ -40,7 +40,6 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from transfertwin._atomic import file_stamp
 from transfertwin._errors import InputError
 from transfertwin.sim import SimulationUnstable, VirtualTransferSystem
 from transfertwin.study.experiment._experiment import (
@@ -49,6 +48,7 @@ from transfertwin.study.experiment._experiment import (
     _object,
     _run,
     _Seeing,
+    _stamp,
     _system_for,
 )
 
@@ -395,7 +395,7 @@ class WarpExecutor:
             if scene.physics.guard:
                 raise InputError("--executor warp does not run the implausible-event guard "
                                  "(physics.guard); use --executor local")  # fmt: skip
-            stamp = file_stamp(ref)
+            stamp = _stamp(ref)
             object_id = _object(ref, units, stamp).object_id
             # A fresh system, not the process's cached one: the lanes write its surfacevel.
             template = _fresh_system(ref, units, scene, stamp)

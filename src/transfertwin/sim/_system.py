@@ -33,8 +33,8 @@ __all__ = [
 
 _SENSORS_OFF = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
 _PULLEYS = ("pulley_start", "pulley_end")
-# The ufuncs' reductions themselves: ndarray.min/max first pass through a Python wrapper.
-_MIN, _MAX = np.minimum.reduce, np.maximum.reduce
+# The ufunc's reduction itself: ndarray.max first passes through a Python wrapper.
+_MAX = np.maximum.reduce
 
 
 def _outer_vertices(verts: np.ndarray) -> np.ndarray:
@@ -103,7 +103,7 @@ class SimClock:
     def wait(self, dt_s: float) -> None:
         """Advance the simulation by `dt_s` (rounded to whole physics steps, at least 1)."""
         system = self._system
-        timestep = system.model.opt.timestep
+        timestep = system._opt.timestep
         if (dt_s, timestep) != self._last:  # a controller waits the same period each sample
             self._last, self._steps = (dt_s, timestep), max(1, round(dt_s / timestep))
         system.step(self._steps)
@@ -206,6 +206,7 @@ class VirtualTransferSystem:
             hulls, mass_kg, com_m, inertia_kg_m2, cfg, feature_hulls=feature_hulls
         ).compile()
         self.data = mujoco.MjData(self.model)
+        self._opt = self.model.opt  # bound once: read at every wait and step
         self._body = self.model.body(OBJECT_BODY).id
         joint = self.model.joint(OBJECT_JOINT)
         self._qadr = int(joint.qposadr[0])
@@ -214,13 +215,17 @@ class VirtualTransferSystem:
         self._verts = np.concatenate([np.asarray(h, dtype=float) for h in hulls], axis=0)
         self._badqacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
         self._com = np.asarray(com_m, dtype=float)
-        # The readout's one product per sample, R @ columns (3, k + 2): the AABB of a point
+        # The readout's one product per sample, R @ columns (3, 2k + 2): the AABB of a point
         # set is the AABB of its convex hull's vertices, so the first k columns are only
-        # those (exact, typically a quarter of all hull vertices); then the COM (R c) and
-        # the body's x axis (R e_x: the first column of R, whose yaw is θ).
+        # those (exact, typically a quarter of all hull vertices), the next k their
+        # negatives (R(-v) = -(Rv) exactly, so one max-reduction gives both ends of the
+        # box); then the COM (R c) and the body's x axis (R e_x: the first column of R,
+        # whose yaw is θ).
         outer = _outer_vertices(self._verts)
         self._n_outer = len(outer)
-        self._readout_t = np.ascontiguousarray(np.vstack([outer, self._com, (1.0, 0.0, 0.0)]).T)
+        self._readout_t = np.ascontiguousarray(
+            np.vstack([outer, -outer, self._com, (1.0, 0.0, 0.0)]).T
+        )
         self.tu_pose = (cfg.gap_m, 0.0, 0.0)
         # Implausible-event guard (PhysicsConfig.guard): highest COM height and mechanical
         # energy at the last check, cleared whenever the object is placed or the TU moves.
@@ -256,9 +261,11 @@ class VirtualTransferSystem:
         self._qpos7 = d.qpos[self._qadr : self._qadr + 7]
         self._qvel6 = d.qvel[self._vadr : self._vadr + 6]
         self._warning = d.warning[self._badqacc]
+        k = self._n_outer
         self._pts = np.empty_like(self._readout_t)
-        self._pts_outer = self._pts[:, : self._n_outer]
-        self._pts_extra = self._pts[:, self._n_outer :]
+        self._pts_ends = self._pts[:, : 2 * k].reshape(3, 2, k)  # a view: (axis, +/-, vertex)
+        self._pts_extra = self._pts[:, 2 * k :]
+        self._ends = np.empty((3, 2))  # per axis: max, -min
 
     def _guard_reset(self) -> None:
         self._z_top = -math.inf
@@ -316,7 +323,7 @@ class VirtualTransferSystem:
             # Sensors (the light barriers' rangefinders, ~12 % of a step) change nothing in
             # the dynamics and are read only after the last step: the steps before it skip
             # them, so the results are the same bits (docs/speed.md, lever f).
-            opt = self.model.opt
+            opt = self._opt
             flags = opt.disableflags
             opt.disableflags = flags | _SENSORS_OFF
             try:
@@ -398,20 +405,21 @@ class VirtualTransferSystem:
         The AABB comes from the hull vertices; θ is the yaw of the object's x axis (rad).
         """
         np.dot(self._rot, self._readout_t, out=self._pts)  # BLAS gemm, less dispatch than matmul
-        outer = self._pts_outer  # (3, k): rows reduce fast
+        # One reduction over contiguous rows: per axis max(Rv) and max(-Rv) = -min(Rv).
+        (hx, nlx), (hy, nly), (hz, nlz) = _MAX(self._pts_ends, axis=2, out=self._ends).tolist()
+        lx, ly, lz = -nlx, -nly, -nlz
         # The rest in Python floats: the same IEEE operations as on arrays, fewer calls.
-        lo, hi = _MIN(outer, axis=1).tolist(), _MAX(outer, axis=1).tolist()
         (cx, ex), (cy, ey), _ = self._pts_extra.tolist()  # R c and R e_x
         px, py, pz = self._pos.tolist()
         return np.array(
             [
                 self.possessing_unit((cx + px, cy + py)),
-                0.5 * (lo[0] + hi[0]) + px,
-                0.5 * (lo[1] + hi[1]) + py,
-                0.5 * (lo[2] + hi[2]) + pz,
-                0.5 * (hi[0] - lo[0]),
-                0.5 * (hi[1] - lo[1]),
-                0.5 * (hi[2] - lo[2]),
+                0.5 * (lx + hx) + px,
+                0.5 * (ly + hy) + py,
+                0.5 * (lz + hz) + pz,
+                0.5 * (hx - lx),
+                0.5 * (hy - ly),
+                0.5 * (hz - lz),
                 math.atan2(ey, ex),
             ]
         )

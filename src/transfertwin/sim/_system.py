@@ -32,6 +32,8 @@ __all__ = [
 ]
 
 _SENSORS_OFF = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+# The warnings on which MuJoCo resets the data: bad qpos, qvel and qacc (consecutive codes).
+_UNSTABLE = slice(int(mujoco.mjtWarning.mjWARN_BADQPOS), int(mujoco.mjtWarning.mjWARN_BADQACC) + 1)
 _PULLEYS = ("pulley_start", "pulley_end")
 # The ufunc's reduction itself: ndarray.max first passes through a Python wrapper.
 _MAX = np.maximum.reduce
@@ -134,9 +136,9 @@ class MujocoUnitHAL:
         self._system = system
         model = system.model
         self._r = system.cfg.layout.pulley_radius_m
-        self._sensors = {
-            which: int(model.sensor(barrier_sensor(unit, which)).adr[0]) for which in BARRIERS
-        }
+        self._near, self._far = (
+            int(model.sensor(barrier_sensor(unit, which)).adr[0]) for which in BARRIERS
+        )
         self._beam_m = 2 * system.cfg.layout.belt_width_m + system.cfg.layout.belt_separation_m
         # A view made once stays current: MjData's arrays keep their memory (the system
         # makes new HALs when it attaches other data).
@@ -168,9 +170,10 @@ class MujocoUnitHAL:
 
     def barriers(self) -> dict[str, bool]:
         """Whether the 'near' and 'far' light barriers are interrupted."""
-        data = self._sensordata
+        values = self._sensordata.tolist()  # a handful of sensors: one call for all
+        near, far = values[self._near], values[self._far]
         beam = self._beam_m
-        return {which: 0.0 <= float(data[adr]) < beam for which, adr in self._sensors.items()}
+        return {"near": 0.0 <= near < beam, "far": 0.0 <= far < beam}
 
 
 class VirtualTransferSystem:
@@ -213,7 +216,6 @@ class VirtualTransferSystem:
         self._vadr = int(joint.dofadr[0])
         self._tu_mocap = int(self.model.body(TU_BODY).mocapid[0])
         self._verts = np.concatenate([np.asarray(h, dtype=float) for h in hulls], axis=0)
-        self._badqacc = int(mujoco.mjtWarning.mjWARN_BADQACC)
         self._com = np.asarray(com_m, dtype=float)
         # The readout's one product per sample, R @ columns (3, 2k + 2): the AABB of a point
         # set is the AABB of its convex hull's vertices, so the first k columns are only
@@ -260,7 +262,7 @@ class VirtualTransferSystem:
         self._rot = d.xmat[self._body].reshape(3, 3)
         self._qpos7 = d.qpos[self._qadr : self._qadr + 7]
         self._qvel6 = d.qvel[self._vadr : self._vadr + 6]
-        self._warning = d.warning[self._badqacc]
+        self._unstable = d.warning.number[_UNSTABLE]  # a view: the counts stay current
         k = self._n_outer
         self._pts = np.empty_like(self._readout_t)
         self._pts_ends = self._pts[:, : 2 * k].reshape(3, 2, k)  # a view: (axis, +/-, vertex)
@@ -334,8 +336,10 @@ class VirtualTransferSystem:
         self.engine_seconds += time.perf_counter() - t0
         self.engine_steps += n
         self.steps_taken += n
-        bad = self._warning.number > 0
-        if bad or not all(map(math.isfinite, self._qpos7.tolist())):
+        # MuJoCo resets the data when it meets a bad position, velocity or acceleration, so
+        # its warning counts are the signal; a NaN or infinity anywhere in the pose makes the
+        # sum non-finite (as does a pose beyond 1e308 m, which has diverged all the same).
+        if sum(self._unstable.tolist()) or not math.isfinite(sum(self._qpos7.tolist())):
             raise SimulationUnstable(f"physics diverged at t={self.data.time:.3f} s")
         if self._guard:
             self._check_plausible()

@@ -11,6 +11,7 @@ import pytest
 from transfertwin._errors import InputError
 from transfertwin.objects import Protrusion, ProxySpec, load_builtin, proxy_model
 from transfertwin.sim import DockingError, SceneConfig, SimulationUnstable, VirtualTransferSystem
+from transfertwin.sim._system import _UNSTABLE
 from transfertwin.study.experiment import ExperimentSpec, run_experiment
 
 GUARD = SceneConfig().with_overrides(**{"physics.guard": True})
@@ -54,6 +55,27 @@ def test_the_guard_catches_launches_energy_jumps_and_deep_penetration(kick: str)
     with pytest.raises(SimulationUnstable, match=f"implausible: .*{word}"):
         system.step(1)
     plain.step(1)  # without the guard nothing is noticed
+
+
+@pytest.mark.parametrize("where", ["qpos", "qvel", "qacc"])
+def test_a_state_mujoco_resets_is_reported_as_diverged(
+    where: str, tmp_path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # MuJoCo answers a NaN in the position, velocity or acceleration by resetting the data
+    # (a warning, no exception): the step must not go on from the reset state unnoticed.
+    monkeypatch.chdir(tmp_path)  # MuJoCo logs its warning to MUJOCO_LOG.TXT here
+    system = _settled(SceneConfig())
+    if where == "qpos":
+        system.data.qpos[system._qadr] = math.nan
+    elif where == "qvel":
+        system.data.qvel[system._vadr] = math.inf
+    else:
+        system.data.qfrc_applied[system._vadr] = math.nan
+    with pytest.raises(SimulationUnstable, match="physics diverged"):
+        system.step(3)
+    w = mujoco.mjtWarning
+    codes = range(*_UNSTABLE.indices(len(system.data.warning)))
+    assert list(codes) == [int(w.mjWARN_BADQPOS), int(w.mjWARN_BADQVEL), int(w.mjWARN_BADQACC)]
 
 
 def test_an_unstable_run_is_re_run_once_at_a_finer_timestep() -> None:

@@ -329,9 +329,8 @@ def _run(
     phase, offset = ["there"], [0.0]
 
     def record() -> None:
-        if spec.record:
-            t_s = round(offset[0] + system.clock.now(), 6)  # the clock of t_end, to 1 µs
-            frames.append(Frame(phase[0], t_s, _tuple(system.object_qpos())))
+        t_s = round(offset[0] + system.clock.now(), 6)  # the clock of t_end, to 1 µs
+        frames.append(Frame(phase[0], t_s, _tuple(system.object_qpos())))
 
     tu = tu_hal if tu_hal is not None else system.tu
     vision = None  # the perception sensor, closed at the end
@@ -346,7 +345,9 @@ def _run(
                 theta_rad=math.radians(spec.theta_deg), config=seeing.perception,
                 seed=spec.seed if seeing.seed is None else seeing.seed,
             )  # fmt: skip
-        controller = scene_controller(spec.scene, system.tm, tu, seen, system.clock, record)
+        controller = scene_controller(
+            spec.scene, system.tm, tu, seen, system.clock, record if spec.record else None
+        )
         system.clock.start()
         s_pre = controller.state(spec.face, spec.conveyor)
         if not contains_state(experiment_pre_transfer_set(controller.thresholds), s_pre):

@@ -1,70 +1,75 @@
 """Experiments and studies over the virtual transfer system (Ch. 6)."""
 
-from transfertwin.study.calibration import RUN_METRICS, ConfusionMatrix, summarize_runs
-from transfertwin.study.docking import (
-    COPULA_KINDS,
-    DockingErrorModel,
-    FixedDockingError,
-    GaussianCopula,
-    PerStationCopula,
-    ResampledDockingErrors,
-    copula_from_dict,
-    docking_model_from_dict,
-    measured_docking_errors,
-)
-from transfertwin.study.experiment import (
-    PRESETS,
-    RESULT_COLUMNS,
-    Executor,
-    ExperimentResult,
-    ExperimentSpec,
-    Frame,
-    ObjectSummary,
-    Preset,
-    RayExecutor,
-    StudyOutcome,
-    StudyPlan,
-    experiment_seeds,
-    load_profile,
-    parse_objects,
-    run_experiment,
-    run_study,
-    save_profile,
-    scene_from_dict,
-    scene_to_dict,
-    summarize,
-    system_for,
-)
-from transfertwin.study.fullstate import (
-    AnalysisResult,
-    CircularSeries,
-    Interval,
-    SelectedState,
-    Selection,
-    SeriesStats,
-    StateStat,
-    analyze,
-    best_global,
-    best_local,
-    circular_moving_average,
-    clopper_pearson,
-    clopper_pearson_array,
-    moving_average,
-    select,
-    series_table,
-    state_table,
-    worst_global,
-    worst_local,
-)
-from transfertwin.study.validation import (
-    NEWCOMBE_HYBRID_SCORE,
-    VALIDATION_COLUMNS,
-    StateComparison,
-    ValidationResult,
-    compare,
-    newcombe_difference,
-    validate,
-)
+from typing import TYPE_CHECKING
+
+from transfertwin._lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from transfertwin.study.calibration import RUN_METRICS, ConfusionMatrix, summarize_runs
+    from transfertwin.study.docking import (
+        COPULA_KINDS,
+        DockingErrorModel,
+        FixedDockingError,
+        GaussianCopula,
+        PerStationCopula,
+        ResampledDockingErrors,
+        copula_from_dict,
+        docking_model_from_dict,
+        measured_docking_errors,
+    )
+    from transfertwin.study.experiment import (
+        PRESETS,
+        RESULT_COLUMNS,
+        Executor,
+        ExperimentResult,
+        ExperimentSpec,
+        Frame,
+        ObjectSummary,
+        Preset,
+        RayExecutor,
+        StudyOutcome,
+        StudyPlan,
+        experiment_seeds,
+        load_profile,
+        parse_objects,
+        run_experiment,
+        run_study,
+        save_profile,
+        scene_from_dict,
+        scene_to_dict,
+        summarize,
+        system_for,
+    )
+    from transfertwin.study.fullstate import (
+        AnalysisResult,
+        CircularSeries,
+        Interval,
+        SelectedState,
+        Selection,
+        SeriesStats,
+        StateStat,
+        analyze,
+        best_global,
+        best_local,
+        circular_moving_average,
+        clopper_pearson,
+        clopper_pearson_array,
+        moving_average,
+        select,
+        series_table,
+        state_table,
+        worst_global,
+        worst_local,
+    )
+    from transfertwin.study.validation import (
+        NEWCOMBE_HYBRID_SCORE,
+        VALIDATION_COLUMNS,
+        StateComparison,
+        ValidationResult,
+        compare,
+        newcombe_difference,
+        validate,
+    )
 
 __all__ = [
     "COPULA_KINDS",
@@ -127,3 +132,5 @@ __all__ = [
     "worst_global",
     "worst_local",
 ]
+
+__getattr__, __dir__ = lazy_exports(__name__, __file__)

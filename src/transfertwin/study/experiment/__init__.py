@@ -1,44 +1,49 @@
 """The virtual experiment E^V, study plans, profiles and the resumable runner (Sec. 6.2, 6.6)."""
 
-from transfertwin.study.experiment._demo import real_docking_error, run_demo
-from transfertwin.study.experiment._experiment import (
-    RESULT_COLUMNS,
-    SENSORS,
-    ExperimentResult,
-    ExperimentSpec,
-    Frame,
-    run_experiment,
-    scene_controller,
-    system_for,
-)
-from transfertwin.study.experiment._plan import (
-    PRESETS,
-    SAMPLING_MODES,
-    Preset,
-    StudyPlan,
-    experiment_seeds,
-    parse_objects,
-    plan_parameters,
-)
-from transfertwin.study.experiment._profile import (
-    load_profile,
-    profile_toml,
-    save_profile,
-    scene_from_dict,
-    scene_to_dict,
-)
-from transfertwin.study.experiment._ray import RayExecutor
-from transfertwin.study.experiment._runner import (
-    Executor,
-    ObjectSummary,
-    StudyOutcome,
-    check_plan,
-    run_rows,
-    run_study,
-    run_tagged,
-    summarize,
-)
-from transfertwin.study.experiment._warp import WarpExecutor, warp_available
+from typing import TYPE_CHECKING
+
+from transfertwin._lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from transfertwin.study.experiment._demo import real_docking_error, run_demo
+    from transfertwin.study.experiment._experiment import (
+        RESULT_COLUMNS,
+        SENSORS,
+        ExperimentResult,
+        ExperimentSpec,
+        Frame,
+        run_experiment,
+        scene_controller,
+        system_for,
+    )
+    from transfertwin.study.experiment._plan import (
+        PRESETS,
+        SAMPLING_MODES,
+        Preset,
+        StudyPlan,
+        experiment_seeds,
+        parse_objects,
+        plan_parameters,
+    )
+    from transfertwin.study.experiment._profile import (
+        load_profile,
+        profile_toml,
+        save_profile,
+        scene_from_dict,
+        scene_to_dict,
+    )
+    from transfertwin.study.experiment._ray import RayExecutor
+    from transfertwin.study.experiment._runner import (
+        Executor,
+        ObjectSummary,
+        StudyOutcome,
+        check_plan,
+        run_rows,
+        run_study,
+        run_tagged,
+        summarize,
+    )
+    from transfertwin.study.experiment._warp import WarpExecutor, warp_available
 
 __all__ = [
     "PRESETS",
@@ -75,3 +80,5 @@ __all__ = [
     "system_for",
     "warp_available",
 ]
+
+__getattr__, __dir__ = lazy_exports(__name__, __file__)

@@ -14,7 +14,6 @@ import itertools
 import logging
 import multiprocessing as mp
 import os
-import threading
 import time
 from collections import Counter, defaultdict
 from collections.abc import Callable, Collection, Container, Iterable, Iterator
@@ -26,8 +25,9 @@ from typing import Protocol, TypeVar
 from transfertwin._errors import InputError
 from transfertwin.objects import load_object
 from transfertwin.store import ResultStore
-from transfertwin.study.experiment._experiment import ExperimentSpec, run_experiment
+from transfertwin.study.experiment._experiment import ExperimentSpec
 from transfertwin.study.experiment._plan import StudyPlan
+from transfertwin.study.experiment._worker import exit_with_parent, run_row
 
 __all__ = [
     "Executor",
@@ -43,23 +43,6 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 T = TypeVar("T")
-
-
-def _exit_with_parent(parent_pid: int, period_s: float = 0.5) -> None:
-    """Worker initializer: a daemon thread that ends this worker once its parent is gone
-    (e.g. killed with SIGKILL, which runs no clean-up), so no orphan keeps computing."""
-
-    def watch() -> None:
-        while os.getppid() == parent_pid:
-            time.sleep(period_s)
-        os._exit(1)
-
-    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
-
-
-def _run_row(spec: ExperimentSpec) -> dict[str, object]:
-    """Worker entry point: one experiment → one result row."""
-    return run_experiment(spec).row()
 
 
 class Executor(Protocol):
@@ -179,14 +162,14 @@ def run_tagged(
     results apart (the tag stays in this process)."""
     if workers <= 1:
         for tag, spec in items:
-            yield tag, _run_row(spec)
+            yield tag, run_row(spec)
         return
     todo = iter(items)
     ctx = mp.get_context("spawn")
     with ProcessPoolExecutor(
-        workers, mp_context=ctx, initializer=_exit_with_parent, initargs=(os.getpid(),)
+        workers, mp_context=ctx, initializer=exit_with_parent, initargs=(os.getpid(),)
     ) as pool:
-        pending = {pool.submit(_run_row, s): tag for tag, s in itertools.islice(todo, 3 * workers)}
+        pending = {pool.submit(run_row, s): tag for tag, s in itertools.islice(todo, 3 * workers)}
         try:
             while pending:
                 done, _ = wait(pending, return_when=FIRST_COMPLETED)
@@ -195,7 +178,7 @@ def run_tagged(
                     yield tag, future.result()
                     nxt = next(todo, None)
                     if nxt is not None:
-                        pending[pool.submit(_run_row, nxt[1])] = nxt[0]
+                        pending[pool.submit(run_row, nxt[1])] = nxt[0]
         except BaseException:
             pool.shutdown(wait=False, cancel_futures=True)
             raise

@@ -53,8 +53,8 @@ def lazy_exports(
     """
     where = type_checking_imports(init_file)
     prefix = package + "."
-    subpackages = {m[len(prefix) :].split(".")[0] for m in where.values() if m.startswith(prefix)}
-    subpackages = {m for m in subpackages if not m.startswith("_")}
+    tops = {m[len(prefix) :].split(".")[0] for m in where.values() if m.startswith(prefix)}
+    subpackages = {m for m in tops if not m.startswith("_")}  # private modules stay hidden
 
     def __getattr__(name: str) -> object:  # noqa: N807 - PEP 562's name
         if name in where:

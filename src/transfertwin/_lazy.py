@@ -5,7 +5,7 @@ and its literal ``__all__``, and ends with ``__getattr__, __dir__ = lazy_exports
 __file__)``: a name is imported on first use, so ``from transfertwin.study import
 run_study`` imports the runner and what it needs, not the calibration, statistics and
 analysis modules beside it. A spawned study worker, which imports only the module of its
-entry point, so starts in about half the time (docs/speed.md, tenth session). The imports
+entry point, so starts in about half the time (docs/speed.md, "Worker start-up"). The imports
 stay the one list of what comes from where: `lazy_exports` reads them from the source, type
 checkers and the layering check (`transfertwin._layers`) see them as before, and
 `tests/unit/test_lazy.py` checks that every name of ``__all__`` resolves.

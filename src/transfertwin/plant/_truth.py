@@ -31,7 +31,7 @@ PLANT_TAG = 0x504C4E54  # "PLNT"
 #: the default (prism-pulley) scene: 4 of 8 faces plain, the others 4-26 mm. With it a
 #: plant's success share on random states is 0.66-0.77 over seeds 1-6 (real data: 0.67);
 #: the prior it replaces (plain with 0.3, else 4-32 mm, set for 25 mm cylinder pulleys)
-#: gave 0.47-0.68 (docs/design-choices.md, rehearsal).
+#: gave 0.47-0.68 (docs/explanation/rehearsal.md).
 P_PLAIN_FACE = 0.5
 FEATURE_DEPTH_M = (0.004, 0.026)
 

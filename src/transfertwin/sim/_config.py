@@ -101,7 +101,7 @@ class PhysicsConfig:
         guard_speed_factor, guard_energy_j_per_kg, guard_penetration_m: Guard limits. In
             60 ordinary runs of random cores (fast profile) the largest values seen were
             1.4 x belt speed, 0.09 J/kg and 8 mm (an edge on a pulley): the limits leave
-            a margin of 3-5x (docs/design-choices.md, rehearsal).
+            a margin of 3-5x (docs/explanation/rehearsal.md).
         guard_retry_timestep_factor: With `guard` on, a run marked 'unstable' is run once
             more with the timestep times this factor (None: no re-run).
 

@@ -3,7 +3,7 @@
 A worker unpickles these by module, so this module imports only the experiment itself
 (`_experiment`: the engine, the object and the sets), not the runner's plan and docking
 models: with the package's lazy surface (`transfertwin._lazy`) a worker starts without the
-statistics, calibration and analysis modules (docs/speed.md, tenth session).
+statistics, calibration and analysis modules (docs/speed.md, "Worker start-up").
 """
 
 from __future__ import annotations

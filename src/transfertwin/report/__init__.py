@@ -6,9 +6,11 @@ that draws it into a pyplot-free `matplotlib.figure.Figure`; nothing here calls
 """
 
 from transfertwin.report._binary_polar import (
+    LABEL_MAX_STATES,
     RING_RADIUS,
     BinaryPoint,
     BinaryPolar,
+    BinaryState,
     binary_polar_data,
     plot_binary_polar,
 )
@@ -69,12 +71,14 @@ from transfertwin.report._validation_plots import (
 )
 
 __all__ = [
+    "LABEL_MAX_STATES",
     "REHEARSAL_REPORT_NAME",
     "REPORT_NAME",
     "RING_RADIUS",
     "SMOOTH_GRID_DEG",
     "BinaryPoint",
     "BinaryPolar",
+    "BinaryState",
     "Curve",
     "DockingCorrelations",
     "DockingHistograms",

@@ -449,9 +449,11 @@ def _figures(analysis: AnalysisResult) -> list[tuple[str, str, bytes]]:
             out.append((f"full_state_{_safe(obj)}", caption, png))
         png = figure_png(plot_binary_polar(binary_polar_data(by_object[obj], obj)))
         caption = (
-            f"<b>{name}</b>: every valid experiment at its yaw θ (cf. Fig. 6.7); green = "
-            "success, red = failure. The ring is the conveyor the object started on: outer "
-            "ring left, middle ring both, inner ring right."
+            f"<b>{name}</b>: the valid experiments of each state at its yaw θ (cf. Fig. 6.7), "
+            "one marker per state coloured by its success share k/n: red = all failed, "
+            "yellow = half, green = all succeeded (with few states, k/n is written beside "
+            "it). The ring is the conveyor the object started on: outer ring left, middle "
+            "ring both, inner ring right."
         )
         out.append((f"binary_{_safe(obj)}", caption, png))
     return out

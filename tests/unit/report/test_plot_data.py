@@ -13,6 +13,7 @@ from transfertwin._errors import InputError
 from transfertwin.report import (
     RING_RADIUS,
     BinaryPoint,
+    BinaryState,
     binary_polar_data,
     circular_smooth,
     interval_plot_data,
@@ -136,3 +137,19 @@ def test_full_state_line_of_sparse_real_data_is_smooth() -> None:
         raw_jumps.append(np.max(np.abs(np.diff(curve.y_ma))))
     # The ȳ^MA values of the same states, joined state to state, jump from 0 to 1.
     assert max(raw_jumps) == 1.0
+
+
+def test_fig_6_7_one_share_per_state_not_one_dot_per_experiment() -> None:
+    """Issue 30.1: o32 front θ = -60 with 6 of 8 successes is one state at share 0.75."""
+    rows = [row(obj="o32", theta=-60, success=int(r < 6)) for r in range(8)]
+    rows += [row(obj="o32", theta=-60, success=None, status="unstable")]
+    rows += [row(obj="o32", theta=0, conveyor="left", success=0) for _ in range(3)]
+    rows += [row(obj="o32", theta=0, conveyor="right", success=1)]
+    data = binary_polar_data(rows, "o32")
+    assert data.states == (
+        BinaryState("front", "left", 0, 3, 0, RING_RADIUS["left"]),
+        BinaryState("front", "both", -60, 8, 6, RING_RADIUS["both"]),
+        BinaryState("front", "right", 0, 1, 1, RING_RADIUS["right"]),
+    )
+    assert [s.share for s in data.face_states("front")] == [0.0, 0.75, 1.0]
+    assert data.face_states("back") == ()

@@ -64,7 +64,12 @@ def _endpoint(info: dict, asset_id: str) -> str:
 
 
 def cmd_up(args: argparse.Namespace) -> int:
-    """Start the demo CPS and serve until SIGINT/SIGTERM."""
+    """Start the demo CPS and serve until SIGINT/SIGTERM (`--floor`: one process per
+    asset, `_cps_floor.cmd_up_floor`)."""
+    if args.floor is not None:
+        from transfertwin.cli._cps_floor import cmd_up_floor
+
+        return cmd_up_floor(args)
     from transfertwin.cps import Cps, CpsConfig, check_plant_seed
     from transfertwin.study.experiment import load_profile
 
@@ -106,6 +111,15 @@ def cmd_status(args: argparse.Namespace) -> int:
 
     wd = _workdir(args.workdir, must_exist=True)
     info, creds = _load(wd)
+    if info.get("mode") == "processes":
+        from transfertwin.cli._cps_floor import floor_status, print_floor_status
+
+        doc = floor_status(wd)
+        if args.json:
+            print(json.dumps(doc, indent=2))
+        else:
+            print_floor_status(doc)
+        return 0
 
     async def ask() -> list[dict]:
         async with connect(
@@ -123,6 +137,9 @@ def cmd_status(args: argparse.Namespace) -> int:
         return rows
 
     rows = _run_client(wd, ask)
+    if args.json:
+        print(json.dumps({"assets": rows}, indent=2))
+        return 0
     for r in rows:  # the graph's order of the classes is arbitrary
         r["class"] = "/".join(sorted(str(r.get("class", "")).split("/")))
     print("assets in the knowledge graph")
@@ -363,9 +380,24 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--plant-seed", type=int, metavar="N",
                    help="also start an emulated plant drawn from seed N as the physical "
                         "transfer units TU_A_P..TU_D_P (its parameters stay hidden)")  # fmt: skip
+    p.add_argument("--floor", metavar="FLOOR",
+                   help="one process per asset: a floor file (examples/floor-demo.toml) or "
+                        "'demo' for the built-in floor; each asset binds its own loopback "
+                        "address")  # fmt: skip
+    p.add_argument("--detach", action="store_true",
+                   help="with --floor: exit once the floor is up and leave it running "
+                        "(stop it with 'cps down')")  # fmt: skip
+    p.add_argument("--lease", type=float, default=3.0,
+                   help="with --floor: seconds without a heartbeat before an asset counts as "
+                        "offline (default 3)")  # fmt: skip
+    p.add_argument("--start-timeout", type=float, default=120.0,
+                   help="with --floor: seconds to wait for every asset to join (default 120)")
     p.set_defaults(func=cmd_up)
     p = csub.add_parser("status", help="list the assets and where the objects are")
     p.add_argument("--workdir", required=True)
+    p.add_argument("--json", action="store_true",
+                   help="one JSON document: assets (id, kind, address, pid, online, state) and "
+                        "every object's location")  # fmt: skip
     p.set_defaults(func=cmd_status)
     p = csub.add_parser("order", help="run a transport operation end to end over OPC UA")
     p.add_argument("--workdir", required=True)
@@ -399,3 +431,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--with-physical", action="store_true",
                    help="also the physical twins (TU_A_P, ...) of the virtual models")  # fmt: skip
     p.set_defaults(func=cmd_export)
+    from transfertwin.cli._cps_floor import register as register_floor
+
+    register_floor(csub)

@@ -190,6 +190,13 @@ CONTROL_INTERFACE: Mapping[str, tuple[OperationSpec, ...]] = MappingProxyType(
                 (Arg("y", _I),),
                 "Run one object transfer; y is the outcome (1 success).",
             ),
+            OperationSpec(
+                "AssignOperation",
+                (Arg("operation_id", _S), *_TRANSFER_ARGS),
+                _OK,
+                "Take a transport operation from the TMS; progress and result are reported "
+                "back to it (ReportProgress).",
+            ),
         ),
         "object": (),
         "transport_module_system": (
@@ -205,6 +212,25 @@ CONTROL_INTERFACE: Mapping[str, tuple[OperationSpec, ...]] = MappingProxyType(
                 (Arg("operation_id", _S),),
                 (Arg("status_json", _S),),
                 "State (queued|running|finished) and result of a transport operation.",
+            ),
+            OperationSpec(
+                "ReportProgress",
+                (Arg("operation_id", _S), Arg("event_json", _S)),
+                _OK,
+                "A transport module reports a step, a moved object or the result of an "
+                "operation it was assigned (idempotent).",
+            ),
+            OperationSpec(
+                "Ledger",
+                (),
+                (Arg("ledger_json", _S),),
+                "Where every object is (or was last seen), and the operations.",
+            ),
+            OperationSpec(
+                "Locate",
+                (Arg("object", _S), Arg("holder", _S)),
+                _OK,
+                "An operator states where an object whose location is unknown lies.",
             ),
         ),
         "experiment_manager": (
@@ -250,6 +276,25 @@ CONTROL_INTERFACE: Mapping[str, tuple[OperationSpec, ...]] = MappingProxyType(
                 (Arg("sparql", _S),),
                 (Arg("result_json", _S),),
                 "Answer a SPARQL query.",
+            ),
+            OperationSpec(
+                "Heartbeat",
+                (Arg("description_json", _S),),
+                (Arg("endpoints_json", _S),),
+                "Renew an asset's lease with its description and live state; answers the "
+                "endpoints of the online assets.",
+            ),
+            OperationSpec(
+                "Leave",
+                (Arg("asset_id", _S),),
+                _OK,
+                "An asset announces that it leaves the network.",
+            ),
+            OperationSpec(
+                "Status",
+                (),
+                (Arg("status_json", _S),),
+                "Every known asset with its address, process, liveness and state.",
             ),
         ),
     }

@@ -29,15 +29,19 @@ class ObjectLedger:
     Args:
         locations: Object id -> id of the asset it lies on (initial placement).
         units: Ids of the transfer units orders may name as source or target.
+        carriers: Ids of other assets an object may lie on (transport modules).
     """
 
-    def __init__(self, locations: Mapping[str, str], units: Iterable[str]) -> None:
+    def __init__(
+        self, locations: Mapping[str, str], units: Iterable[str], carriers: Iterable[str] = ()
+    ) -> None:
         self._at = dict(locations)
         self._units = tuple(sorted(units))
+        self.holders = frozenset(self._units) | frozenset(carriers)
         self._moving: dict[str, str] = {}  # object -> operation id
         self._lock = threading.Lock()
         for obj, holder in self._at.items():
-            if holder not in self._units:
+            if holder not in self.holders:
                 raise InputError(f"{obj}: initial location {holder!r} is not a transfer unit")
 
     def location(self, obj: str) -> str:
@@ -74,6 +78,11 @@ class ObjectLedger:
         """`check` the order and reserve its object for `op_id` (atomically)."""
         with self._lock:
             self._check(source, target, obj)
+            self._moving[obj] = op_id
+
+    def hold(self, op_id: str, obj: str) -> None:
+        """Reserve `obj` for `op_id` without a check (an operation resumed after a restart)."""
+        with self._lock:
             self._moving[obj] = op_id
 
     def move(self, obj: str, holder: str) -> str:

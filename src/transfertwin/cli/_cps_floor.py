@@ -1,0 +1,259 @@
+"""`transfertwin cps up --floor`, `cps asset`, `cps down`, `cps locate` and the process
+floor's `cps status`: the DT network with one process per asset (docs/architecture.md,
+"Deployment")."""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import json
+import logging
+import os
+import signal
+import time
+from pathlib import Path
+
+from transfertwin._errors import InputError
+from transfertwin.cli._paths import out_dir
+
+__all__ = ["cmd_asset", "cmd_down", "cmd_locate", "cmd_up_floor", "floor_status", "register"]
+
+
+def _floor_spec(name: str):
+    from transfertwin.cps._floor_file import default_floor_spec, load_floor
+
+    return default_floor_spec() if name == "demo" else load_floor(name)
+
+
+def cmd_up_floor(args: argparse.Namespace) -> int:
+    """Start one process per asset of the floor; wait until the knowledge graph knows them
+    all; then stay until SIGINT/SIGTERM (stopping the floor) or, with --detach, exit and
+    leave the floor running."""
+    from transfertwin.cps._launcher import (
+        check_workdir,
+        launch,
+        prepare_floor,
+        stop_floor,
+        write_floor_info,
+    )
+
+    if args.plant_seed is not None:
+        raise InputError("--plant-seed runs with the single-process CPS only (drop --floor)")
+    if args.time_scale < 0:
+        raise InputError(f"--time-scale must be >= 0, got {args.time_scale}")
+    floor = _floor_spec(args.floor)
+    wd = out_dir(args.workdir)
+    check_workdir(wd)
+    configs = prepare_floor(floor, wd, insecure=args.insecure, seed=args.seed,
+                            time_scale=args.time_scale, docking=args.docking,
+                            lease_s=args.lease)  # fmt: skip
+    write_floor_info(wd, configs, floor)
+    t0 = time.monotonic()
+    standby = floor.standby()
+    procs = launch(configs, wd, skip=standby)
+    expected = set(procs)
+    online = _wait_online(wd, expected, args.start_timeout, procs)
+    took = time.monotonic() - t0
+    print(f"floor {floor.name} up: {len(online)} asset processes in {took:.1f} s"
+          f"{f', {len(standby)} on standby' if standby else ''}; {wd / 'cps.json'}",
+          flush=True)  # fmt: skip
+    if args.detach:
+        return 0
+    stop = _stop_event()
+    try:
+        while not stop["set"]:
+            time.sleep(0.2)
+    finally:
+        stop_floor(wd)
+        for p in procs.values():
+            with contextlib.suppress(Exception):
+                p.wait(15)
+    print("floor down", flush=True)
+    return 0
+
+
+def _stop_event() -> dict[str, bool]:
+    flag = {"set": False}
+
+    def handler(signum, frame) -> None:
+        flag["set"] = True
+
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, handler)
+    return flag
+
+
+def _wait_online(wd: Path, expected: set[str], timeout_s: float, procs) -> set[str]:
+    """Poll the graph until every expected asset is online (InputError on a timeout or
+    an asset process that exits)."""
+    deadline = time.monotonic() + timeout_s
+    online: set[str] = set()
+    while time.monotonic() < deadline:
+        for aid, p in procs.items():
+            if p.poll() is not None:
+                log = wd / "logs" / f"{aid}.log"
+                tail = log.read_text().strip().splitlines()[-1:] if log.exists() else []
+                raise InputError(f"asset {aid} exited with code {p.returncode} while the floor "
+                                 f"started: {tail[0] if tail else 'no output'} ({log})")  # fmt: skip
+        try:
+            doc = floor_status(wd, with_objects=False)
+            online = {a["id"] for a in doc["assets"] if a["online"]}
+        except (InputError, OSError, TimeoutError, ConnectionError):
+            pass
+        if expected <= online:
+            return online
+        time.sleep(0.5)
+    missing = sorted(expected - online)
+    raise InputError(f"the floor did not come up within {timeout_s:g} s: not online: "
+                     f"{', '.join(missing[:8])}{' ...' if len(missing) > 8 else ''} "
+                     f"(logs in {wd / 'logs'})")  # fmt: skip
+
+
+def cmd_asset(args: argparse.Namespace) -> int:
+    """Serve one asset until SIGINT/SIGTERM; announce the leave; exit 0."""
+    from transfertwin.cps._asset_config import load_asset_config
+    from transfertwin.cps._node import AssetNode
+
+    cfg = load_asset_config(args.config)
+    logging.getLogger("transfertwin.cps").setLevel(logging.INFO)
+    handler = logging.StreamHandler()
+    handler.setFormatter(logging.Formatter("%(asctime)s %(message)s"))
+    logging.getLogger("transfertwin.cps").addHandler(handler)
+    pid_file = cfg.state_dir / "pid"
+
+    async def serve() -> None:
+        stop = asyncio.Event()
+        loop = asyncio.get_running_loop()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(sig, stop.set)
+        async with AssetNode(cfg) as node:
+            cfg.state_dir.mkdir(parents=True, exist_ok=True)
+            pid_file.write_text(f"{os.getpid()}\n")
+            print(f"{cfg.asset_id} up at {node.server.endpoint} (pid {os.getpid()})", flush=True)
+            await stop.wait()
+        pid_file.unlink(missing_ok=True)
+        print(f"{cfg.asset_id} left", flush=True)
+
+    asyncio.run(serve())
+    return 0
+
+
+def cmd_down(args: argparse.Namespace) -> int:
+    """Stop every asset process of a floor (SIGTERM: each announces its leave)."""
+    from transfertwin.cps._launcher import asset_pids, stop_floor
+
+    wd = Path(args.workdir)
+    pids = stop_floor(wd)
+    deadline = time.monotonic() + 20
+    while asset_pids(wd) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    left = asset_pids(wd)
+    print(f"stopped {len(pids) - len(left)} asset processes"
+          f"{f'; still running: {sorted(left)}' if left else ''}")  # fmt: skip
+    return 0 if not left else 1
+
+
+def _info(wd: Path) -> tuple[dict, object]:
+    from transfertwin.cps.opcua import load_credentials
+
+    path = wd / "cps.json"
+    if not path.is_file():
+        raise InputError(f"{wd}: no floor there (no cps.json); start one with "
+                         "'transfertwin cps up --floor FLOOR --workdir DIR'")  # fmt: skip
+    info = json.loads(path.read_text())
+    creds = None if info.get("insecure") else load_credentials(Path(info["credentials_file"]))
+    return info, creds
+
+
+async def _call(info: dict, creds, aid: str, op: str, *args, timeout_s: float = 10.0):
+    from transfertwin.cps.opcua import connect
+
+    endpoint = next(a["endpoint"] for a in info["assets"] if a["id"] == aid)
+    async with connect(endpoint, aid, credentials=creds, role="operator",
+                       cert_dir=Path(info["cert_dir"]), insecure=info["insecure"],
+                       timeout_s=timeout_s) as s:  # fmt: skip
+        return await s.call(op, *args)
+
+
+def floor_status(wd: Path, *, with_objects: bool = True) -> dict:
+    """The floor as one document: assets (id, kind, class, address, pid, online, state)
+    from the knowledge graph, objects' locations from the TMS's ledger."""
+    info, creds = _info(wd)
+
+    async def ask() -> dict:
+        try:
+            doc = json.loads(await _call(info, creds, "KG", "Status", timeout_s=5))
+        except (OSError, TimeoutError, ConnectionError) as exc:
+            raise InputError(f"{wd}: the knowledge graph is not answering "
+                             f"({type(exc).__name__})") from None  # fmt: skip
+        if with_objects:
+            try:
+                ledger = json.loads(await _call(info, creds, "TMS", "Ledger", timeout_s=5))
+            except (OSError, TimeoutError, ConnectionError) as exc:
+                doc["objects"] = None
+                doc["objects_error"] = f"the TMS is not answering ({type(exc).__name__})"
+            else:
+                doc["objects"] = {
+                    o: ({"location": None, "unknown": True, "last_seen": u["last_seen"],
+                         "operation": u["operation"]}
+                        if (u := ledger["unknown"].get(o)) else
+                        {"location": at, "unknown": False,
+                         "moving": ledger["moving"].get(o)})
+                    for o, at in ledger["locations"].items()
+                }  # fmt: skip
+        return doc
+
+    return asyncio.run(ask())
+
+
+def print_floor_status(doc: dict) -> None:
+    """`cps status` for a process floor, as plain columns."""
+    from transfertwin.cli._cps import _table
+
+    rows = [{**a, "online": "online" if a["online"] else "OFFLINE",
+             "pid": a.get("pid") or ""} for a in doc["assets"]]  # fmt: skip
+    print("assets (knowledge graph)")
+    print(_table(rows, ("id", "class", "online", "state", "pid", "address")))
+    objects = doc.get("objects")
+    if objects is None:
+        print(f"objects: {doc.get('objects_error', 'not known')}")
+        return
+    print("objects (TMS ledger)")
+    lines = [{"object": o, "location": (f"unknown, last seen at {v['last_seen']} "
+                                        f"({v['operation']})" if v["unknown"] else
+                                        v["location"] + (f" (moving: {v['moving']})"
+                                                         if v.get("moving") else ""))}
+             for o, v in objects.items()]  # fmt: skip
+    print(_table(lines, ("object", "location")))
+
+
+def cmd_locate(args: argparse.Namespace) -> int:
+    """Tell the TMS where an object whose place is unknown lies."""
+    from transfertwin.cps.opcua import OperationRefused
+
+    wd = Path(args.workdir)
+    info, creds = _info(wd)
+    try:
+        asyncio.run(_call(info, creds, "TMS", "Locate", args.object, args.at))
+    except OperationRefused as exc:
+        raise InputError(f"the TMS refused: {exc.reason}") from None
+    except (OSError, TimeoutError, ConnectionError) as exc:
+        raise InputError(f"{wd}: the TMS is not answering ({type(exc).__name__})") from None
+    print(f"{args.object} is at {args.at}")
+    return 0
+
+
+def register(csub: argparse._SubParsersAction) -> None:
+    """Add `cps asset|down|locate` (`cps up --floor` is `cps up`'s option)."""
+    p = csub.add_parser("asset", help="serve one asset of a floor (one process per asset)")
+    p.add_argument("--config", required=True, help="ASSET.toml (W/assets/<id>.toml)")
+    p.set_defaults(func=cmd_asset)
+    p = csub.add_parser("down", help="stop every asset process of a floor")
+    p.add_argument("--workdir", required=True)
+    p.set_defaults(func=cmd_down)
+    p = csub.add_parser("locate", help="say where an object whose location is unknown lies")
+    p.add_argument("--workdir", required=True)
+    p.add_argument("--object", required=True)
+    p.add_argument("--at", required=True, help="transfer unit or transport module")
+    p.set_defaults(func=cmd_locate)

@@ -1,0 +1,174 @@
+"""One asset process's configuration file, ``assets/<id>.toml`` (docs/architecture.md,
+"Deployment").
+
+```toml
+[asset]
+id = "TU_A"                  # an asset of the floor file below
+floor = "/plant/floor.toml"  # the floor it belongs to (stations, placement, peers' kinds)
+
+[network]
+host = "127.0.0.2"           # address to bind; beyond loopback needs allow_remote = true
+port = 48401
+seeds = ["opc.tcp://127.0.0.5:48405/transfertwin/KG"]  # peers to join through
+lease_s = 3.0                # a peer silent this long is offline
+
+[security]
+insecure = false             # NoSecurity: explicit opt-in, loopback only
+cert_dir = "certs"           # this process's own application certificates
+trust_dir = "trusted"        # client certificates this asset accepts
+credentials = "../../credentials.json"
+
+[runtime]
+state_dir = "state"          # what survives a crash, written atomically
+seed = 0
+time_scale = 1.0
+docking = "sampled"
+```
+
+Relative paths are resolved against the file's folder.
+"""
+
+from __future__ import annotations
+
+import ipaddress
+import json
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from transfertwin._atomic import write_atomic
+from transfertwin._errors import InputError
+
+__all__ = ["AssetConfig", "load_asset_config", "write_asset_config"]
+
+
+@dataclass(frozen=True)
+class AssetConfig:
+    """How one asset process runs (see the module docstring for the file)."""
+
+    asset_id: str
+    floor_file: Path
+    host: str
+    port: int
+    seeds: tuple[str, ...]
+    cert_dir: Path
+    trust_dir: Path
+    credentials_file: Path | None
+    state_dir: Path
+    insecure: bool = False
+    allow_remote: bool = False
+    lease_s: float = 3.0
+    seed: int = 0
+    time_scale: float = 1.0
+    docking: str = "sampled"
+
+    def __post_init__(self) -> None:
+        where = f"asset {self.asset_id}"
+        try:
+            address = ipaddress.ip_address(self.host)
+        except ValueError:
+            raise InputError(f"{where}: host must be an IP address, got {self.host!r}") from None
+        if not address.is_loopback and not self.allow_remote:
+            raise InputError(f"{where}: binding {self.host} (beyond loopback) needs "
+                             "allow_remote = true in [network]")  # fmt: skip
+        if not address.is_loopback and self.insecure:
+            raise InputError(f"{where}: insecure (NoSecurity) is for loopback only; "
+                             f"{self.host} needs security")  # fmt: skip
+        if not 0 < self.port < 65536:
+            raise InputError(f"{where}: port must be 1..65535, got {self.port}")
+        if not self.insecure and self.credentials_file is None:
+            raise InputError(f"{where}: a secure asset needs [security] credentials")
+        if not (math.isfinite(self.lease_s) and self.lease_s >= 0.5):
+            raise InputError(f"{where}: lease_s must be at least 0.5 s, got {self.lease_s}")
+        if self.docking not in ("sampled", "navigated"):
+            raise InputError(f"{where}: docking must be sampled or navigated")
+
+    @property
+    def endpoint(self) -> str:
+        """This asset's OPC UA endpoint URL."""
+        return f"opc.tcp://{self.host}:{self.port}/transfertwin/{self.asset_id}"
+
+
+def _table(doc: dict, key: str) -> dict:
+    value = doc.get(key, {})
+    if not isinstance(value, dict):
+        raise InputError(f"[{key}] must be a table")
+    return value
+
+
+def load_asset_config(path: Path | str) -> AssetConfig:
+    """Read ``ASSET.toml``; one `InputError` line for anything missing or malformed."""
+    path = Path(path)
+    try:
+        doc = tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such asset configuration file") from None
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise InputError(f"{path}: not a readable TOML file ({exc})") from None
+    base = path.parent
+    asset, net = _table(doc, "asset"), _table(doc, "network")
+    sec, run = _table(doc, "security"), _table(doc, "runtime")
+
+    def rel(value: object, key: str) -> Path:
+        if not isinstance(value, str) or not value:
+            raise InputError(f"{path}: {key} must be a path")
+        p = Path(value)
+        return p if p.is_absolute() else (base / p).resolve()
+
+    try:
+        aid, floor = asset["id"], asset["floor"]
+        host, port = net["host"], net["port"]
+    except KeyError as exc:
+        raise InputError(f"{path}: missing {exc.args[0]!r}") from None
+    seeds = net.get("seeds", [])
+    if not isinstance(seeds, list) or not all(isinstance(s, str) for s in seeds):
+        raise InputError(f"{path}: [network] seeds must be a list of opc.tcp:// URLs")
+    insecure = bool(sec.get("insecure", False))
+    creds = sec.get("credentials")
+    try:
+        return AssetConfig(
+            asset_id=str(aid), floor_file=rel(floor, "[asset] floor"), host=str(host),
+            port=int(port), seeds=tuple(seeds),
+            cert_dir=rel(sec.get("cert_dir", "certs"), "[security] cert_dir"),
+            trust_dir=rel(sec.get("trust_dir", "trusted"), "[security] trust_dir"),
+            credentials_file=None if creds is None else rel(creds, "[security] credentials"),
+            state_dir=rel(run.get("state_dir", "state"), "[runtime] state_dir"),
+            insecure=insecure, allow_remote=bool(net.get("allow_remote", False)),
+            lease_s=float(net.get("lease_s", 3.0)), seed=int(run.get("seed", 0)),
+            time_scale=float(run.get("time_scale", 1.0)),
+            docking=str(run.get("docking", "sampled")),
+        )  # fmt: skip
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{path}: {exc}") from None
+
+
+def _toml(value: object) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int | float):
+        return repr(value)
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(_toml(v) for v in value) + "]"
+    return json.dumps(str(value))  # a TOML basic string is a JSON string
+
+
+def write_asset_config(path: Path, cfg: AssetConfig) -> Path:
+    """Write `cfg` as ``ASSET.toml`` (atomically; absolute paths)."""
+    tables = {
+        "asset": {"id": cfg.asset_id, "floor": str(cfg.floor_file)},
+        "network": {"host": cfg.host, "port": cfg.port, "seeds": list(cfg.seeds),
+                    "lease_s": cfg.lease_s, "allow_remote": cfg.allow_remote},  # fmt: skip
+        "security": {"insecure": cfg.insecure, "cert_dir": str(cfg.cert_dir),
+                     "trust_dir": str(cfg.trust_dir)},  # fmt: skip
+        "runtime": {"state_dir": str(cfg.state_dir), "seed": cfg.seed,
+                    "time_scale": cfg.time_scale, "docking": cfg.docking},  # fmt: skip
+    }
+    if cfg.credentials_file is not None:
+        tables["security"]["credentials"] = str(cfg.credentials_file)
+    lines = [f"# transfertwin asset process: transfertwin cps asset --config {path.name}"]
+    for name, table in tables.items():
+        lines += ["", f"[{name}]", *(f"{k} = {_toml(v)}" for k, v in table.items())]
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_atomic(path, "\n".join(lines) + "\n")
+    return path

@@ -1,0 +1,312 @@
+"""A shop floor as a file: stations, transport modules, objects, logical assets (Ch. 3).
+
+A floor file (TOML) names every asset of one floor and where it stands, so that a launcher
+can start one process per asset and any asset can be restarted by hand from its own
+``assets/<id>.toml``. ``examples/floor-demo.toml`` is the demonstration floor of Sec. 5.3;
+``examples/floor-large.toml`` has 3 modules, 8 units and 20 objects.
+
+```toml
+name = "demo"
+size_m = [12.0, 8.0]                      # optional; walls around it
+
+[[station]]                               # a station with its transfer unit TU_<name>
+name = "A"
+x_m = 2.6                                 # centre of the station's front face, m
+y_m = 6.6
+yaw_deg = 90                              # inward normal of the face (docked heading)
+mount = "left"                            # mounting side of the unit (Fig. 5.16)
+
+[[module]]                                # a transport module and its start pose
+id = "TM_1"
+x_m = 6.0
+y_m = 5.2
+theta_deg = 0
+standby = false                           # true: prepared, started later by hand
+
+[[object]]                                # a built-in core id, and the unit it lies on
+id = "o5"
+at = "TU_A"
+
+logical = ["TMS", "EM", "PropS", "KG"]    # optional; these four by default
+```
+
+Parsing happens here, at the edge; the rest of the runtime sees the frozen `FloorSpec`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from transfertwin._errors import InputError
+from transfertwin.cps.aas import AssetDescriptor, AssetKind, Capability, PhysicalType
+from transfertwin.cps.aas._demo import DEMO_PLACEMENT, PHYSICAL_SUFFIX
+from transfertwin.navigation import ShopFloor, Station, default_floor
+from transfertwin.navigation._floor import _wall
+
+__all__ = [
+    "LOGICAL_ASSETS",
+    "FloorSpec",
+    "ModuleSpec",
+    "StationSpec",
+    "default_floor_spec",
+    "floor_toml",
+    "load_floor",
+    "parse_floor",
+]
+
+#: The logical assets a floor may run, by id: (class, capability).
+LOGICAL_ASSETS = {
+    "TMS": ("transport_module_system", Capability.ALLOCATE),
+    "EM": ("experiment_manager", Capability.EXPERIMENT),
+    "PropS": ("props", Capability.FUSE_POSES),
+    "KG": ("knowledge_graph", Capability.KNOWLEDGE),
+}
+
+_TU_CAPS = (Capability.TRANSFER, Capability.SENSE)
+_TM_CAPS = (Capability.TRANSPORT, Capability.TRANSFER, Capability.SENSE)
+
+
+@dataclass(frozen=True)
+class StationSpec:
+    """A station module on the floor; its transfer unit is ``TU_<name>``."""
+
+    name: str
+    x_m: float
+    y_m: float
+    yaw_deg: float
+    mount: str
+
+    @property
+    def unit(self) -> str:
+        """Id of the station's transfer unit."""
+        return f"TU_{self.name}"
+
+
+@dataclass(frozen=True)
+class ModuleSpec:
+    """A transport module and its start pose (x m, y m, θ deg)."""
+
+    asset_id: str
+    x_m: float
+    y_m: float
+    theta_deg: float = 0.0
+    standby: bool = False
+
+    @property
+    def home(self) -> tuple[float, float, float]:
+        """Start pose (x m, y m, θ rad)."""
+        return (self.x_m, self.y_m, math.radians(self.theta_deg))
+
+
+@dataclass(frozen=True)
+class FloorSpec:
+    """One shop floor: its size, stations, modules, objects (id -> unit) and logical assets."""
+
+    name: str
+    size_m: tuple[float, float]
+    stations: tuple[StationSpec, ...]
+    modules: tuple[ModuleSpec, ...]
+    objects: tuple[tuple[str, str], ...]
+    logical: tuple[str, ...] = tuple(LOGICAL_ASSETS)
+
+    def __post_init__(self) -> None:
+        _check(self)
+
+    @property
+    def units(self) -> tuple[str, ...]:
+        """Ids of the transfer units, in station order."""
+        return tuple(s.unit for s in self.stations)
+
+    def placement(self) -> dict[str, str]:
+        """Object id -> the unit it lies on when the floor starts."""
+        return dict(self.objects)
+
+    def module(self, asset_id: str) -> ModuleSpec:
+        """The module called `asset_id`."""
+        for m in self.modules:
+            if m.asset_id == asset_id:
+                return m
+        raise InputError(f"floor {self.name}: no transport module {asset_id!r}")
+
+    def descriptors(self) -> tuple[AssetDescriptor, ...]:
+        """Every asset of the floor: units, modules, objects, logical assets (in that order)."""
+        units = tuple(
+            _virtual(s.unit, "transfer_unit", PhysicalType.D_E, _TU_CAPS, s.name)
+            for s in self.stations
+        )
+        modules = tuple(
+            _virtual(m.asset_id, "transport_module", PhysicalType.E, _TM_CAPS)
+            for m in self.modules
+        )
+        objects = tuple(_virtual(o, "object", PhysicalType.B) for o, _ in self.objects)
+        logical = tuple(
+            AssetDescriptor(aid, AssetKind.LOGICAL, LOGICAL_ASSETS[aid][0],
+                            capabilities=(LOGICAL_ASSETS[aid][1],))  # fmt: skip
+            for aid in self.logical
+        )
+        return (*units, *modules, *objects, *logical)
+
+    def standby(self) -> frozenset[str]:
+        """Ids of the assets prepared but not started by the launcher."""
+        return frozenset(m.asset_id for m in self.modules if m.standby)
+
+    def shop_floor(self) -> ShopFloor:
+        """The navigation floor: walls around `size_m` and the stations (the default floor's
+        obstacles too when the stations are the default ones)."""
+        base = default_floor()
+        goal = {s.mount: s.goal_in_edge for s in base.stations}
+        stations = tuple(
+            Station(s.name, s.x_m, s.y_m, math.radians(s.yaw_deg), s.mount,
+                    goal_in_edge=goal[s.mount])  # fmt: skip
+            for s in self.stations
+        )
+        if stations == base.stations and self.size_m == base.size_m:
+            return base
+        w, h, t = self.size_m[0], self.size_m[1], 0.1
+        walls = (_wall(0.0, 0.0, w, t), _wall(0.0, h - t, w, h), _wall(0.0, 0.0, t, h),
+                 _wall(w - t, 0.0, w, h))  # fmt: skip
+        return ShopFloor(self.size_m, walls, stations)
+
+
+def _virtual(aid: str, cls: str, ptype: PhysicalType, caps: tuple[Capability, ...] = (),
+             station: str | None = None) -> AssetDescriptor:  # fmt: skip
+    return AssetDescriptor(aid, AssetKind.VIRTUAL_MODEL, cls, physical_type=ptype,
+                           capabilities=caps, station=station,
+                           models=f"{aid}{PHYSICAL_SUFFIX}")  # fmt: skip
+
+
+def _check(floor: FloorSpec) -> None:
+    """Refuse a floor whose ids repeat, whose objects lie on no unit, or that lacks a
+    knowledge graph or a TMS (InputError naming the floor and the first problem)."""
+    where = f"floor {floor.name}"
+    ids = [*floor.units, *(m.asset_id for m in floor.modules),
+           *(o for o, _ in floor.objects), *floor.logical]  # fmt: skip
+    seen: set[str] = set()
+    for aid in ids:
+        if aid in seen:
+            raise InputError(f"{where}: asset id {aid!r} appears twice")
+        seen.add(aid)
+    for s in floor.stations:
+        if s.mount not in ("left", "right"):
+            raise InputError(f"{where}: station {s.name}: mount must be left or right, "
+                             f"got {s.mount!r}")  # fmt: skip
+    for obj, at in floor.objects:
+        if at not in floor.units:
+            raise InputError(f"{where}: object {obj} lies on {at!r}, which is no transfer unit "
+                             f"of the floor ({', '.join(floor.units)})")  # fmt: skip
+    for aid in floor.logical:
+        if aid not in LOGICAL_ASSETS:
+            raise InputError(f"{where}: unknown logical asset {aid!r}; "
+                             f"known: {', '.join(LOGICAL_ASSETS)}")  # fmt: skip
+    for need in ("KG", "TMS"):
+        if need not in floor.logical:
+            raise InputError(f"{where}: a floor needs the logical asset {need}")
+    if not floor.modules:
+        raise InputError(f"{where}: no transport module")
+    if len(floor.size_m) != 2 or min(floor.size_m) <= 0:
+        raise InputError(f"{where}: size_m must be two positive lengths")
+
+
+def default_floor_spec() -> FloorSpec:
+    """The demonstration floor (Sec. 5.3): stations A–D of `navigation.default_floor` with
+    TU_A…TU_D, TM_1 at the home pose, o1…o5 as `DEMO_PLACEMENT`, the four logical assets."""
+    from transfertwin.cps.apps._floor import HOME_POSE
+
+    base = default_floor()
+    stations = tuple(
+        StationSpec(s.name, s.face_x_m, s.face_y_m, math.degrees(s.yaw_rad), s.mount)
+        for s in base.stations
+    )
+    x, y, th = HOME_POSE
+    module = ModuleSpec("TM_1", x, y, math.degrees(th))
+    return FloorSpec("demo", base.size_m, stations, (module,), tuple(DEMO_PLACEMENT.items()))
+
+
+def _float(table: dict, key: str, where: str) -> float:
+    value = table.get(key)
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise InputError(f"{where}: {key} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def _str(table: dict, key: str, where: str) -> str:
+    value = table.get(key)
+    if not isinstance(value, str) or not value:
+        raise InputError(f"{where}: {key} must be a non-empty string, got {value!r}")
+    return value
+
+
+def parse_floor(doc: dict, name: str) -> FloorSpec:
+    """A `FloorSpec` from a parsed floor document (see the module docstring)."""
+    known = {"name", "size_m", "station", "module", "object", "logical"}
+    if unknown := sorted(set(doc) - known):
+        raise InputError(f"floor {name}: unknown key {unknown[0]!r}; known: "
+                         f"{', '.join(sorted(known))}")  # fmt: skip
+    name = str(doc.get("name", name))
+    size = doc.get("size_m", [12.0, 8.0])
+    if not isinstance(size, list) or len(size) != 2:
+        raise InputError(f"floor {name}: size_m must be [width, height] in metres")
+    size_m = (_float({"w": size[0]}, "w", f"floor {name}: size_m"),
+              _float({"h": size[1]}, "h", f"floor {name}: size_m"))  # fmt: skip
+    stations = []
+    for i, t in enumerate(doc.get("station", [])):
+        where = f"floor {name}: station {i + 1}"
+        stations.append(StationSpec(_str(t, "name", where), _float(t, "x_m", where),
+                                    _float(t, "y_m", where), _float(t, "yaw_deg", where),
+                                    _str(t, "mount", where)))  # fmt: skip
+    modules = []
+    for i, t in enumerate(doc.get("module", [])):
+        where = f"floor {name}: module {i + 1}"
+        modules.append(ModuleSpec(_str(t, "id", where), _float(t, "x_m", where),
+                                  _float(t, "y_m", where), float(t.get("theta_deg", 0.0)),
+                                  bool(t.get("standby", False))))  # fmt: skip
+    objects = []
+    for i, t in enumerate(doc.get("object", [])):
+        where = f"floor {name}: object {i + 1}"
+        objects.append((_str(t, "id", where), _str(t, "at", where)))
+    logical = doc.get("logical", list(LOGICAL_ASSETS))
+    if not isinstance(logical, list) or not all(isinstance(a, str) for a in logical):
+        raise InputError(f"floor {name}: logical must be a list of asset ids")
+    return FloorSpec(name, size_m, tuple(stations), tuple(modules), tuple(objects),
+                     tuple(logical))  # fmt: skip
+
+
+def load_floor(path: Path | str) -> FloorSpec:
+    """Read a floor file; one `InputError` line for a missing, unreadable or invalid file."""
+    path = Path(path)
+    try:
+        doc = tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such floor file") from None
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise InputError(f"{path}: not a readable TOML floor file ({exc})") from None
+    spec = parse_floor(doc, path.stem)
+    from transfertwin.objects import builtin_ids
+
+    cores = set(builtin_ids())
+    for obj, _ in spec.objects:
+        if obj not in cores:
+            raise InputError(f"{path}: object {obj!r} is not a built-in core (o1..o37)")
+    return spec
+
+
+def floor_toml(floor: FloorSpec) -> str:
+    """`floor` as a floor file (what `load_floor` reads back to an equal `FloorSpec`)."""
+    lines = [f"name = {json.dumps(floor.name)}",
+             f"size_m = [{floor.size_m[0]!r}, {floor.size_m[1]!r}]",
+             f"logical = [{', '.join(json.dumps(a) for a in floor.logical)}]"]  # fmt: skip
+    for s in floor.stations:
+        lines += ["", "[[station]]", f"name = {json.dumps(s.name)}", f"x_m = {s.x_m!r}",
+                  f"y_m = {s.y_m!r}", f"yaw_deg = {s.yaw_deg!r}",
+                  f"mount = {json.dumps(s.mount)}"]  # fmt: skip
+    for m in floor.modules:
+        lines += ["", "[[module]]", f"id = {json.dumps(m.asset_id)}", f"x_m = {m.x_m!r}",
+                  f"y_m = {m.y_m!r}", f"theta_deg = {m.theta_deg!r}",
+                  f"standby = {'true' if m.standby else 'false'}"]  # fmt: skip
+    for obj, at in floor.objects:
+        lines += ["", "[[object]]", f"id = {json.dumps(obj)}", f"at = {json.dumps(at)}"]
+    return "\n".join(lines) + "\n"

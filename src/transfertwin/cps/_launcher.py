@@ -1,0 +1,185 @@
+"""Lay out a floor's asset processes and start them (docs/architecture.md, "Deployment").
+
+`prepare_floor` writes everything one asset process needs into the work folder: the floor
+file, ``assets/<id>.toml`` (its own address on a loopback address of its own, its seeds,
+its certificate and trust folders, its state folder), one application certificate per
+process, and the trust lists (every asset trusts every asset's client certificate and the
+command-line clients'). `launch` starts one detached process per asset: the floor does not
+depend on the launcher staying alive, and any asset can be restarted by hand with
+``transfertwin cps asset --config W/assets/<id>.toml``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import ipaddress
+import json
+import os
+import signal
+import subprocess
+import sys
+from collections.abc import Iterable
+from pathlib import Path
+
+from transfertwin._atomic import write_atomic
+from transfertwin._errors import InputError
+from transfertwin.cps._asset_config import AssetConfig, load_asset_config, write_asset_config
+from transfertwin.cps._floor_file import FloorSpec, floor_toml
+from transfertwin.cps.opcua import (
+    ROLES,
+    ensure_certificate,
+    free_port,
+    new_credentials,
+    trust_certificate,
+    write_credentials,
+)
+
+__all__ = ["asset_pids", "floor_configs", "launch", "prepare_floor", "stop_floor"]
+
+#: Seeds every asset joins through: the knowledge graph and the TMS.
+SEED_ASSETS = ("KG", "TMS")
+
+
+def _address(i: int, base: str) -> str:
+    """The i-th emulated host: consecutive loopback addresses from `base`."""
+    return str(ipaddress.ip_address(base) + i)
+
+
+def prepare_floor(
+    floor: FloorSpec,
+    workdir: Path,
+    *,
+    insecure: bool = False,
+    seed: int = 0,
+    time_scale: float = 1.0,
+    docking: str = "sampled",
+    lease_s: float = 3.0,
+    base_host: str = "127.0.0.2",
+) -> dict[str, AssetConfig]:
+    """Write the floor's work folder; returns asset id -> its configuration.
+
+    A work folder used before keeps its credentials, certificates and every asset's state
+    (the ledger, operation ids, possessions): a floor started again goes on where it was.
+    """
+    workdir.mkdir(parents=True, exist_ok=True)
+    floor_file = workdir / "floor.toml"
+    write_atomic(floor_file, floor_toml(floor))
+    creds_file = workdir / "credentials.json"
+    if not insecure and not creds_file.is_file():
+        write_credentials(creds_file, new_credentials())
+    descs = floor.descriptors()
+    order = sorted(descs, key=lambda d: (d.asset_id not in SEED_ASSETS, d.asset_id))
+    hosts = {d.asset_id: _address(i, base_host) for i, d in enumerate(order)}
+    ports = {aid: free_port(h) for aid, h in hosts.items()}
+    seeds = tuple(f"opc.tcp://{hosts[a]}:{ports[a]}/transfertwin/{a}" for a in SEED_ASSETS)
+    configs = {}
+    for d in descs:
+        aid = d.asset_id
+        home = workdir / "assets" / aid
+        configs[aid] = AssetConfig(
+            asset_id=aid, floor_file=floor_file.resolve(), host=hosts[aid], port=ports[aid],
+            seeds=seeds, cert_dir=(home / "certs").resolve(),
+            trust_dir=(home / "trusted").resolve(),
+            credentials_file=None if insecure else creds_file.resolve(),
+            state_dir=(home / "state").resolve(), insecure=insecure, lease_s=lease_s,
+            seed=seed, time_scale=time_scale, docking=docking,
+        )  # fmt: skip
+        write_asset_config(workdir / "assets" / f"{aid}.toml", configs[aid])
+    if not insecure:
+        asyncio.run(_certificates(workdir, configs.values()))
+    return configs
+
+
+async def _certificates(workdir: Path, configs: Iterable[AssetConfig]) -> None:
+    """Each process's own client certificate, and every one trusted by every asset (the
+    floor trusts its members and the command-line clients in ``W/certs``)."""
+    configs = list(configs)
+    clients = [(await ensure_certificate(workdir / "certs", f"client-{r}"))[0] for r in ROLES]
+    for cfg in configs:
+        clients.append((await ensure_certificate(cfg.cert_dir, "client-operator"))[0])
+    for folder in {cfg.trust_dir for cfg in configs} | {workdir / "certs" / "trusted"}:
+        for cert in clients:
+            trust_certificate(folder, cert)
+
+
+def floor_configs(workdir: Path) -> dict[str, AssetConfig]:
+    """The asset configurations of a prepared work folder."""
+    return {p.stem: load_asset_config(p) for p in sorted((workdir / "assets").glob("*.toml"))}
+
+
+def launch(configs: dict[str, AssetConfig], workdir: Path,
+           skip: Iterable[str] = ()) -> dict[str, subprocess.Popen]:  # fmt: skip
+    """Start one detached process per asset (logs in ``W/logs/<id>.log``)."""
+    logs = workdir / "logs"
+    logs.mkdir(parents=True, exist_ok=True)
+    skip = set(skip)
+    procs = {}
+    for aid in sorted(configs, key=lambda a: (a not in SEED_ASSETS, a)):
+        if aid in skip:
+            continue
+        procs[aid] = start_asset(workdir / "assets" / f"{aid}.toml", logs / f"{aid}.log")
+    return procs
+
+
+def start_asset(config: Path, log_file: Path) -> subprocess.Popen:
+    """`transfertwin cps asset --config CONFIG` in a session of its own."""
+    with log_file.open("ab") as out:
+        return subprocess.Popen(
+            [sys.executable, "-m", "transfertwin", "cps", "asset", "--config", str(config)],
+            stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+            start_new_session=True, env={**os.environ, "PYTHONUNBUFFERED": "1"},
+        )  # fmt: skip
+
+
+def write_floor_info(workdir: Path, configs: dict[str, AssetConfig], floor: FloorSpec) -> Path:
+    """``W/cps.json``: the endpoints and security of the floor, for its clients."""
+    by_id = {d.asset_id: d for d in floor.descriptors()}
+    first = next(iter(configs.values()))
+    info = {
+        "mode": "processes",
+        "floor": str(first.floor_file),
+        "assets": [{"id": aid, "kind": by_id[aid].kind.value, "class": by_id[aid].asset_class,
+                    "type": by_id[aid].physical_type.value if by_id[aid].physical_type else None,
+                    "endpoint": cfg.endpoint,
+                    "security_policy": "None" if cfg.insecure else "Basic256Sha256",
+                    "config": str((workdir / "assets" / f"{aid}.toml").resolve())}
+                   for aid, cfg in sorted(configs.items())],  # fmt: skip
+        "credentials_file": None if first.insecure else str(first.credentials_file),
+        "cert_dir": str((workdir / "certs").resolve()),
+        "trust_dir": str((workdir / "certs" / "trusted").resolve()),
+        "insecure": first.insecure,
+    }
+    return write_atomic(workdir / "cps.json", json.dumps(info, indent=2) + "\n")
+
+
+def asset_pids(workdir: Path) -> dict[str, int]:
+    """Asset id -> pid of its running process (from the pid files the processes keep)."""
+    pids = {}
+    for f in (workdir / "assets").glob("*/state/pid"):
+        try:
+            pid = int(f.read_text())
+            os.kill(pid, 0)
+        except (ValueError, OSError):
+            continue
+        pids[f.parent.parent.name] = pid
+    return pids
+
+
+def stop_floor(workdir: Path, sig: int = signal.SIGTERM) -> dict[str, int]:
+    """Send `sig` to every asset process of the floor; returns those signalled."""
+    pids = asset_pids(workdir)
+    for pid in pids.values():
+        try:
+            os.kill(pid, sig)
+        except OSError:
+            pass
+    return pids
+
+
+def check_workdir(workdir: Path) -> None:
+    """Refuse a work folder whose floor is still running."""
+    running = asset_pids(workdir)
+    if running:
+        raise InputError(f"{workdir}: a floor is running there ({len(running)} asset processes, "
+                         f"e.g. {next(iter(running))}); stop it with 'transfertwin cps down "
+                         f"--workdir {workdir}'")  # fmt: skip

@@ -1,0 +1,354 @@
+"""The transport module in its own process: it takes operations from the TMS, runs them
+through the flow of Fig. 5.9a (`run_transport_operation`, the same skills as the
+single-process CPS, `_VirtualTransport`) and reports every step, every moved object and
+the result back to the TMS.
+
+The module's process owns the simulation of itself and the unit it is docked at (its
+`Environment`): the unit's belts are commanded through the unit's own OPC UA interface
+and mirrored into the simulation; the simulated light barriers are written to the unit's
+server (`MirroredUnitHAL`), so a virtual unit looks on the wire as a physical one does.
+
+Reports go through a persisted outbox: a report the TMS does not acknowledge (the TMS is
+restarting) is sent again until it is, and survives a crash of the module. A module that
+restarts in the middle of an operation reports it failed, with the step it was in.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import functools
+import json
+import logging
+import time
+from types import SimpleNamespace
+from typing import TYPE_CHECKING, Any
+
+from transfertwin.cps._roles import Role
+
+if TYPE_CHECKING:
+    from transfertwin.cps._node import AssetNode
+
+__all__ = ["MirroredUnitHAL", "ModuleRole", "load_scene"]
+
+log = logging.getLogger("transfertwin.cps")
+
+#: Steps of an operation during which a failure leaves the object's place unknown (it may
+#: lie across the gap).
+UNCERTAIN_STEPS = frozenset({"transferring"})
+
+
+@functools.cache
+def load_scene():
+    """The virtual models' scene (the built-in defaults)."""
+    from transfertwin.sim import SceneConfig
+
+    return SceneConfig()
+
+
+class MirroredUnitHAL:
+    """A remote virtual unit's HAL whose physics runs here.
+
+    Belt commands go to the unit (it records and publishes them) and into the local
+    simulation; the light barriers are read from the simulation and written to the unit
+    when they change (a virtual unit's sensors are synchronised by the environment that
+    simulates it).
+
+    Args:
+        remote: `OpcUaUnitHAL` of the unit.
+        local: The simulated unit's HAL (`VirtualTransferSystem.tu`).
+        loop: The event loop that owns the unit's session.
+    """
+
+    def __init__(self, remote, local, loop: asyncio.AbstractEventLoop) -> None:
+        self.name = remote.name
+        self._remote, self._local, self._loop = remote, local, loop
+        self._published: dict[str, bool] | None = None
+
+    def set_belt_speed(self, belt: str, speed_m_s: float) -> None:
+        self._remote.set_belt_speed(belt, speed_m_s)
+        self._local.set_belt_speed(belt, speed_m_s)
+
+    def belt_speed(self, belt: str) -> float:
+        return self._local.belt_speed(belt)
+
+    def barriers(self) -> dict[str, bool]:
+        now = self._local.barriers()
+        if now != self._published:
+            self._remote_write(now)
+            self._published = dict(now)
+        return now
+
+    def _remote_write(self, barriers: dict[str, bool]) -> None:
+        client = self._remote._client
+
+        async def write() -> None:
+            await client.write("OperationalData", "BarrierNearInterrupted", barriers["near"])
+            await client.write("OperationalData", "BarrierFarInterrupted", barriers["far"])
+
+        asyncio.run_coroutine_threadsafe(write(), self._loop).result(10)
+
+
+class ModuleRole(Role):
+    """A virtual transport module (type E)."""
+
+    def __init__(self, node: AssetNode) -> None:
+        super().__init__(node)
+        from transfertwin.cps.apps import Environment, FloorRobot
+        from transfertwin.cps.apps._floor import HOME_POSE
+
+        spec = node.floor.module(self.aid)
+        pose = self.state.data.get("pose") or list(spec.home or HOME_POSE)
+        self.robot = FloorRobot(node.floor.shop_floor(), home=tuple(pose))
+        self.env = Environment(load_scene(), node.cfg.time_scale)
+        self.op: dict[str, Any] | None = None
+        self._outbox_kick = asyncio.Event()
+        # what `_VirtualTransport` reads of the runtime it serves
+        self.floor_robots = {self.aid: self.robot}
+        self.config = SimpleNamespace(docking=node.cfg.docking, seed=node.cfg.seed,
+                                      scene=self.env.scene)  # fmt: skip
+        self.assets = {d.asset_id: SimpleNamespace(desc=d) for d in node.descriptors.values()}
+        self.ledger = SimpleNamespace(objects_at=self._objects_at)
+
+    def initial(self) -> dict[str, Any]:
+        return {"possesses": [], "pose": None, "docked": "", "current": None, "outbox": []}
+
+    def handlers(self) -> dict[str, Any]:
+        return {"SetBeltSpeed": self._set_belt, "SetPossessedObjects": self._set_possessed,
+                "AssignOperation": self._assign, "Dock": self._dock_op,
+                "Undock": self._undock_op}  # fmt: skip
+
+    async def start(self) -> None:
+        data = self.state.data
+        await self.set("PossessedObjects", ",".join(data["possesses"]))
+        await self.set("DockedAt", "")
+        await self._publish_pose(self.aid)
+        if data["current"] is not None:  # died in the middle of an operation
+            cur = data["current"]
+            step = cur.get("state", "idle")
+            lost = step in UNCERTAIN_STEPS
+            self._report(cur["operation"], {
+                "event": "result",
+                "result": {"status": f"failed while {step}", "failed_step": step,
+                           "reason": f"{self.aid} restarted while {step}",
+                           "location_unknown": lost},
+            })  # fmt: skip
+            if lost:
+                data["possesses"] = [o for o in data["possesses"] if o != cur["object"]]
+            data["current"] = None
+            self.state.save()
+            log.info("%s: resumed after a crash during %s (%s)", self.aid, cur["operation"], step)
+        self.node.spawn(self._flush_outbox())
+
+    async def live(self) -> dict[str, Any]:
+        x, y, th = (float(v) for v in self.robot.pose)
+        return {"state": await self.get("State"), "docked": await self.get("DockedAt") or None,
+                "possesses": list(self.state.data["possesses"]),
+                "pose": [round(x, 3), round(y, 3), round(th, 4)],
+                "operation": (self.op or {}).get("operation")}  # fmt: skip
+
+    # -- belts and possession -------------------------------------------------------------
+    def _objects_at(self, holder: str) -> list[str]:
+        return sorted(self.state.data["possesses"]) if holder == self.aid else []
+
+    async def _set_belt(self, belt: str, speed: float) -> bool:
+        if belt not in ("left", "right"):
+            raise ValueError(f"unknown belt {belt!r}")
+        with self.env.lock:
+            if self.env.object_ref is not None:
+                self.env.system.tm.set_belt_speed(belt, speed)
+        await self.set(f"BeltSpeed{belt.capitalize()}", float(speed))
+        return True
+
+    async def _set_possessed(self, objects: str) -> bool:
+        self.state.data["possesses"] = sorted(o for o in objects.split(",") if o)
+        self.state.save()
+        await self.set("PossessedObjects", ",".join(self.state.data["possesses"]))
+        return True
+
+    # -- operations -----------------------------------------------------------------------
+    async def _assign(self, op_id: str, source: str, target: str, obj: str) -> bool:
+        from transfertwin.cps.opcua import OperationRefused
+
+        if self.op is not None:
+            if self.op["operation"] == op_id:
+                return True  # the TMS asked again (it restarted): already running
+            raise OperationRefused(f"{self.aid} is busy with {self.op['operation']}",
+                                   status="BadInvalidState")  # fmt: skip
+        for unit in (source, target):
+            if unit not in self.node.floor.units:
+                raise OperationRefused(f"no transfer unit {unit!r}", argument="source")
+        self.op = {"operation": op_id, "source": source, "target": target, "object": obj,
+                   "state": "assigned"}  # fmt: skip
+        self.state.data["current"] = dict(self.op)
+        self.state.save()
+        self.node.spawn(self._run(dict(self.op)))
+        return True
+
+    async def _run(self, op: dict[str, Any]) -> None:
+        from transfertwin.cps.apps._applications import _VirtualTransport
+        from transfertwin.cps.apps._transport import legs_of, run_transport_operation
+
+        op_id, obj = op["operation"], op["object"]
+        await self.set("CurrentTask", f"{op_id}: {obj} {op['source']} -> {op['target']}")
+
+        async def on_state(state: str, leg) -> None:
+            await self.set("State", state)
+            if self.op is not None:
+                self.op["state"] = state
+                self.state.data["current"] = dict(self.op)
+                self.state.save()
+            self._report(op_id, {"event": "step", "state": state,
+                                 "leg": None if leg is None else leg.name,
+                                 "unit": None if leg is None else leg.unit})  # fmt: skip
+
+        skills = _ModuleTransport(self, self.aid, op["source"], op["target"], obj)
+        self._op_id = op_id
+        try:
+            result = await run_transport_operation(skills, legs_of(op["source"], op["target"]),
+                                                   on_state)  # fmt: skip
+        except Exception as exc:  # a peer died mid-step: the operation fails, we go on
+            step = (self.op or {}).get("state", "idle")
+            log.warning("%s: %s failed while %s: %s", self.aid, op_id, step, exc)
+            result = {"status": f"failed while {step}", "failed_step": step,
+                      "reason": f"{type(exc).__name__}: {exc}",
+                      "location_unknown": step in UNCERTAIN_STEPS}  # fmt: skip
+            if step in UNCERTAIN_STEPS:
+                self.state.data["possesses"] = [o for o in self.state.data["possesses"]
+                                                if o != obj]  # fmt: skip
+            await self._undock(self.aid)
+            with self.env.lock:
+                self.env.undock()
+            await self.set("State", "idle")
+        result["docking"] = self.node.cfg.docking
+        self.op = None
+        self.state.data["current"] = None
+        self._report(op_id, {"event": "result", "result": result})
+        await self.set("CurrentTask", "")
+
+    def _report(self, op_id: str, event: dict[str, Any]) -> None:
+        """Queue a report to the TMS (persisted; sent in order until acknowledged)."""
+        event = {**event, "module": self.aid, "t": time.time()}
+        self.state.data["outbox"].append([op_id, event])
+        self.state.save()
+        self._outbox_kick.set()
+
+    async def _flush_outbox(self) -> None:
+        while True:
+            outbox = self.state.data["outbox"]
+            while outbox:
+                op_id, event = outbox[0]
+                try:
+                    await asyncio.wait_for(self.node.peers.call(
+                        "TMS", "ReportProgress", op_id, json.dumps(event)), 10.0)  # fmt: skip
+                except Exception as exc:
+                    log.debug("%s: TMS not answering (%s); report kept", self.aid, exc)
+                    break
+                outbox.pop(0)
+                self.state.save()
+            self._outbox_kick.clear()
+            try:
+                await asyncio.wait_for(self._outbox_kick.wait(), 0.5)
+            except TimeoutError:
+                pass
+
+    # -- what `_VirtualTransport` calls --------------------------------------------------------
+    async def _publish_pose(self, tm: str) -> None:
+        x, y, theta = (float(v) for v in self.robot.pose)
+        for prop, value in (("PoseX", x), ("PoseY", y), ("PoseTheta", theta)):
+            await self.set(prop, value)
+        self.state.data["pose"] = [x, y, theta]
+        self.state.save()
+
+    def _error(self, source: str, target: str, obj: str, leg: int):
+        from transfertwin.cps._runtime import _docking_model
+        from transfertwin.study.experiment import experiment_seeds
+
+        seed, _ = experiment_seeds(self.node.cfg.seed, f"{obj}:{source}:{target}:{self._op_id}",
+                                   leg, 0)  # fmt: skip
+        return _docking_model().sample(seed)
+
+    def _locked(self, fn, *args):
+        with self.env.lock:
+            return fn(*args)
+
+    async def _dock(self, tm: str, unit: str) -> bool:
+        await self.set("DockedAt", unit)
+        try:
+            await self.node.peers.write(unit, "DockedTransportModule", self.aid)
+        except Exception as exc:
+            raise ConnectionError(f"{unit} not answering while docking: {exc}") from None
+        return True
+
+    async def _undock(self, tm: str) -> bool:
+        unit = await self.get("DockedAt")
+        await self.set("DockedAt", "")
+        if unit:
+            try:  # the unit's barriers are clear once the module has left
+                await self.node.peers.write(unit, "DockedTransportModule", "")
+                await self.node.peers.write(unit, "BarrierNearInterrupted", False)
+                await self.node.peers.write(unit, "BarrierFarInterrupted", False)
+            except Exception as exc:
+                log.info("%s: %s not answering while undocking: %s", self.aid, unit, exc)
+        return True
+
+    async def _dock_op(self, unit: str) -> bool:
+        if unit not in self.node.floor.units:
+            raise ValueError(f"no transfer unit {unit!r}")
+        return await self._dock(self.aid, unit)
+
+    async def _undock_op(self) -> bool:
+        return await self._undock(self.aid)
+
+    async def _transfer(self, tm: str, unit: str, direction):
+        from transfertwin.cps.opcua import OpcUaUnitHAL
+        from transfertwin.study.experiment import scene_controller
+
+        session = await self.node.peers.session(unit)
+        loop = asyncio.get_running_loop()
+        system = self.env.system
+        hal = MirroredUnitHAL(OpcUaUnitHAL(session, loop, timeout_s=10), system.tu, loop)
+        ctl = scene_controller(self.env.scene, system.tm, hal, system, self.env.clock)
+        try:
+            return await asyncio.to_thread(ctl.transfer, direction, "front", None)
+        except Exception:
+            await self.node.peers.drop(unit)
+            raise
+
+    async def _moved(self, obj: str, holder: str) -> None:
+        own = set(self.state.data["possesses"])
+        own.add(obj) if holder == self.aid else own.discard(obj)
+        self.state.data["possesses"] = sorted(own)
+        self.state.save()
+        await self.set("PossessedObjects", ",".join(self.state.data["possesses"]))
+        self._report(self._op_id, {"event": "moved", "object": obj, "holder": holder})
+
+
+def _make_transport():
+    from transfertwin.cps.apps._applications import _VirtualTransport
+
+    class ModuleTransport(_VirtualTransport):
+        """The skills of `_VirtualTransport`; a module that restarted with an object on
+        board puts it back on its belts in the simulation before docking to deliver it."""
+
+        async def dock(self, leg):
+            env = self.cps.env
+            if leg.name != "pick-up" and env.object_ref != self.obj:
+                await asyncio.to_thread(self.cps._locked, _load_on_module, env, self.obj)
+            return await super().dock(leg)
+
+    return ModuleTransport
+
+
+def _ModuleTransport(*args):  # noqa: N802 - a class made on first use (imports the simulation)
+    return _make_transport()(*args)
+
+
+def _load_on_module(env, obj: str) -> None:
+    """Put `obj` on the module's belts in the simulation (after a restart of the module)."""
+    from transfertwin.sim import DockingError
+
+    system = env.use(obj)
+    system.reset(DockingError(0.0, 0.0, 0.0))
+    system.place("front", 0.0, -0.2, 0.0)
+    system.clock.wait(env.scene.placement.settle_time_s)
+    env.docked_unit = None

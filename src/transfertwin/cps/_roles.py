@@ -1,0 +1,324 @@
+"""What each asset does in its own process (`AssetNode`): transfer units, objects, PropS,
+the Experiment Manager and the knowledge graph. The transport module and the TMS, which
+carry the transport operations, are in `_role_tm` and `_role_tms`.
+
+Every role offers `handlers()` (the OPC UA operations), `writable()` (properties others
+may write besides the externally synchronised ones), `live()` (its part of the heartbeat),
+`start()` and `stop()`.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+import time
+from typing import TYPE_CHECKING, Any
+
+from transfertwin._errors import InputError
+from transfertwin.cps._node import NodeState
+
+if TYPE_CHECKING:
+    from transfertwin.cps._node import AssetNode
+
+__all__ = ["Role", "role_for"]
+
+log = logging.getLogger("transfertwin.cps")
+
+
+class Role:
+    """The default role: serve the AAS, nothing else."""
+
+    def __init__(self, node: AssetNode) -> None:
+        self.node = node
+        self.aid = node.desc.asset_id
+        self.state = NodeState(node.cfg.state_dir / f"{self.aid}.json", self.initial())
+
+    def initial(self) -> dict[str, Any]:
+        """The persisted state before the first save."""
+        return {}
+
+    def handlers(self) -> dict[str, Any]:
+        return {}
+
+    def writable(self) -> set[str]:
+        return set()
+
+    async def start(self) -> None:
+        pass
+
+    async def stop(self) -> None:
+        pass
+
+    async def live(self) -> dict[str, Any]:
+        """This asset's live state for the heartbeat."""
+        return {"state": "idle"}
+
+    async def set(self, prop: str, value: object) -> None:
+        """Set one of this asset's OperationalData properties."""
+        await self.node.server.set("OperationalData", prop, value)
+
+    async def get(self, prop: str) -> Any:
+        return await self.node.server.get("OperationalData", prop)
+
+
+class UnitRole(Role):
+    """A virtual transfer unit (type D/E): belt drives, possession kept by others, its light
+    barriers written by the environment that simulates it (the docked module's process)."""
+
+    def initial(self) -> dict[str, Any]:
+        return {"possessed": [], "docked": ""}
+
+    def handlers(self) -> dict[str, Any]:
+        return {"SetBeltSpeed": self._set_belt, "SetPossessedObjects": self._set_possessed}
+
+    def writable(self) -> set[str]:
+        return {"BarrierNearInterrupted", "BarrierFarInterrupted"}
+
+    async def start(self) -> None:
+        await self.set("PossessedObjects", ",".join(self.state.data["possessed"]))
+        await self.set("DockedTransportModule", self.state.data["docked"])
+        self.node.server.on_client_write(self._written)
+
+    def _written(self, submodel: str, prop: str, value: object) -> None:
+        if prop == "PossessedObjects":
+            self.state.data["possessed"] = [o for o in str(value).split(",") if o]
+            self.state.save()
+        elif prop == "DockedTransportModule":
+            self.state.data["docked"] = str(value)
+            self.state.save()
+
+    async def _set_belt(self, belt: str, speed: float) -> bool:
+        if belt not in ("left", "right"):
+            raise ValueError(f"unknown belt {belt!r}")
+        await self.set(f"BeltSpeed{belt.capitalize()}", float(speed))
+        return True
+
+    async def _set_possessed(self, objects: str) -> bool:
+        ids = [o for o in objects.split(",") if o]
+        await self.set("PossessedObjects", ",".join(ids))
+        self.state.data["possessed"] = ids
+        self.state.save()
+        return True
+
+    async def live(self) -> dict[str, Any]:
+        docked = await self.get("DockedTransportModule")
+        return {"state": "docked" if docked else "idle", "docked": docked or None,
+                "possesses": self.state.data["possessed"]}  # fmt: skip
+
+
+class ObjectRole(Role):
+    """A virtual object (type B): others keep its state; it persists what they wrote."""
+
+    def initial(self) -> dict[str, Any]:
+        return {"possessed_by": self.node.floor.placement().get(self.aid, "")}
+
+    async def start(self) -> None:
+        await self.set("PossessedBy", self.state.data["possessed_by"])
+        self.node.server.on_client_write(self._written)
+
+    def _written(self, submodel: str, prop: str, value: object) -> None:
+        if prop == "PossessedBy":
+            self.state.data["possessed_by"] = str(value)
+            self.state.save()
+
+    async def live(self) -> dict[str, Any]:
+        return {"state": "idle", "location": self.state.data["possessed_by"] or None}
+
+
+class PropsRole(Role):
+    """PropS: fuses reported poses in its pose graph."""
+
+    def __init__(self, node: AssetNode) -> None:
+        super().__init__(node)
+        from transfertwin.cps.apps import PoseGraph
+
+        self.poses = PoseGraph()
+
+    def handlers(self) -> dict[str, Any]:
+        return {"ReportPose": self._report, "FusedPose": self._fused}
+
+    async def _report(self, source, subject, x, y, theta, sigma_xy, sigma_theta) -> bool:
+        from transfertwin.cps.apps import PoseObservation
+
+        self.poses.add(PoseObservation(source, subject, x, y, theta, sigma_xy, sigma_theta))
+        await self.set("FusedPoses", len(self.poses.solve()))
+        return True
+
+    async def _fused(self, subject: str) -> str:
+        try:
+            pose = self.poses.fused(subject)
+        except InputError as exc:
+            raise ValueError(str(exc)) from None
+        return json.dumps({"x": pose.x, "y": pose.y, "theta": pose.theta})
+
+
+class ExperimentRole(Role):
+    """The Experiment Manager: runs E^V against a unit through that unit's OPC UA interface;
+    the virtual unit's physics runs here and mirrors its belt commands (`MirroredUnitHAL`)."""
+
+    def handlers(self) -> dict[str, Any]:
+        return {"RunExperiment": self._run}
+
+    async def _run(self, unit: str, obj: str, face: str, conveyor: str, theta_deg: int,
+                   seed: int) -> str:  # fmt: skip
+        from transfertwin.cps._role_tm import MirroredUnitHAL, load_scene
+        from transfertwin.cps.opcua import OpcUaUnitHAL
+        from transfertwin.study.experiment import ExperimentSpec, run_experiment, system_for
+
+        if unit not in self.node.floor.units:
+            raise ValueError(f"no transfer unit {unit!r}")
+        scene = load_scene()
+        spec = ExperimentSpec(obj, face, conveyor, int(theta_deg), scene=scene, seed=int(seed))
+        await self.set("State", "running")
+        try:
+            session = await self.node.peers.session(unit)
+            loop = asyncio.get_running_loop()
+            system = system_for(obj, "m", scene)
+            hal = MirroredUnitHAL(OpcUaUnitHAL(session, loop, timeout_s=30), system.tu, loop)
+            result = await asyncio.to_thread(run_experiment, spec, tu_hal=hal)
+        finally:
+            await self.set("State", "idle")
+        await self.set("ExperimentsDone", int(await self.get("ExperimentsDone")) + 1)
+        return json.dumps(result.row())
+
+
+class GraphRole(Role):
+    """The knowledge graph: the semantic layer, kept current by the other assets' leases.
+
+    Its content is soft state: every heartbeat carries the sender's whole description, so
+    a restarted graph is complete again one heartbeat period after it comes back.
+    """
+
+    def __init__(self, node: AssetNode) -> None:
+        super().__init__(node)
+        self.kg = None
+        self.leases: dict[str, float] = {}  # asset id -> monotonic deadline
+        self.info: dict[str, dict[str, Any]] = {}  # last heartbeat per asset
+        self._lock = asyncio.Lock()
+
+    def handlers(self) -> dict[str, Any]:
+        return {"Query": self._query, "Heartbeat": self._heartbeat, "Leave": self._leave,
+                "Status": self._status}  # fmt: skip
+
+    async def start(self) -> None:
+        from transfertwin.cps.kg import KnowledgeGraph
+
+        srv = self.node.server
+        self.kg = KnowledgeGraph(self.aid, endpoint=srv.endpoint,
+                                 security_policy=srv.security_policy)  # fmt: skip
+        self.node.spawn(self._expire())
+
+    async def beat_self(self) -> None:
+        """The graph's own lease (it is an asset like any other)."""
+        import os
+
+        srv = self.node.server
+        self.info[self.aid] = {"id": self.aid, "kind": "logical", "class": "knowledge_graph",
+                               "endpoint": srv.endpoint, "pid": os.getpid(), "state": "idle",
+                               "seen": time.time()}  # fmt: skip
+        await self._counts()
+
+    async def _counts(self) -> None:
+        await self.set("Triples", self.kg.triples())
+        await self.set("Assets", len(self.kg.assets(online_only=True)))
+
+    async def _query(self, sparql: str) -> str:
+        return json.dumps(self.kg.query(sparql))
+
+    async def _heartbeat(self, payload: str) -> str:
+        from transfertwin.cps.aas import AssetDescriptor, AssetKind, Capability, PhysicalType
+
+        d = json.loads(payload)
+        aid = d["id"]
+        fresh = aid not in self.leases or self.info.get(aid, {}).get("pid") != d.get("pid")
+        self.leases[aid] = time.monotonic() + self.node.cfg.lease_s
+        d["seen"] = time.time()
+        self.info[aid] = d
+        if fresh:
+            desc = AssetDescriptor(
+                aid, AssetKind(d["kind"]), d["class"],
+                physical_type=PhysicalType(d["type"]) if d.get("type") else None,
+                capabilities=tuple(Capability(c) for c in d.get("capabilities", ())),
+                station=d.get("station"), models=d.get("models"),
+            )  # fmt: skip
+            self.kg.join(desc, endpoint=d["endpoint"], security_policy=d["security_policy"],
+                         state=_state_word(d.get("state")))  # fmt: skip
+            log.info("KG: %s joined (pid %s, %s)", aid, d.get("pid"), d["endpoint"])
+        self._apply(aid, d)
+        return json.dumps({a: i["endpoint"] for a, i in self.info.items()
+                           if a in self.leases or a == self.aid})  # fmt: skip
+
+    def _apply(self, aid: str, d: dict[str, Any]) -> None:
+        """The live part of a heartbeat into the graph (each fact on its own: one that does
+        not fit yet, e.g. a location on an asset not joined, waits for the next beat)."""
+        kg = self.kg
+        updates = [lambda: kg.set_state(aid, _state_word(d.get("state")) or "idle")]
+        if d["class"] == "transport_module":
+            docked = d.get("docked")
+            updates.append(lambda: kg.set_docked(aid, docked if docked in self.leases else None))
+        if "possesses" in d:
+            updates.append(lambda: kg.set_possesses(aid, d["possesses"]))
+        if d["class"] == "object" and d.get("location") in self.leases:
+            updates.append(lambda: kg.set_location(aid, d["location"]))
+        for update in updates:
+            try:
+                update()
+            except InputError as exc:
+                log.debug("KG: %s: %s", aid, exc)
+
+    async def _leave(self, aid: str) -> bool:
+        if aid in self.leases:
+            del self.leases[aid]
+            self.kg.leave(aid)
+            log.info("KG: %s left", aid)
+        return True
+
+    async def _expire(self) -> None:
+        while True:
+            await asyncio.sleep(0.25)
+            now = time.monotonic()
+            for aid in [a for a, t in self.leases.items() if t < now]:
+                del self.leases[aid]
+                try:
+                    self.kg.leave(aid)
+                except InputError:
+                    pass
+                log.info("KG: %s offline (lease of %.1f s expired)", aid, self.node.cfg.lease_s)
+            await self._counts()
+
+    async def _status(self) -> str:
+        rows = []
+        for aid, d in sorted(self.info.items()):
+            online = aid in self.leases or aid == self.aid
+            rows.append({"id": aid, "kind": d.get("kind"), "class": d.get("class"),
+                         "address": d.get("endpoint"), "pid": d.get("pid"), "online": online,
+                         "state": d.get("state") if online else "offline",
+                         "docked": d.get("docked"), "location": d.get("location"),
+                         "pose": d.get("pose"),
+                         "last_seen_s": round(time.time() - d["seen"], 2)})  # fmt: skip
+        return json.dumps({"assets": rows})
+
+
+def _state_word(state: object) -> str | None:
+    """An operational state as the graph stores it (lower-case letters and '_')."""
+    if not isinstance(state, str) or not state:
+        return None
+    word = "".join(c if c.isalpha() else "_" for c in state.lower())
+    return word or None
+
+
+def role_for(node: AssetNode) -> Role:
+    """The role of the node's asset class."""
+    cls = node.desc.asset_class
+    if cls == "transport_module":
+        from transfertwin.cps._role_tm import ModuleRole
+
+        return ModuleRole(node)
+    if cls == "transport_module_system":
+        from transfertwin.cps._role_tms import TmsRole
+
+        return TmsRole(node)
+    roles = {"transfer_unit": UnitRole, "object": ObjectRole, "props": PropsRole,
+             "experiment_manager": ExperimentRole, "knowledge_graph": GraphRole}  # fmt: skip
+    return roles.get(cls, Role)(node)

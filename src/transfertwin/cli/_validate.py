@@ -1,7 +1,8 @@
 """`transfertwin validate`: virtual against physical results per state (Sec. 6.7).
 
 Writes ``validation.csv``, ``summary.json`` and ``validation.png`` into ``--out``
-and prints one summary line such as ``12/37 objects differ (…)``.
+and prints one summary line such as ``12/37 objects differ (…)``; when the compared
+states have too few runs to see a difference it says so, and which n per side would.
 """
 
 from __future__ import annotations
@@ -25,6 +26,8 @@ def cmd_validate(args: argparse.Namespace) -> int:
         f"at alpha={result.alpha:g}; not compared: {len(result.virtual_only)} virtual-only, "
         f"{len(result.physical_only)} physical-only states)"
     )
+    if result.power_note:
+        print(result.power_note)
     return 0
 
 

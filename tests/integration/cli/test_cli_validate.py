@@ -142,3 +142,24 @@ def test_out_must_not_be_a_file(tmp_path: Path) -> None:
     with pytest.raises(InputError, match="not a directory"):
         run("validate", "--virtual", str(REAL_CSV), "--physical", str(REAL_CSV),
             "--out", str(file))  # fmt: skip
+
+
+def test_states_with_one_physical_run_are_reported_without_power(tmp_path: Path, capsys) -> None:
+    """n_p = 1 everywhere (the README's case). Hand-derived: the 6 states that agree
+    (20/20 vs 1/1, 0/20 vs 0/1) are not significant and 1 run cannot show a difference
+    of 0.2; o1's 2 contradicting states are significant and have the power."""
+    virtual = tmp_path / "virtual.csv"
+    write_virtual(virtual)
+    out = tmp_path / "out"
+    assert run("validate", "--virtual", str(virtual), "--physical", str(REAL_CSV),
+               "--out", str(out)) == 0  # fmt: skip
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert len(lines) == 2
+    note = lines[1]
+    assert note.startswith("6/8 compared states have too few runs to see a difference: "
+                           "physical n = 1 per state, virtual n = 20")  # fmt: skip
+    assert "does not mean 'no difference'" in note
+    assert "Newcombe interval would exclude 0 for a difference of 0.2 with n = " in note
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    assert summary["power_note"] == note
+    assert summary["power"]["states_underpowered"] == 6

@@ -6,6 +6,13 @@ from transfertwin.study.validation._agreement import (
     compare_scenes,
     run_side,
 )
+from transfertwin.study.validation._power import (
+    DETECTABLE_DIFFERENCE,
+    PowerSummary,
+    n_to_exclude_zero,
+    power_note,
+    power_summary,
+)
 from transfertwin.study.validation._validation import (
     NEWCOMBE_HYBRID_SCORE,
     VALIDATION_COLUMNS,
@@ -21,16 +28,21 @@ from transfertwin.study.validation._validation import (
 )
 
 __all__ = [
+    "DETECTABLE_DIFFERENCE",
     "NEWCOMBE_HYBRID_SCORE",
     "VALIDATION_COLUMNS",
     "Agreement",
     "DifferenceInterval",
+    "PowerSummary",
     "SideOutcome",
     "StateComparison",
     "ValidationResult",
     "compare",
     "compare_scenes",
+    "n_to_exclude_zero",
     "newcombe_difference",
+    "power_note",
+    "power_summary",
     "run_side",
     "summary_json_text",
     "validate",

@@ -41,6 +41,7 @@ from transfertwin.study.fullstate import (
     state_order,
     state_table,
 )
+from transfertwin.study.validation._power import power_note, power_summary
 
 __all__ = [
     "NEWCOMBE_HYBRID_SCORE",
@@ -268,6 +269,12 @@ class ValidationResult:
         """E.g. ``"12/37 objects differ"``."""
         return f"{len(self.differing_objects)}/{len(self.object_ids)} objects differ"
 
+    @property
+    def power_note(self) -> str:
+        """Whether the compared n can show a difference and which n would (`power_note`);
+        empty when every compared state has enough runs."""
+        return power_note(power_summary(self.comparisons)) if self.comparisons else ""
+
     def _objects(self) -> dict[str, dict[str, Any]]:
         counts: dict[str, Counter[str]] = {}
         for name, keys in (
@@ -287,7 +294,8 @@ class ValidationResult:
         return out
 
     def to_dict(self) -> dict[str, Any]:
-        """The content of ``summary.json``: method, counts, per-object counts.
+        """The content of ``summary.json``: method, counts, per-object counts, and what the
+        compared n can show (``power``, ``power_note``; see `power_summary`).
 
         Per object ``differs`` is ``None`` when none of its states was compared.
         """
@@ -305,6 +313,8 @@ class ValidationResult:
             "states_virtual_only": len(self.virtual_only),
             "states_physical_only": len(self.physical_only),
             "objects": self._objects(),
+            "power": power_summary(self.comparisons).to_dict() if self.comparisons else None,
+            "power_note": self.power_note,
         }
 
 

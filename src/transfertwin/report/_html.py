@@ -438,13 +438,16 @@ def _figures(analysis: AnalysisResult) -> list[tuple[str, str, bytes]]:
             sigmas = [c.bandwidth_deg for f in data.faces for c in f.curves]
             png = figure_png(plot_polar_full_state(data))
             caption = (
-                f"<b>{name}</b>: success rate over the yaw θ, per face (cf. Fig. 6.20). "
-                "Radius: success rate, 0 at the centre, 1 on the rim. Lines: the states' "
-                f"success rates smoothed over θ (Gaussian kernel, σ = {_sigma_text(sigmas)}; "
-                "gaps where no state was run nearby): solid blue for the left conveyor "
-                "(states with c = left or both), dashed orange for the right conveyor "
-                "(c = right or both). Dots: each state's own k/n. Star and cross: the best "
-                f"and worst state (Alg. 1–4), drawn at their {_YMA}."
+                f"<b>{name}</b>: success rate over the yaw θ, one panel per face (rows) and "
+                "conveyor (columns; cf. Fig. 6.20). Radius: success rate, 0 at the centre, 1 "
+                "on the rim. Line: the states' success rates smoothed over θ (Gaussian kernel, "
+                f"σ = {_sigma_text(sigmas)}; gaps where no state was run nearby): solid blue "
+                "for the left conveyor (states with c = left or both), dashed orange for the "
+                "right conveyor (c = right or both); the two share the states with c = both, "
+                "so their curves are alike where those dominate. Dots: each state's own k/n. "
+                f"Star and cross: the best and worst state (Alg. 1–4), drawn at their {_YMA} "
+                "in the panel of the series they were chosen from; a dotted spoke marks their "
+                "angle θ, labelled at the rim."
             )
             out.append((f"full_state_{_safe(obj)}", caption, png))
         png = figure_png(plot_binary_polar(binary_polar_data(by_object[obj], obj)))

@@ -2,12 +2,17 @@
 
 Data first: `polar_full_state_data` turns an object's series (Eq. 6.28) and its
 selection (Alg. 1–4) into plain tuples; `plot_polar_full_state` draws them. Each
-face gets a polar axes with θ = 0 at the top, θ growing counter-clockwise and
-radius = success rate ∈ [0, 1] (centre 0, rim 1). Per series (left conveyor:
-c ∈ {left, both}; right conveyor: c ∈ {right, both}) the line is a circular-kernel
-estimate of the success probability over θ (`circular_smooth`), the dots are the
-states' own rates k/n, and the best (star) and worst (×) state of Alg. 1–4 sit at
-their ȳ^MA (Eq. 6.27), the value the selection used.
+series (face × conveyor side: left conveyor c ∈ {left, both}, right conveyor
+c ∈ {right, both}) gets its own polar axes, faces in rows and sides in columns, with
+θ = 0 at the top, θ growing counter-clockwise and radius = success rate ∈ [0, 1]
+(centre 0, rim 1). Own panels because the two sides share every 'both' state: at a
+coarse θ-step (30°: only θ = 0 and 180 are single-conveyor) their curves coincide and
+one would hide the other. The line is a circular-kernel estimate of the success
+probability over θ (`circular_smooth`), the dots are the states' own rates k/n, and
+the best (star) and worst (×) state of Alg. 1–4 sit at their ȳ^MA (Eq. 6.27), the
+value the selection used, in the panel of the series they were chosen from. A spoke
+from the centre to the rim at the state's θ, labelled "best: θ = …°", keeps its angle
+readable even when it sits at radius 0.
 
 The study's ȳ^MA averages the angles present within ±window/2; for sparse data
 (e.g. the 191 real experiments, one per state) that is the raw 0/1 outcome of a
@@ -227,50 +232,75 @@ def _smooth_xy(curve: PolarCurve) -> tuple[np.ndarray, np.ndarray]:
     return np.radians(np.asarray(curve.grid_deg, dtype=float)), np.asarray(curve.y_smooth)
 
 
+def _setup_rate_axes(ax) -> None:
+    setup_yaw_axes(ax)
+    ax.set_rlim(0.0, 1.05)
+    ax.set_rticks([0.25, 0.5, 0.75, 1.0], labels=["0.25", "0.5", "0.75", ""])
+    ax.set_rlabel_position(RLABEL_DEG)
+    for label in ax.get_yticklabels():
+        label.set_fontsize("small")
+        label.set_color("#444444")
+        label.set_bbox({"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.8})
+    ax.text(
+        math.radians(RLABEL_DEG + 8), 1.32, RADIUS_NOTE, fontsize="small",
+        color="#444444", ha="center", va="center",
+    )  # fmt: skip
+
+
+def _draw_curve(ax, curve: PolarCurve) -> None:
+    style = _SERIES_STYLE[curve.side]
+    if curve.grid_deg:
+        th, r = _smooth_xy(curve)
+        ax.plot(th, r, label="smoothed success rate", zorder=3, **style)
+    if curve.n:
+        ax.scatter(
+            np.radians(curve.theta_deg), curve.y_mean, s=18, color=style["color"],
+            alpha=0.7, zorder=2, linewidths=0, label="each state's k/n",
+        )  # fmt: skip
+
+
+def _draw_marker(ax, m: PolarMarker) -> None:
+    """The state at (θ, ȳ^MA) and a labelled spoke at its θ (visible at radius 0 too)."""
+    th = math.radians(m.theta_deg)
+    color = _MARK[m.kind]["color"]
+    ax.plot([th, th], [0.0, 1.05], color=color, linestyle=":", linewidth=1.6, zorder=4)
+    ax.text(
+        th, 1.3, f"{m.kind}: θ = {m.theta_deg}°", color="black", fontsize="small",
+        ha="center", va="center", zorder=6,
+        bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": color},
+    )  # fmt: skip
+    label = f"{m.kind} state: θ = {m.theta_deg}°, " + r"$\bar{y}^{MA}$" + f" = {m.y_ma:.2f}"
+    ax.scatter([th], [m.y_ma], label=label, zorder=5, **_MARK[m.kind])
+
+
 def plot_polar_full_state(data: PolarFullState, fig: Figure | None = None) -> Figure:
-    """Draw Fig. 6.20/6.21 for one object: one polar axes per face.
+    """Draw Fig. 6.20/6.21 for one object: one polar axes per series (face × side).
 
     Args:
         data: From `polar_full_state_data`.
-        fig: Empty figure to draw into; a new 11 × 5.8 in figure when ``None``.
+        fig: Empty figure to draw into; a new 11 × 11.5 in figure when ``None``.
 
     Returns:
-        The figure (two polar axes).
+        The figure: faces in rows, conveyor sides (left, right) in columns; a series
+        with no run state leaves its panel empty.
     """
-    fig = fig if fig is not None else new_figure(11.0, 5.8)
+    fig = fig if fig is not None else new_figure(11.0, 11.5)
+    sides = tuple(_SERIES_STYLE)
     for i, face in enumerate(data.faces):
-        ax = fig.add_subplot(1, len(data.faces), i + 1, projection="polar")
-        setup_yaw_axes(ax)
-        ax.set_rlim(0.0, 1.05)
-        ax.set_rticks([0.25, 0.5, 0.75, 1.0], labels=["0.25", "0.5", "0.75", ""])
-        ax.set_rlabel_position(RLABEL_DEG)
-        for label in ax.get_yticklabels():
-            label.set_fontsize("small")
-            label.set_color("#444444")
-            label.set_bbox({"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.8})
-        ax.set_title(f"face '{face.face}'", pad=14)
-        for curve in face.curves:
-            style = _SERIES_STYLE[curve.side]
-            if curve.grid_deg:
-                th, r = _smooth_xy(curve)
-                ax.plot(th, r, label=_SERIES_LABEL[curve.side], zorder=3, **style)
-            if curve.n:
-                ax.scatter(
-                    np.radians(curve.theta_deg), curve.y_mean, s=14, color=style["color"],
-                    alpha=0.55, zorder=2, linewidths=0,
-                )  # fmt: skip
-        for m in face.markers:
-            label = f"{m.kind} state: θ = {m.theta_deg}°, " + r"$\bar{y}^{MA}$" + f" = {m.y_ma:.2f}"
-            ax.scatter(
-                [math.radians(m.theta_deg)], [m.y_ma], label=label, zorder=5, **_MARK[m.kind]
-            )
-        if face.curves or face.markers:
-            ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.08), fontsize="small")
-        ax.text(
-            math.radians(RLABEL_DEG + 8), 1.32, RADIUS_NOTE, fontsize="small",
-            color="#444444", ha="center", va="center",
-        )  # fmt: skip
+        for j, side in enumerate(sides):
+            ax = fig.add_subplot(len(data.faces), len(sides), i * len(sides) + j + 1,
+                                 projection="polar")  # fmt: skip
+            _setup_rate_axes(ax)
+            ax.set_title(f"{face.face} face, {_SERIES_LABEL[side]}", pad=48)
+            name = f"{face.face}-{side}"
+            for curve in (c for c in face.curves if c.series == name):
+                _draw_curve(ax, curve)
+            for m in (m for m in face.markers if m.series == name):
+                _draw_marker(ax, m)
+            if ax.get_legend_handles_labels()[0]:
+                ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.17), fontsize="small")
     fig.suptitle(
-        f"{data.object_id}: success rate over the yaw θ (line: smoothed; dots: each state's k/n)"
+        f"{data.object_id}: success rate over the yaw θ, one panel per face and conveyor "
+        "(line: smoothed; dots: each state's k/n)"
     )
     return fig

@@ -36,7 +36,7 @@ def test_fig_6_20_plot_polar_full_state(tmp_path: Path) -> None:
         polar_full_state_data(series_table(stats, "o1"), select(stats, "o1"))
     )
     assert isinstance(fig, Figure)
-    assert [ax.name for ax in fig.axes] == ["polar", "polar"]
+    assert [ax.name for ax in fig.axes] == ["polar"] * 4  # face x conveyor side
     fig.savefig(tmp_path / "polar.png")
     assert (tmp_path / "polar.png").read_bytes().startswith(PNG_MAGIC)
 
@@ -101,3 +101,53 @@ def test_binary_polar_draws_one_marker_per_state_coloured_by_its_share() -> None
     rgba = coll.to_rgba(coll.get_array())[0]
     assert np.allclose(rgba, coll.cmap(coll.norm(0.75)))
     assert "6/8" in _texts(front)  # few states: each is labelled with its k/n
+
+
+def _step30_rows() -> list[dict]:
+    """Both faces at θ-step 30, 8 runs a state; front fails everywhere at θ = -150 only."""
+    out = []
+    for face in ("front", "back"):
+        for t in range(-150, 181, 30):
+            convs = ("left", "right") if t in (0, 180) else ("both",)
+            for conv in convs:
+                wins = 0 if (face, t) == ("front", -150) else 8
+                out += [dict(object_id="o1", face=face, conveyor=conv, theta_deg=t,
+                             success=int(r < wins)) for r in range(8)]  # fmt: skip
+    return out
+
+
+def test_full_state_plot_shows_every_curve_in_its_own_panel() -> None:
+    """Issue 30.2: at θ-step 30 the left and right curves coincide, so each series gets its
+    own panel (face × conveyor side) instead of being drawn over the other."""
+    stats = state_table(_step30_rows())
+    data = polar_full_state_data(series_table(stats, "o1"), select(stats, "o1"))
+    fig = plot_polar_full_state(data)
+    polar = [ax for ax in fig.axes if ax.name == "polar"]
+    assert len(polar) == 4
+    titles = [ax.get_title() for ax in polar]
+    assert titles == [
+        "front face, left conveyor (c = left or both)",
+        "front face, right conveyor (c = right or both)",
+        "back face, left conveyor (c = left or both)",
+        "back face, right conveyor (c = right or both)",
+    ]
+    for ax in polar:  # exactly one smoothed curve per panel
+        assert sum(len(line.get_xdata()) == 361 for line in ax.lines) == 1
+
+
+def test_full_state_plot_marks_the_angle_of_a_worst_state_at_radius_0() -> None:
+    """Issue 30.2: the worst state (0 of 8, drawn at the centre) keeps its angle: a radial
+    line from the centre to the rim at its θ and a label with θ in degrees."""
+    import math
+
+    stats = state_table(_step30_rows())
+    sel = select(stats, "o1")
+    assert (sel.worst.theta_deg, sel.worst.y_ma) == (-150, 0.0)
+    fig = plot_polar_full_state(polar_full_state_data(series_table(stats, "o1"), sel))
+    panel = fig.axes[0]  # front, left: the series the worst state was chosen from
+    spokes = [
+        line for line in panel.lines
+        if len(set(line.get_xdata())) == 1 and line.get_xdata()[0] == math.radians(-150)
+    ]  # fmt: skip
+    assert spokes and min(spokes[0].get_ydata()) == 0.0 and max(spokes[0].get_ydata()) >= 1.0
+    assert "worst: θ = -150°" in _texts(panel)

@@ -1,6 +1,8 @@
 """`transfertwin rehearse`: the whole calibrate → predict → validate loop on an emulated plant.
 
-Writes ``rehearsal.json``, ``report.html`` and the plant's and twin's rows into ``--out``.
+Writes ``rehearsal.json``, ``report.html`` and the plant's and twin's rows into ``--out``
+and prints what it found (saying when the held-out rows are too few for a change in F0.5
+to be significant) and where ``report.html`` is.
 With several ``--calibration-experiments`` (``25,50,100``) each K gets ``--out/K<k>/``;
 ``--out/rehearsal.json`` (and ``curve.json``) collect F0.5 and the significant differences
 against K, and ``--out/report.html`` plots them. ``--ablate mass|stability|compliance``
@@ -13,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from pathlib import Path
 
 from rich.console import Console
 
@@ -42,6 +45,23 @@ def _depths(text: str) -> tuple[float, ...]:
         return tuple(float(p) for p in text.split(",") if p.strip())
     except ValueError:
         raise InputError(f"--depths-mm expects D1,D2,... in mm, got {text!r}") from None
+
+
+def _summary_line(doc: dict, n_objects: int, where: Path) -> str:
+    """What one rehearsal found, with the small-n caveat of `f05_change_text`, and where
+    its report is."""
+    from transfertwin.report import REHEARSAL_REPORT_NAME, f05_change_text, rehearsal_plot_data
+
+    k = doc["config"]["calibration_experiments"]
+    return (
+        f"K={k}: F0.5 on {doc['held_out']} held-out rows before {doc['f05_before']:.3f}, "
+        f"after {doc['f05_after']:.3f} (always-success {doc['f05_base_rate']:.3f}); "
+        f"{f05_change_text(rehearsal_plot_data(doc))}; significant best "
+        f"{doc['significant_best']}/{n_objects}, worst {doc['significant_worst']}/{n_objects}; "
+        f"{doc['plant_experiments']} plant and {doc['virtual_experiments']} virtual "
+        f"experiments in {doc['seconds']} s\n  report: {where / REHEARSAL_REPORT_NAME} "
+        "(rehearsal.json and the rows beside it)"
+    )
 
 
 def cmd_rehearse(args: argparse.Namespace) -> int:
@@ -78,16 +98,7 @@ def cmd_rehearse(args: argparse.Namespace) -> int:
             doc = rehearse(cfg, where, on_stage=stage, on_progress=update)
         write_rehearsal_report(doc, where)
         docs.append(doc)
-        print(
-            f"K={cfg.calibration_experiments}: F0.5 held-out before {doc['f05_before']:.3f}, "
-            f"after {doc['f05_after']:.3f} (always-success {doc['f05_base_rate']:.3f}); "
-            f"on {doc['held_out']} rows, after - before 95 % CI [{doc['f05_delta_ci'][0]:.2f}, "
-            f"{doc['f05_delta_ci'][1]:.2f}]; "
-            f"significant best {doc['significant_best']}/{len(cfg.objects)}, worst "
-            f"{doc['significant_worst']}/{len(cfg.objects)}; {doc['plant_experiments']} plant "
-            f"and {doc['virtual_experiments']} virtual experiments in {doc['seconds']} s "
-            f"-> {where / 'rehearsal.json'}"
-        )
+        print(_summary_line(doc, len(cfg.objects), where))
         for m, ab in doc["ablations"].items():
             print(
                 f"  without {m}: F0.5 after {ab['f05_after']:.3f} "
@@ -108,7 +119,8 @@ def cmd_rehearse(args: argparse.Namespace) -> int:
         curve = curve_document(docs)
         write_atomic(out / "curve.json", json.dumps(curve["curve"], indent=2) + "\n")
         write_atomic(out / "rehearsal.json", json.dumps(curve, indent=2) + "\n")
-        write_rehearsal_curve_report(curve, out)
+        page = write_rehearsal_curve_report(curve, out)
+        print(f"curve over K: {page} (curve.json, rehearsal.json beside it)")
     return 0
 
 

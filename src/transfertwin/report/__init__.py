@@ -50,10 +50,19 @@ from transfertwin.report._polar_full_state import (
     polar_full_state_data,
 )
 from transfertwin.report._rehearsal_html import (
+    REHEARSAL_FIGURE,
     REHEARSAL_REPORT_NAME,
     plot_rehearsal_curve,
     write_rehearsal_curve_report,
     write_rehearsal_report,
+)
+from transfertwin.report._rehearsal_plots import (
+    F05Point,
+    RehearsalPlot,
+    ValidatedState,
+    f05_change_text,
+    plot_rehearsal,
+    rehearsal_plot_data,
 )
 from transfertwin.report._sensitivity_plots import (
     MorrisBar,
@@ -72,6 +81,7 @@ from transfertwin.report._validation_plots import (
 
 __all__ = [
     "LABEL_MAX_STATES",
+    "REHEARSAL_FIGURE",
     "REHEARSAL_REPORT_NAME",
     "REPORT_NAME",
     "RING_RADIUS",
@@ -82,6 +92,7 @@ __all__ = [
     "Curve",
     "DockingCorrelations",
     "DockingHistograms",
+    "F05Point",
     "FidelityPlot",
     "IntervalPlot",
     "MorrisBar",
@@ -89,15 +100,18 @@ __all__ = [
     "PolarFace",
     "PolarFullState",
     "PolarMarker",
+    "RehearsalPlot",
     "ScoreDistribution",
     "SensitivityPanel",
     "ShareBar",
+    "ValidatedState",
     "ValidationPlot",
     "analyze_and_report",
     "binary_polar_data",
     "circular_smooth",
     "docking_correlation_data",
     "docking_hist_data",
+    "f05_change_text",
     "fidelity_plot_data",
     "figure_png",
     "format_value",
@@ -111,11 +125,13 @@ __all__ = [
     "plot_intervals",
     "plot_morris",
     "plot_polar_full_state",
+    "plot_rehearsal",
     "plot_rehearsal_curve",
     "plot_score_distribution",
     "plot_sensitivity",
     "plot_validation",
     "polar_full_state_data",
+    "rehearsal_plot_data",
     "score_distribution_data",
     "sensitivity_plot_data",
     "validate_and_report",

@@ -1,4 +1,10 @@
-"""Self-contained HTML page of a rehearsal (`transfertwin rehearse`, issue 12)."""
+"""Self-contained HTML pages of a rehearsal (`transfertwin rehearse`, issues 12 and 30).
+
+One rehearsal's page reads like the study's report: what was done, what it found in words
+(held-out F0.5 with intervals and, with few rows, that a change is not significant), the
+figure (`plot_rehearsal`), the tables, and the configuration folded away. Several K get a
+curve page (`write_rehearsal_curve_report`).
+"""
 
 from __future__ import annotations
 
@@ -9,8 +15,16 @@ from pathlib import Path
 
 from transfertwin._atomic import write_atomic
 from transfertwin.report._figure import figure_png, new_figure
+from transfertwin.report._rehearsal_plots import (
+    SMALL_HELD_OUT,
+    RehearsalPlot,
+    f05_change_text,
+    plot_rehearsal,
+    rehearsal_plot_data,
+)
 
 __all__ = [
+    "REHEARSAL_FIGURE",
     "REHEARSAL_REPORT_NAME",
     "plot_rehearsal_curve",
     "write_rehearsal_curve_report",
@@ -18,6 +32,8 @@ __all__ = [
 ]
 
 REHEARSAL_REPORT_NAME = "report.html"
+#: The figure `write_rehearsal_report` writes beside the page.
+REHEARSAL_FIGURE = "rehearsal.png"
 _STYLE = (
     "body{font-family:sans-serif;margin:2em;max-width:1100px}"
     "table{border-collapse:collapse;margin:1em 0}"
@@ -168,63 +184,183 @@ def write_rehearsal_curve_report(doc: Mapping[str, object], out_dir: str | Path)
     return path
 
 
+_PAGE_STYLE = (
+    "body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1100px;padding:0 1em;"
+    "color:#222;line-height:1.45}h1{margin-bottom:0.1em}.lead{color:#555;margin-top:0.2em}"
+    "table{border-collapse:collapse;margin:0.6em 0 1.2em}"
+    "td,th{border:1px solid #ccc;padding:4px 8px;text-align:left;vertical-align:top}"
+    "th{background:#f0f0f0}.warn{color:#8a4b00}"
+    "details{margin:0.8em 0;border:1px solid #ddd;border-radius:4px;padding:0.4em 0.8em}"
+    "summary{cursor:pointer;font-weight:600}"
+    "figure{margin:1.2em 0 2em}figcaption{color:#444;font-size:0.93em;max-width:60em}"
+    "img{max-width:100%;display:block}"
+)
+#: What the fields of ``rehearsal.json`` hold, for the folded glossary.
+_FIELDS = (
+    ("f05_before, f05_after, f05_base_rate", "held-out F0.5 of the twin before and after "
+     "calibration and of the always-success predictor (mean over runs)"),
+    ("*_ci", "their 95 % percentile-bootstrap intervals over the held-out rows"),
+    ("f05_delta_ci", "after − before on the same resamples (paired)"),
+    ("significant_best, significant_worst", "objects whose best/worst state differs "
+     "between twin and plant (Newcombe interval of p_V − p_P excludes 0)"),
+    ("ablations, delta_*", "twin variants with one counter-measure off; without − with"),
+)  # fmt: skip
+
+
+_CALIBRATION_HEAD = (
+    "object", "protrusion depth", "measured mass [kg]", "plant success share (calibration)",
+)  # fmt: skip
+_STATES_HEAD = (
+    "object", "state", "pre-transfer state", "twin k/n", "plant k/n", "p_V − p_P 95 % CI",
+    "differ",
+)  # fmt: skip
+
+
+def _what_was_done(doc: Mapping[str, object]) -> str:
+    cfg: Mapping[str, object] = doc.get("config") or {}  # type: ignore[assignment]
+    objects = ", ".join(map(str, cfg.get("objects", ()))) or "?"  # type: ignore[call-overload]
+    runs = html.escape(str(cfg.get("validation_runs", "?")))
+    if cfg.get("test_experiments"):
+        split = (f"all {doc['training']} calibrated the twin and {doc['held_out']} further "
+                 "plant experiments were kept only for scoring")  # fmt: skip
+    else:
+        split = (f"{doc['training']} of them calibrated the twin and {doc['held_out']} were "
+                 "held out, never used in calibration")  # fmt: skip
+    return (
+        f"<p>An emulated plant (seed {html.escape(str(cfg.get('plant_seed', '?')))}, its "
+        "physical parameters hidden from the twin) stood in for the real one. It ran "
+        f"{html.escape(str(cfg.get('calibration_experiments', '?')))} calibration experiments "
+        f"on random pre-transfer states of {html.escape(objects)}; {split}. Calibration fitted "
+        "each object's proxy (a protrusion depth per face, with the measured mass) to the "
+        "plant's outcomes. The twin predicted the held-out experiments before and after "
+        "calibration. Then its full-state prediction chose each object's best and worst "
+        f"state, and plant and twin each ran those {runs} times. In all "
+        f"{doc['plant_experiments']} plant and {doc['virtual_experiments']} virtual "
+        f"experiments, {doc['seconds']} s.</p>"
+    )
+
+
+def _findings(doc: Mapping[str, object], data: RehearsalPlot) -> str:
+    base, before, after = data.f05
+    n = len(doc.get("objects") or {})  # type: ignore[arg-type]
+    best = ", ".join(doc.get("significant_best_objects") or []) or "none"  # type: ignore[arg-type]
+    worst = ", ".join(doc.get("significant_worst_objects") or []) or "none"  # type: ignore[arg-type]
+    small = data.held_out < SMALL_HELD_OUT
+    items = [
+        f"Held-out F0.5: before calibration {before.f05:.3f} {_ci_text(before.ci)}, after "
+        f"{after.f05:.3f} {_ci_text(after.ci)}; {f05_change_text(data)}."
+        + (" <span class='warn'>Score on more rows (<code>--test-experiments H</code>) "
+           "before reading a change into these numbers.</span>" if small else ""),
+        f"F0.5 counts precision twice as much as recall: a predicted success that fails "
+        f"costs more than a missed one. 1 is perfect; always predicting success scores "
+        f"{base.f05:.3f} {_ci_text(base.ci)} on these rows, so the twin is useful only above "
+        "that.",
+        f"Validation of the best/worst states: twin and plant differ significantly for the "
+        f"best state of {doc['significant_best']}/{n} objects ({html.escape(best)}) and the "
+        f"worst of {doc['significant_worst']}/{n} ({html.escape(worst)}).",
+    ]  # fmt: skip
+    note = _power_note(data)
+    if note:
+        items.append(f"<span class='warn'>{html.escape(note)}</span>")
+    return "<h2>What it found</h2><ul>" + "".join(f"<li>{t}</li>" for t in items) + "</ul>"
+
+
+def _power_note(data: RehearsalPlot) -> str:
+    """The validation's power note (study.validation) over the best/worst states."""
+    from transfertwin.study.validation import StateComparison, power_note, power_summary
+
+    comps = [
+        StateComparison(s.object_id, *s.state.split(" ")[:2], 0, s.n_v, s.k_v, *s.ci_v,
+                        s.n_p, s.k_p, *s.ci_p, *s.diff)
+        for s in data.states
+    ]  # fmt: skip
+    return power_note(power_summary(comps)) if comps else ""
+
+
+def _depth_text(fit: Mapping[str, object]) -> str:
+    depth = fit.get("depth_mm")
+    if isinstance(depth, Mapping):
+        return ", ".join(f"{face} {float(d):g} mm" for face, d in sorted(depth.items()))
+    if depth is not None:
+        return f"{float(depth):g} mm"  # type: ignore[arg-type]
+    return html.escape(str(fit.get("reason", "not calibrated")))
+
+
+def _calibration_rows(objects: Mapping[str, Mapping[str, object]]) -> list[list[object]]:
+    rows: list[list[object]] = []
+    for oid, entry in objects.items():
+        fit: Mapping[str, object] = entry.get("calibration") or {}  # type: ignore[assignment]
+        mass = fit.get("measured_mass_kg")
+        share = entry.get("plant_calibration_share")
+        rows.append([oid, _depth_text(fit), "" if mass is None else f"{float(mass):.3f}",  # type: ignore[arg-type]
+                     "" if share is None else f"{float(share):.2f}"])  # type: ignore[arg-type]  # fmt: skip
+    return rows
+
+
+def _state_rows(data: RehearsalPlot) -> list[list[object]]:
+    return [
+        [s.object_id, s.kind, s.state, f"{s.k_v}/{s.n_v}", f"{s.k_p}/{s.n_p}",
+         f"[{s.diff[0]:.2f}, {s.diff[1]:.2f}]", "yes" if s.significant else "no"]
+        for s in data.states
+    ]  # fmt: skip
+
+
+def _config_details(doc: Mapping[str, object]) -> str:
+    cfg: Mapping[str, object] = doc.get("config") or {}  # type: ignore[assignment]
+    rows = [[k, ", ".join(map(str, v)) if isinstance(v, (list, tuple)) else v]
+            for k, v in cfg.items()]  # fmt: skip
+    fields = _table(("rehearsal.json field", "holds"), [list(f) for f in _FIELDS])
+    return (
+        "<details><summary>Configuration</summary>"
+        + _table(("setting", "value"), rows)
+        + "</details><details><summary>Fields of rehearsal.json</summary>"
+        + fields
+        + "</details>"
+    )
+
+
 def write_rehearsal_report(doc: Mapping[str, object], out_dir: str | Path) -> Path:
-    """Write ``report.html`` for a ``rehearsal.json`` document into `out_dir`."""
+    """Write ``report.html`` (and ``rehearsal.png``) for a ``rehearsal.json`` document:
+    what was done, what it found in words (with the small-n caveats), the figure, the
+    tables, and the configuration folded away."""
+    data = rehearsal_plot_data(doc)
+    png = figure_png(plot_rehearsal(data))
     scores = [
-        ["always 'success'", doc["f05_base_rate"], "", "", ""],
+        ["always 'success'", _with_ci(doc, "f05_base_rate"), "", "", ""],
         *[
-            [label, s["f05"], s["precision"], s["recall"], s["brier"]]
-            for label, s in (("twin before calibration", doc["scores_before"]),
-                             ("twin after calibration", doc["scores_after"]))
+            [label, _with_ci(doc, key), s["precision"], s["recall"], s["brier"]]
+            for label, key, s in (("twin before calibration", "f05_before", doc["scores_before"]),
+                                  ("twin after calibration", "f05_after", doc["scores_after"]))
         ],
     ]  # fmt: skip
     objects: Mapping[str, Mapping[str, object]] = doc["objects"]  # type: ignore[assignment]
-    states, calib = [], []
-    for oid, entry in objects.items():
-        fit = entry["calibration"]
-        calib.append([oid, fit.get("depth_mm", fit.get("reason", "")),
-                      entry.get("plant_calibration_share", "")])  # fmt: skip
-        for kind in ("best", "worst"):
-            st = entry.get(kind)
-            if st:
-                states.append([
-                    oid, kind, f"{st['face']} {st['conveyor']} {st['theta_deg']}°",
-                    f"{st['k_v']}/{st['n_v']}", f"{st['k_p']}/{st['n_p']}",
-                    f"[{st['diff_low']:.2f}, {st['diff_high']:.2f}]",
-                    "yes" if st["significant"] else "no",
-                ])  # fmt: skip
-    n = len(objects)
     page = (
         f"<!doctype html><html><head><meta charset='utf-8'><title>Rehearsal</title>"
-        f"<style>{_STYLE}</style></head><body><h1>Rehearsal on an emulated plant</h1>"
-        f"<p>{html.escape(str(doc.get('note', '')))}</p>"
-        f"<p>Plant experiments: {doc['plant_experiments']}; virtual experiments: "
-        f"{doc['virtual_experiments']}; training rows {doc['training']}, held-out rows "
-        f"{doc['held_out']}; {doc['seconds']} s.</p>"
+        f"<style>{_PAGE_STYLE}</style></head><body><h1>Rehearsal on an emulated plant</h1>"
+        "<p class='lead'>The study's procedure — calibrate, predict, validate — tried "
+        "against a plant whose truth is known.</p>"
+        + _what_was_done(doc)
+        + _findings(doc, data)
+        + "<figure><img alt='held-out F0.5 before/after calibration; best/worst states, "
+        f"twin vs plant' src='data:image/png;base64,{base64.b64encode(png).decode()}'>"
+        "<figcaption>Left: F0.5 on the held-out plant experiments with 95 % bootstrap "
+        "intervals. Right: each object's best and worst state as the twin chose them, the "
+        "twin's and the plant's success share with 95 % Clopper–Pearson intervals; a red "
+        "background where the Newcombe interval of p<sub>V</sub> − p<sub>P</sub> excludes "
+        "0.</figcaption></figure>"
         "<h2>Held-out plant experiments</h2>"
-        + _table(("predictor", "F0.5", "precision", "recall", "Brier"), scores)
+        + _table(("predictor", "F0.5 [95 %]", "precision", "recall", "Brier"), scores)
         + "<h2>Object calibration (proxies, not scans)</h2>"
-        + _table(("object", "protrusion depth [mm]", "plant success share (calibration)"), calib)
-        + f"<h2>Validation: best/worst states</h2><p>Significant: best "
-        f"{doc['significant_best']}/{n}, worst {doc['significant_worst']}/{n} "
-        "(Newcombe hybrid score interval of p<sub>V</sub> − p<sub>P</sub>, α = 0.05).</p>"
-        + _table(
-            (
-                "object",
-                "state",
-                "pre-transfer state",
-                "virtual k/n",
-                "plant k/n",
-                "p_V − p_P 95 % CI",
-                "significant",
-            ),
-            states,
-        )
+        + _table(_CALIBRATION_HEAD, _calibration_rows(objects))
+        + "<h2>Validation: best/worst states</h2>"
+        + _table(_STATES_HEAD, _state_rows(data))
         + _ablation_section(doc)
         + _operations_section(doc)
-        + f"<h2>Configuration</h2><pre>{html.escape(str(doc.get('config', '')))}</pre>"
-        "</body></html>\n"
+        + _config_details(doc)
+        + "</body></html>\n"
     )
-    path = Path(out_dir) / REHEARSAL_REPORT_NAME
+    out = Path(out_dir)
+    write_atomic(out / REHEARSAL_FIGURE, png)
+    path = out / REHEARSAL_REPORT_NAME
     write_atomic(path, page)
     return path

@@ -214,6 +214,13 @@ def cmd_order(args: argparse.Namespace) -> int:
         raise InputError(f"--timeout must be a positive number of seconds, got {args.timeout}")
     wd = _workdir(args.workdir, must_exist=True)
     info, creds = _load(wd)
+    if info.get("mode") == "processes":
+        from transfertwin.cli._cps_floor import floor_order
+
+        return floor_order(wd, info, creds, args)
+    if args.source is None:
+        raise InputError("--from is required by the single-process CPS (a floor started with "
+                         "--floor finds the object itself)")  # fmt: skip
     _check_order(info, args.source, args.target, args.object)
 
     async def order() -> dict:
@@ -387,9 +394,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--detach", action="store_true",
                    help="with --floor: exit once the floor is up and leave it running "
                         "(stop it with 'cps down')")  # fmt: skip
-    p.add_argument("--lease", type=float, default=3.0,
+    p.add_argument("--lease", type=float, default=5.0,
                    help="with --floor: seconds without a heartbeat before an asset counts as "
-                        "offline (default 3)")  # fmt: skip
+                        "offline (default 5)")  # fmt: skip
     p.add_argument("--start-timeout", type=float, default=120.0,
                    help="with --floor: seconds to wait for every asset to join (default 120)")
     p.set_defaults(func=cmd_up)
@@ -401,7 +408,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_status)
     p = csub.add_parser("order", help="run a transport operation end to end over OPC UA")
     p.add_argument("--workdir", required=True)
-    p.add_argument("--from", dest="source", required=True)
+    p.add_argument("--from", dest="source",
+                   help="the unit (or, on a --floor floor, the transport module) the object "
+                        "lies on; a --floor floor finds it when left out")  # fmt: skip
     p.add_argument("--to", dest="target", required=True)
     p.add_argument("--object", required=True)
     p.add_argument("--timeout", type=float, default=600.0,

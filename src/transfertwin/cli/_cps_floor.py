@@ -53,7 +53,11 @@ def cmd_up_floor(args: argparse.Namespace) -> int:
     standby = floor.standby()
     procs = launch(configs, wd, skip=standby)
     expected = set(procs)
-    online = _wait_online(wd, expected, args.start_timeout, procs)
+    try:
+        online = _wait_online(wd, expected, args.start_timeout, procs)
+    except BaseException:  # a floor that did not come up is not left half running
+        stop_floor(wd)
+        raise
     took = time.monotonic() - t0
     print(f"floor {floor.name} up: {len(online)} asset processes in {took:.1f} s"
           f"{f', {len(standby)} on standby' if standby else ''}; {wd / 'cps.json'}",
@@ -257,3 +261,70 @@ def register(csub: argparse._SubParsersAction) -> None:
     p.add_argument("--object", required=True)
     p.add_argument("--at", required=True, help="transfer unit or transport module")
     p.set_defaults(func=cmd_locate)
+
+
+#: Exit code of `cps order` on a process floor when the operation failed (the object is
+#: where the last line says; the order can be issued again).
+ORDER_FAILED = 3
+
+
+def floor_order(wd: Path, info: dict, creds, args: argparse.Namespace) -> int:
+    """`cps order` on a process floor: submit to the TMS (the source found in its ledger
+    when --from is left out), then follow the operation's history to its end, across a
+    restart of the TMS. Exit 0 when delivered, `ORDER_FAILED` when it failed."""
+    from transfertwin.cps.opcua import OperationRefused
+
+    by_id = {a["id"]: a["class"] for a in info["assets"]}
+    if by_id.get(args.object) != "object":
+        objects = sorted(a for a, c in by_id.items() if c == "object")
+        raise InputError(f"--object {args.object}: not an object of this floor; objects: "
+                         f"{', '.join(objects)}")  # fmt: skip
+    if by_id.get(args.target) != "transfer_unit":
+        units = sorted(a for a, c in by_id.items() if c == "transfer_unit")
+        raise InputError(f"--to {args.target}: no such transfer unit; units: {', '.join(units)}")
+
+    async def submit() -> tuple[str, str]:
+        source = args.source
+        if source is None:
+            ledger = json.loads(await _call(info, creds, "TMS", "Ledger"))
+            if args.object in ledger["unknown"]:
+                u = ledger["unknown"][args.object]
+                raise InputError(f"where {args.object} is is unknown since {u['operation']} "
+                                 f"(last seen at {u['last_seen']}); say where it is with "
+                                 "'transfertwin cps locate'")  # fmt: skip
+            source = ledger["locations"][args.object]
+        try:
+            op = await _call(info, creds, "TMS", "SubmitTransportOperation", source,
+                             args.target, args.object)  # fmt: skip
+        except OperationRefused as exc:
+            raise InputError(f"the TMS refused the order: {exc.reason}") from None
+        return op, source
+
+    try:
+        op, source = asyncio.run(submit())
+    except (OSError, TimeoutError, ConnectionError) as exc:
+        raise InputError(f"{wd}: the TMS is not answering ({type(exc).__name__})") from None
+    print(f"submitted {op}: {args.object} {source} -> {args.target}", flush=True)
+    deadline = time.monotonic() + args.timeout
+    shown = 0
+    while True:
+        try:
+            status = json.loads(asyncio.run(_call(info, creds, "TMS", "OperationStatus", op)))
+        except (OSError, TimeoutError, ConnectionError):
+            status = None  # the TMS is restarting: the operation is in its state file
+        if status is not None:
+            for t, what in status["history"][shown:]:
+                print(f"{time.strftime('%H:%M:%S', time.localtime(t))} {op}: {what}", flush=True)
+            shown = len(status["history"])
+            if status["state"] == "finished":
+                break
+        if time.monotonic() > deadline:
+            raise InputError(f"{op} did not finish within --timeout {args.timeout:g} s; it goes "
+                             "on on the floor ('cps status')")  # fmt: skip
+        time.sleep(0.5)
+    result = status["result"]
+    line = f"{op} finished: {result['status']}; {args.object} is at {status['location']}"
+    if result.get("reason"):
+        line += f" ({result.get('failed_step')}: {result['reason']})"
+    print(line)
+    return 0 if result["status"] == "delivered" else ORDER_FAILED

@@ -2,7 +2,8 @@
 served over OPC UA, the knowledge graph and the logical assets; optionally an emulated plant
 as the physical assets (`CpsConfig.plant_seed`).
 
-The runtime and the applications (`Cps`, `CpsConfig`, `DOCKING_MODES`, `PoseGraph`,
+The emulated plant's assets (`check_plant_seed`, `plant_descriptors`, ...), the runtime and
+the applications (`Cps`, `CpsConfig`, `DOCKING_MODES`, `PoseGraph`,
 `PoseObservation`) and the knowledge graph (`KnowledgeGraph`) load on first use: they bring
 the simulation, the study stack and rdflib/pySHACL, which a client command (`cps status`,
 `cps order`) or the web console's gateway does not need.
@@ -10,14 +11,6 @@ the simulation, the study stack and rdflib/pySHACL, which a client command (`cps
 
 from typing import TYPE_CHECKING
 
-from transfertwin.cps._plant_assets import (
-    PHYSICAL_RECORD_EXTRA,
-    PLANT_LOG,
-    RUN_TRANSFER,
-    check_plant_seed,
-    physical_record,
-    plant_descriptors,
-)
 from transfertwin.cps.aas import (
     TYPE_PROPERTIES,
     AssetDescriptor,
@@ -46,11 +39,25 @@ from transfertwin.cps.opcua import (
 )
 
 if TYPE_CHECKING:
+    from transfertwin.cps._plant_assets import (
+        PHYSICAL_RECORD_EXTRA,
+        PLANT_LOG,
+        RUN_TRANSFER,
+        check_plant_seed,
+        physical_record,
+        plant_descriptors,
+    )
     from transfertwin.cps._runtime import DOCKING_MODES, Cps, CpsConfig
     from transfertwin.cps.apps import PoseGraph, PoseObservation
     from transfertwin.cps.kg import KnowledgeGraph
 
 _LAZY = {
+    "PHYSICAL_RECORD_EXTRA": "_plant_assets",
+    "PLANT_LOG": "_plant_assets",
+    "RUN_TRANSFER": "_plant_assets",
+    "check_plant_seed": "_plant_assets",
+    "physical_record": "_plant_assets",
+    "plant_descriptors": "_plant_assets",
     "DOCKING_MODES": "_runtime",
     "Cps": "_runtime",
     "CpsConfig": "_runtime",

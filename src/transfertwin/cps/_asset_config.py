@@ -10,7 +10,7 @@ floor = "/plant/floor.toml"  # the floor it belongs to (stations, placement, pee
 host = "127.0.0.2"           # address to bind; beyond loopback needs allow_remote = true
 port = 48401
 seeds = ["opc.tcp://127.0.0.5:48405/transfertwin/KG"]  # peers to join through
-lease_s = 3.0                # a peer silent this long is offline
+lease_s = 5.0                # a peer silent this long is offline
 
 [security]
 insecure = false             # NoSecurity: explicit opt-in, loopback only
@@ -58,7 +58,7 @@ class AssetConfig:
     state_dir: Path
     insecure: bool = False
     allow_remote: bool = False
-    lease_s: float = 3.0
+    lease_s: float = 5.0
     seed: int = 0
     time_scale: float = 1.0
     docking: str = "sampled"
@@ -135,7 +135,7 @@ def load_asset_config(path: Path | str) -> AssetConfig:
             credentials_file=None if creds is None else rel(creds, "[security] credentials"),
             state_dir=rel(run.get("state_dir", "state"), "[runtime] state_dir"),
             insecure=insecure, allow_remote=bool(net.get("allow_remote", False)),
-            lease_s=float(net.get("lease_s", 3.0)), seed=int(run.get("seed", 0)),
+            lease_s=float(net.get("lease_s", 5.0)), seed=int(run.get("seed", 0)),
             time_scale=float(run.get("time_scale", 1.0)),
             docking=str(run.get("docking", "sampled")),
         )  # fmt: skip

@@ -53,7 +53,7 @@ def prepare_floor(
     seed: int = 0,
     time_scale: float = 1.0,
     docking: str = "sampled",
-    lease_s: float = 3.0,
+    lease_s: float = 5.0,
     base_host: str = "127.0.0.2",
 ) -> dict[str, AssetConfig]:
     """Write the floor's work folder; returns asset id -> its configuration.

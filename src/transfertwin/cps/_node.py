@@ -155,7 +155,7 @@ class AssetNode:
 
     def __init__(self, cfg: AssetConfig, floor: FloorSpec | None = None) -> None:
         self.cfg = cfg
-        self.floor = load_floor(cfg.floor_file) if floor is None else floor
+        self.floor = load_floor(cfg.floor_file, check_cores=False) if floor is None else floor
         by_id = {d.asset_id: d for d in self.floor.descriptors()}
         if cfg.asset_id not in by_id:
             raise_input(f"asset {cfg.asset_id!r} is not on floor {self.floor.name} "

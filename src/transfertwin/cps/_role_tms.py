@@ -39,7 +39,7 @@ class TmsRole(Role):
 
     def __init__(self, node: AssetNode) -> None:
         super().__init__(node)
-        from transfertwin.cps.apps import ObjectLedger
+        from transfertwin.cps.apps._ledger import ObjectLedger
 
         data = self.state.data
         modules = [m.asset_id for m in node.floor.modules]
@@ -152,9 +152,14 @@ class TmsRole(Role):
         return [a for a in status["assets"] if a.get("class") == "transport_module"]
 
     async def _allocate(self, op_id: str) -> str:
-        """Wait for an online, idle transport module that holds no operation; claim it."""
+        """Wait for an online, idle transport module that holds no operation; claim it
+        (the module the object lies on, for an order from a module onward)."""
+        source = self.ops[op_id]["source"]
+        carrier = source if source not in self.node.floor.units else None
         while True:
             for m in await self._modules() or []:
+                if carrier is not None and m["id"] != carrier:
+                    continue
                 if m["online"] and m["state"] == "idle" and m["id"] not in self._claimed:
                     self._claimed[m["id"]] = op_id
                     return m["id"]
@@ -183,9 +188,16 @@ class TmsRole(Role):
         await self._watch(op_id, done)
 
     async def _watch(self, op_id: str, done: asyncio.Event) -> None:
-        """Wait for the result; fail the operation if its module's lease runs out first."""
+        """Wait for the result; fail the operation if its module stays offline.
+
+        A module whose lease expired may only have been slow: the operation fails once the
+        module has been offline for one more lease period (a module that restarted reports
+        the failure itself, with the step it was in).
+        """
         op = self.ops[op_id]
         module = op["module"]
+        grace = self.node.cfg.lease_s
+        offline_since: float | None = None
         while op["state"] != "finished":
             try:
                 await asyncio.wait_for(done.wait(), 1.0)
@@ -195,8 +207,11 @@ class TmsRole(Role):
             modules = await self._modules()
             if modules is None:
                 continue  # the graph is away: cannot tell, keep waiting
-            online = {m["id"] for m in modules if m["online"]}
-            if module not in online and op["state"] != "finished":
+            if module in {m["id"] for m in modules if m["online"]}:
+                offline_since = None
+                continue
+            offline_since = offline_since or time.monotonic()
+            if time.monotonic() - offline_since >= grace and op["state"] != "finished":
                 step = op["phase"]
                 self._finish(op_id, {
                     "status": f"failed while {step}", "failed_step": step,

@@ -131,7 +131,7 @@ class PropsRole(Role):
 
     def __init__(self, node: AssetNode) -> None:
         super().__init__(node)
-        from transfertwin.cps.apps import PoseGraph
+        from transfertwin.cps.apps._props import PoseGraph
 
         self.poses = PoseGraph()
 
@@ -139,7 +139,7 @@ class PropsRole(Role):
         return {"ReportPose": self._report, "FusedPose": self._fused}
 
     async def _report(self, source, subject, x, y, theta, sigma_xy, sigma_theta) -> bool:
-        from transfertwin.cps.apps import PoseObservation
+        from transfertwin.cps.apps._props import PoseObservation
 
         self.poses.add(PoseObservation(source, subject, x, y, theta, sigma_xy, sigma_theta))
         await self.set("FusedPoses", len(self.poses.solve()))

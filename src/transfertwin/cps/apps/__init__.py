@@ -1,28 +1,37 @@
 """The assets' applications: TMS, Experiment Manager, PropS, virtual environment, and the
-transport module's operation flow (Fig. 5.9a) on the shop floor."""
+transport module's operation flow (Fig. 5.9a) on the shop floor.
 
-from transfertwin.cps.apps._applications import AssetApplications
-from transfertwin.cps.apps._environment import Environment, ScaledClock
-from transfertwin.cps.apps._floor import HOME_POSE, FloorRobot, LegResult
-from transfertwin.cps.apps._ledger import ObjectLedger
-from transfertwin.cps.apps._props import (
-    Pose2D,
-    PoseGraph,
-    PoseGraphSolution,
-    PoseObservation,
-    fuse_poses,
-    wrap_angle,
-)
-from transfertwin.cps.apps._transport import (
-    STEPS,
-    Leg,
-    OtsCheck,
-    StepResult,
-    TransportSkills,
-    form_ots,
-    legs_of,
-    run_transport_operation,
-)
+The names load on first use (PEP 562): an asset process imports only what its role needs
+(a unit or an object needs neither the simulation nor the navigation stack).
+"""
+
+from typing import TYPE_CHECKING
+
+from transfertwin._lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from transfertwin.cps.apps._applications import AssetApplications
+    from transfertwin.cps.apps._environment import Environment, ScaledClock
+    from transfertwin.cps.apps._floor import HOME_POSE, FloorRobot, LegResult
+    from transfertwin.cps.apps._ledger import ObjectLedger
+    from transfertwin.cps.apps._props import (
+        Pose2D,
+        PoseGraph,
+        PoseGraphSolution,
+        PoseObservation,
+        fuse_poses,
+        wrap_angle,
+    )
+    from transfertwin.cps.apps._transport import (
+        STEPS,
+        Leg,
+        OtsCheck,
+        StepResult,
+        TransportSkills,
+        form_ots,
+        legs_of,
+        run_transport_operation,
+    )
 
 __all__ = [
     "HOME_POSE",
@@ -47,3 +56,5 @@ __all__ = [
     "run_transport_operation",
     "wrap_angle",
 ]
+
+__getattr__, __dir__ = lazy_exports(__name__, __file__)

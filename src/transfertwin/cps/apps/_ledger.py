@@ -99,11 +99,14 @@ class ObjectLedger:
                 del self._moving[obj]
 
     def _check(self, source: str, target: str, obj: str) -> None:
-        for arg, unit in (("source", source), ("target", target)):
-            if unit not in self._units:
-                raise OperationRefused(
-                    f"no transfer unit {unit!r}; units: {', '.join(self._units)}", argument=arg
-                )
+        if source not in self.holders:  # an object on a carrier can be ordered onward
+            raise OperationRefused(
+                f"no transfer unit {source!r}; units: {', '.join(self._units)}", argument="source"
+            )
+        if target not in self._units:
+            raise OperationRefused(
+                f"no transfer unit {target!r}; units: {', '.join(self._units)}", argument="target"
+            )
         if source == target:
             raise OperationRefused(f"source and target are both {source}", argument="target")
         if obj not in self._at:

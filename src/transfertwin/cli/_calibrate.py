@@ -60,6 +60,69 @@ def _mapping_note(mapping: dict[str, str]) -> str:
     return ", ".join(f"{k}->{v}" for k, v in sorted(mapping.items()))
 
 
+_ROW_KEY = ("object_id", "face", "conveyor", "theta_deg", "success", "dock_err_x_mm",
+            "dock_err_y_mm", "dock_err_theta_deg")  # fmt: skip
+
+
+def _row_key(row: dict[str, object]) -> tuple[str, ...]:
+    return tuple(str(row.get(k)) for k in _ROW_KEY)
+
+
+def _builtin_real(rows: list[dict[str, object]]) -> bool:
+    """Whether the rows are (a part of) the study's real experiments shipped with the
+    package: only then are the objects the real cores whose scans are not public."""
+    from transfertwin.data import calibration_csv_path
+    from transfertwin.store import read_results
+
+    shipped = {_row_key(r) for r in read_results(calibration_csv_path())}
+    return bool(rows) and all(_row_key(r) in shipped for r in rows)
+
+
+def _mapping_line(mapping: dict[str, str], builtin_real: bool) -> str:
+    """Which mesh replays which object; the scans remark only for the built-in real cores."""
+    if builtin_real:
+        return (f"real objects mapped to meshes: {_mapping_note(mapping)} "
+                "(the real cores' scans are not public)")  # fmt: skip
+    return f"objects replayed with the meshes: {_mapping_note(mapping)}"
+
+
+#: Why a metric of a confusion matrix is undefined (Eq. A.1-A.4), by the empty denominator.
+_NO_PREDICTED = "no predicted successes"
+_NO_REAL = "no real successes"
+
+
+def _undefined(confusion, key: str) -> str:
+    """Why ``key`` is undefined for one run's confusion matrix ('' when it is defined):
+    precision needs predicted successes, recall real ones, F0.5 both."""
+    reasons = []
+    if key in ("precision", "f05") and confusion.tp + confusion.fp == 0:
+        reasons.append((_NO_PREDICTED, "precision"))
+    if key in ("recall", "f05") and confusion.tp + confusion.fn == 0:
+        reasons.append((_NO_REAL, "recall"))
+    if key == "accuracy" and confusion.total == 0:
+        reasons.append(("no rows", "accuracy"))
+    if not reasons:
+        return ""
+    why = " and ".join(r for r, _ in reasons)
+    what = " and ".join(m for _, m in reasons)
+    return f"{why}: {what} undefined"
+
+
+def _metric_line(key: str, summary: dict[str, object], confusions) -> str:
+    """One metric's mean ± std over runs, or n/a with the reason when no run defines it."""
+    reasons = [_undefined(c, key) for c in confusions]
+    n_undefined = sum(bool(r) for r in reasons)
+    if n_undefined == len(confusions):
+        return f"{key:9s} n/a ({reasons[0]})"
+    std = summary[key]["std"]
+    spread = f" ± {std:.3f}" if math.isfinite(std) else " (one run: no spread)"
+    line = f"{key:9s} {summary[key]['mean']:.3f}{spread}"
+    if n_undefined:
+        first = next(r for r in reasons if r)
+        line += f" ({n_undefined} of {len(confusions)} runs n/a, counted as 0: {first})"
+    return line
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     """Replay the real experiments R times; write metrics.json and predictions.csv."""
     from transfertwin.study.calibration import calibrate
@@ -68,26 +131,30 @@ def cmd_run(args: argparse.Namespace) -> int:
     out = out_dir(args.out)
     result = calibrate(rows, scene=scene, **calib)
     metrics = result.summary()["metrics"]
+    confusions = [r.confusion for r in result.runs]
+    builtin_real = args.real == _DEFAULT_REAL or _builtin_real(rows)
     per_run = [
         {"run": r.run, **r.confusion.to_dict(), "not_ok": r.not_ok,
          **{k: r.confusion.metric(k) for k in metrics}}
         for r in result.runs
     ]  # fmt: skip
+    undefined = {k: _undefined(confusions[0], k) for k in ("f05", "precision", "recall")
+                 if all(_undefined(c, k) for c in confusions)}  # fmt: skip
     payload = {
         "profile": name, "real": args.real, "n_real": len(rows), "runs": per_run,
         "mean": {k: v["mean"] for k, v in metrics.items()},
         "std": {k: v["std"] for k, v in metrics.items()}, "std_ddof": 1,
+        "undefined": undefined,
         "object_map": result.object_map,
-        "note": "real objects are replayed with the mapped meshes; the real scans are not public",
+        "note": "real objects are replayed with the mapped meshes; the real scans are not public"
+        if builtin_real else "objects are replayed with the mapped meshes; a metric listed "
+        "under 'undefined' has an empty denominator in every run (its mean is 0 by convention)",
     }  # fmt: skip
     write_atomic(out / "metrics.json", json.dumps(_json_safe(payload), indent=2) + "\n")
     write_atomic(out / "predictions.csv", _csv_text(_prediction_rows(rows, result)))
-    print(f"real objects mapped to meshes: {_mapping_note(result.object_map)} "
-          "(the real cores' scans are not public)")  # fmt: skip
+    print(_mapping_line(result.object_map, builtin_real))
     for key in ("f05", "precision", "recall", "accuracy"):
-        std = metrics[key]["std"]
-        spread = f" ± {std:.3f}" if math.isfinite(std) else " (one run: no spread)"
-        print(f"{key:9s} {metrics[key]['mean']:.3f}{spread}")
+        print(_metric_line(key, metrics, confusions))
     print(out / "metrics.json")
     return 0
 

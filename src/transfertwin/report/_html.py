@@ -5,7 +5,8 @@ One page, in this order:
 1. **Summary**: what was analysed, one row per object (its best and worst pre-transfer
    state of Alg. 1–4, each with k/n and the 95 % Clopper–Pearson interval) and a
    "what to do" list: how to put each object on the belt, what to avoid, and whether
-   the data can tell the two apart yet.
+   the data can tell the two apart yet; a conveyor and angle are advised only where the
+   separation rule of `transfertwin.report._advice` singles them out.
 2. **Figures**: Fig. 6.22/6.23 (best/worst state per object with intervals), then per
    object the full-state plot (Fig. 6.20/6.21) and the binary plot of single experiments
    (Fig. 6.6/6.7), each with a caption that says how to read it.
@@ -30,6 +31,10 @@ from collections import Counter
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+from transfertwin.report._advice import YMA as _YMA
+from transfertwin.report._advice import advice_item, no_difference, told_apart
+from transfertwin.report._advice import ci_text as _ci
+from transfertwin.report._advice import state_short as _state_short
 from transfertwin.report._binary_polar import binary_polar_data, plot_binary_polar
 from transfertwin.report._figure import figure_png, write_atomic
 from transfertwin.report._interval_plot import interval_plot_data, plot_intervals
@@ -61,12 +66,6 @@ _STYLE = (
     "code,pre{background:#f5f5f5;border-radius:3px;padding:1px 4px;font-size:0.92em}"
     "pre{white-space:pre-wrap;max-height:25em;overflow:auto;padding:0.5em}"
 )
-_YMA = "ȳ<sup>MA</sup>"
-_CONVEYOR_TEXT = {
-    "left": "on the <b>left</b> belt",
-    "right": "on the <b>right</b> belt",
-    "both": "centred across <b>both</b> belts",
-}
 #: Parameter groups in page order; keys without a known ``group.`` prefix go under "source".
 _GROUPS = (
     ("source", "Source"),
@@ -198,35 +197,14 @@ def _table(head: Sequence[str], rows: Sequence[Sequence[str]], numeric: Sequence
     return f"<table><tr>{th}</tr>{body}</table>"
 
 
-def _ci(st: SelectedState) -> str:
-    return f"{st.ci_low:.2f}–{st.ci_high:.2f}"
-
-
 def _rate(st: SelectedState) -> str:
     return f"{st.k}/{st.n} = {st.p_hat:.2f}"
 
 
-def _state_short(st: SelectedState) -> str:
-    return f"{html.escape(st.face)}, {html.escape(st.conveyor)}, θ = {st.theta_deg}°"
-
-
-def _turn_text(theta: int) -> str:
-    if theta == 0:
-        return "aligned with the direction of travel (θ = 0°)"
-    if theta == 180:
-        return "turned round (θ = 180°)"
-    way = "counter-clockwise" if theta > 0 else "clockwise"
-    return f"turned <b>{abs(theta)}° {way}</b> (θ = {theta}°)"
-
-
-def _told_apart(sel: Selection) -> bool:
-    return sel.best.ci_low > sel.worst.ci_high
-
-
 def _apart_cell(sel: Selection) -> str:
-    if _no_difference(sel):
+    if no_difference(sel):
         return "no difference"
-    return "yes" if _told_apart(sel) else "<span class='warn'>not yet</span>"
+    return "yes" if told_apart(sel) else "<span class='warn'>not yet</span>"
 
 
 def _overview_rows(analysis: AnalysisResult) -> list[list[str]]:
@@ -252,46 +230,6 @@ _OVERVIEW_HEAD = (
 )  # fmt: skip
 
 
-def _no_difference(sel: Selection) -> bool:
-    """Best and worst are one smoothed level: no state stands out (e.g. all succeeded)."""
-    return sel.best.y_ma == sel.worst.y_ma
-
-
-def _advice(sel: Selection) -> str:
-    b, w = sel.best, sel.worst
-    obj = html.escape(sel.object_id)
-    if _no_difference(sel):
-        return (
-            f"<li><b>{obj}</b>: no state stands out: the smoothed success rate is "
-            f"{b.y_ma:.2f} at every state run (e.g. {b.k} of {b.n} at {_state_short(b)}, "
-            f"95 % CI {_ci(b)}), so any of the tested placements does as well as any "
-            "other in these data.</li>"
-        )
-    text = (
-        f"<b>{obj}</b>: put it on its <b>{html.escape(b.face)}</b> face "
-        f"{_CONVEYOR_TEXT.get(b.conveyor, html.escape(b.conveyor))}, {_turn_text(b.theta_deg)}. "
-        f"There it succeeded {b.k} of {b.n} times (95 % CI {_ci(b)}; smoothed over "
-        f"neighbouring angles {_YMA} = {b.y_ma:.2f}). "
-        f"Avoid the <b>{html.escape(w.face)}</b> face "
-        f"{_CONVEYOR_TEXT.get(w.conveyor, html.escape(w.conveyor))} at θ = {w.theta_deg}° "
-        f"({w.k} of {w.n}, 95 % CI {_ci(w)})."
-    )
-    if b.ci_high < 0.5:
-        text += (
-            " <span class='warn'>Even the best state fails more often than it succeeds: "
-            "this object needs another way of handling.</span>"
-        )
-    if _told_apart(sel):
-        text += " <span class='ok'>The intervals do not overlap: the difference is real.</span>"
-    else:
-        text += (
-            " <span class='warn'>The intervals overlap: these data cannot yet tell the best "
-            "state from the worst at 95 %; run more experiments at these states (more runs "
-            "per state) before relying on the choice.</span>"
-        )
-    return f"<li>{text}</li>"
-
-
 def _summary_section(analysis: AnalysisResult, params: Mapping[str, object]) -> str:
     status = Counter(r.status for r in analysis.records)
     n = len(analysis.records)
@@ -311,7 +249,10 @@ def _summary_section(analysis: AnalysisResult, params: Mapping[str, object]) -> 
         f"<p>{lead}</p>",
         _table(_OVERVIEW_HEAD, _overview_rows(analysis), numeric=(1, 2, 4, 5, 7, 8)),
         "<h3>What to do</h3><ul class='todo'>",
-        *(_advice(sel) for sel in analysis.selections),
+        *(
+            advice_item(sel, [st for st in analysis.states if st.object_id == sel.object_id])
+            for sel in analysis.selections
+        ),
         "</ul>",
     ]
     if analysis.skipped_objects:

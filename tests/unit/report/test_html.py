@@ -129,7 +129,10 @@ def test_report_opens_with_a_summary_and_folds_readable_parameters(tmp_path: Pat
     head = text[summary:figures]
     assert "<h3>What to do</h3>" in head
     assert "<b>o1</b>: put it on its <b>front</b> face" in head
-    assert "turned <b>105° counter-clockwise</b> (θ = 105°)" in head
+    # One run per state: no front state is told apart from the best at 95 %, so θ = 105°
+    # is named as Alg. 1-4's pick, not advised (issue 30.3).
+    assert "any front placement does about as well as another" in head
+    assert "front, both, θ = 105°" in head and "turned" not in head
     best = analysis.selection_of("o1").best
     assert f"{best.k}/{best.n} = {best.p_hat:.2f}" in head
     assert f"{best.ci_low:.2f}–{best.ci_high:.2f}" in head
@@ -166,3 +169,65 @@ def test_object_without_a_difference_gets_no_best_worst_advice(tmp_path: Path) -
 )  # fmt: skip
 def test_format_value(value: object, shown: str) -> None:
     assert format_value(value) == shown
+
+
+def _face_rows(obj: str, face: str, wins: dict[int, int], runs: int = 8) -> list[dict]:
+    """θ-step 60 states of one face (left and right at 0 and 180, both elsewhere)."""
+    out = []
+    for t, k in wins.items():
+        for conv in ("left", "right") if t in (0, 180) else ("both",):
+            out += [dict(object_id=obj, face=face, conveyor=conv, theta_deg=t,
+                         success=int(r < k)) for r in range(runs)]  # fmt: skip
+    return out
+
+
+def _advice_of(text: str, obj: str) -> str:
+    start = text.index(f"<li><b>{obj}</b>")
+    return text[start : text.index("</li>", start)]
+
+
+ALL_FRONT = {-120: 8, -60: 8, 0: 8, 60: 8, 120: 8, 180: 8}
+
+
+def test_issue_30_3_a_tie_on_the_best_face_is_not_presented_as_a_placement(tmp_path) -> None:
+    """o18: front 8/8 at every θ, so Alg. 1-4's pick of an angle there is a tie."""
+    rows = _face_rows("o18", "front", ALL_FRONT)
+    rows += _face_rows("o18", "back", {-120: 4, -60: 3, 0: 0, 60: 1, 120: 6, 180: 0})
+    text = write_report(tmp_path, analyze(rows), {}).read_text(encoding="utf-8")
+    advice = _advice_of(text, "o18")
+    assert "any front placement works" in advice
+    assert "turned" not in advice and "clockwise" not in advice
+    assert "Avoid the <b>back</b> face" in advice
+
+
+def test_issue_30_3_a_separated_best_state_gets_its_angle(tmp_path) -> None:
+    rows = _face_rows("o32", "front", {-120: 0, -60: 0, 0: 0, 60: 8, 120: 1, 180: 0})
+    rows += _face_rows("o32", "back", {-120: 2, -60: 3, 0: 0, 60: 1, 120: 2, 180: 0})
+    text = write_report(tmp_path, analyze(rows), {}).read_text(encoding="utf-8")
+    advice = _advice_of(text, "o32")
+    assert "turned <b>60° counter-clockwise</b> (θ = 60°)" in advice
+    assert "any front placement" not in advice
+
+
+def test_issue_30_3_overlapping_intervals_on_the_face_name_the_pick_as_a_tie(tmp_path) -> None:
+    rows = _face_rows("o5", "front", {-120: 5, -60: 6, 0: 7, 60: 8, 120: 6, 180: 5})
+    rows += _face_rows("o5", "back", {-120: 0, -60: 0, 0: 0, 60: 0, 120: 0, 180: 0})
+    text = write_report(tmp_path, analyze(rows), {}).read_text(encoding="utf-8")
+    advice = _advice_of(text, "o5")
+    assert "any front placement does about as well as another" in advice
+    assert "turned" not in advice and "θ = 60°" in advice  # named as the pick, not advised
+
+
+def test_separation_rule_compares_clopper_pearson_bounds() -> None:
+    """Separated iff some state's upper bound lies below the best's lower bound (8 runs:
+    8/8 -> [0.631, 1]; 1/8 -> upper 0.527; 2/8 -> upper 0.651, Clopper-Pearson tables)."""
+    from transfertwin.report._advice import best_is_separated
+    from transfertwin.study.fullstate import state_table
+
+    def stats(wins: dict[int, int]):
+        return state_table(_face_rows("o1", "front", wins))
+
+    best = next(s for s in stats(ALL_FRONT) if s.theta_deg == 60)
+    assert not best_is_separated(best, stats(ALL_FRONT))
+    assert best_is_separated(best, stats({**ALL_FRONT, 120: 1}))
+    assert not best_is_separated(best, stats({**ALL_FRONT, 120: 2}))

@@ -215,6 +215,36 @@ def _fmt(value: float) -> str:
     return "" if not math.isfinite(value) else f"{value:.6f}"
 
 
+#: How the CLI names a metric in its lines (the --metric names are file/JSON names).
+_METRIC_NAMES = {"f05": "F0.5", "brier": "Brier"}
+
+
+def _metric_name(metric: str) -> str:
+    return _METRIC_NAMES.get(metric, metric)
+
+
+def _params_text(params: dict[str, object]) -> str:
+    """``physics.solver=Newton mu=0.5``; ``(base settings)`` for none."""
+    parts = [f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in params.items()]
+    return " ".join(parts) or "(base settings)"
+
+
+def _trial_line(label: str, params: dict[str, object], metric: str, score: float) -> str:
+    """``S0 physics.solver=Newton: F0.5 0.860``: a trial, its settings and its named score."""
+    return f"{label} {_params_text(params)}: {_metric_name(metric)} {score:.3f}"
+
+
+def _best_line(label: str, params: dict[str, object], metric: str, score: float,
+               baseline: float) -> str:  # fmt: skip
+    """The best trial beside the untuned baseline (the starting profile, unmodified cores)."""
+    sign = 1.0 if metric != "brier" else -1.0
+    better = "better" if sign * (score - baseline) > 0 else "not better"
+    return (
+        f"best: {_trial_line(label, params, metric, score)}; untuned baseline "
+        f"{_metric_name(metric)} {baseline:.3f} ({better})"
+    )
+
+
 def _check_metric(metric: str) -> None:
     from transfertwin.study.calibration import METRICS
 
@@ -240,11 +270,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     rows, scene, _, calib = _common(args)
     out = out_dir(args.out)
     trials = sweep(rows, args.param, _parse_values(args.values), base=scene, metric=args.metric,
-                   on_trial=lambda t: print(f"{t.label} {t.params}: {t.score:.3f}"),
+                   on_trial=lambda t: print(_trial_line(t.label, t.params, t.metric, t.score)),
                    **calib)  # fmt: skip
     _write_trials(out, _records(trials), _keys(trials), args.metric, f"sweep of {args.param}")
     best = best_trial(trials)
-    print(f"best: {best.params} {args.metric} = {best.score:.3f}; {out / 'trials.csv'}")
+    print(f"best: {_trial_line(best.label, best.params, best.metric, best.score)}; "
+          f"{out / 'trials.csv'}")  # fmt: skip
     return 0
 
 
@@ -317,12 +348,12 @@ def cmd_tune(args: argparse.Namespace) -> int:
         open_storage(storage)
     work = out / "trials"
     metric = args.metric
-    show = lambda t: print(f"T{t.number} {t.params}: {metric} "  # noqa: E731
-                           f"{t.metrics[metric]:.3f}, objective {t.objective:.4f}")  # fmt: skip
+    show = lambda t: print(f"{_trial_line(f'T{t.number}', t.params, metric, t.metrics[metric])}"  # noqa: E731
+                           f", objective {t.objective:.4f}")  # fmt: skip
     if args.method == "lhs":
         lhs = tune_lhs(rows, space, base=scene, n_per_round=args.trials, rounds=2,
                        metric=args.metric, penalty=args.penalty, work_dir=work,
-                       on_trial=lambda t: print(f"{t.label} {t.params}: {t.score:.3f}"),
+                       on_trial=lambda t: print(_trial_line(t.label, t.params, metric, t.score)),
                        **calib)  # fmt: skip
         records = [(t.label, tuned_trial(i, t)) for i, t in enumerate(lhs)]
         best = records[lhs.index(best_trial(lhs))][1]
@@ -353,18 +384,31 @@ def cmd_tune(args: argparse.Namespace) -> int:
     comment = (f"calibrate tune: {where}, best trial {label}, {metric} "
                f"{best.metrics[metric]:.4f}\nreplay with --object-map {object_map}")  # fmt: skip
     save_profile(profile, args.name, scene_with(scene, best.params), comment)
+    baseline = _baseline(rows, scene, metric, calib)
     payload = {
         "method": args.method, "study": where, "trial": label, "params": best.params,
         "objective": best.objective, "metric": args.metric, "metrics": best.metrics,
+        "baseline": {metric: baseline, "note": "the starting profile with the unmodified "
+                     "cores (no tuned setting, no proxy), same rows, runs and seed"},
         "penalty": best.penalty, "space": space.text(), "profile": str(profile),
         "object_map": object_map, "n_trials": len(records),
         "note": "tuned proxies are calibrated stand-ins, not scans; use the object map with "
                 "the profile (--profile, --object-map)",
     }  # fmt: skip
     write_atomic(out / "best.json", json.dumps(_json_safe(payload), indent=2) + "\n")
-    print(f"best: {label} {best.params} {args.metric} = {best.metrics[args.metric]:.3f}; "
+    print(f"{_best_line(label, best.params, metric, best.metrics[metric], baseline)}; "
           f"profile {profile}; object map {object_map}")  # fmt: skip
     return 0
+
+
+def _baseline(rows, scene, metric: str, calib: dict) -> float:
+    """The untuned baseline: the metric of the starting profile with the unmodified cores
+    (one more replay of the same rows, runs and seed)."""
+    from transfertwin.study.calibration import Trial, replay_trial
+
+    print(f"untuned baseline: replaying {len(rows)} rows x {calib['runs']} runs",
+          file=sys.stderr, flush=True)  # fmt: skip
+    return Trial("baseline", {}, replay_trial(rows, scene, {}, **calib), metric).score
 
 
 def cmd_simstudy(args: argparse.Namespace) -> int:
@@ -390,14 +434,14 @@ def cmd_simstudy(args: argparse.Namespace) -> int:
     out = out_dir(args.out)
     trials = simulation_parameter_study(
         rows, base=scene, sets=sets, metric=args.metric,
-        on_trial=lambda t: print(f"{t.label} {t.params}: {t.score:.3f}"), **calib,
+        on_trial=lambda t: print(_trial_line(t.label, t.params, t.metric, t.score)), **calib,
     )  # fmt: skip
     _write_trials(out, _records(trials), _keys(trials), args.metric, "simulation-parameter study")
     best = best_trial(trials)
     chosen = {"label": best.label, "params": best.params, args.metric: best.score}
     write_atomic(out / "chosen.json", json.dumps(chosen, indent=2) + "\n")
     save_profile(out / "profile.toml", f"simstudy-{best.label}", scene_with(scene, best.params))
-    print(f"chosen: {best.label} {best.params} {args.metric} = {best.score:.3f}; "
+    print(f"chosen: {_trial_line(best.label, best.params, best.metric, best.score)}; "
           f"{out / 'profile.toml'}")  # fmt: skip
     return 0
 

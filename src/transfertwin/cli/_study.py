@@ -75,6 +75,16 @@ def _sampling_from_args(args: argparse.Namespace) -> dict[str, object]:
     return {"sampling": "adaptive", "sampling_options": tuple(policy.describe().items())}
 
 
+def run_summary_line(ran: int, seconds: float, done: int, planned: int) -> str:
+    """The line after a study run. Its rate is wall-clock over the whole command, start-up
+    of the workers included, so it is lower than the progress bar's recent rate."""
+    rate = ran / seconds if seconds > 0 else 0.0
+    return (
+        f"{ran} new results in {seconds:.1f} s ({rate:.2f} exp/s wall-clock, including "
+        f"start-up; the bar shows the recent rate); {done}/{planned} done"
+    )
+
+
 def cmd_study_run(args: argparse.Namespace) -> int:
     """Run (or resume) a full-state study into a SQLite db, on local workers or Ray."""
     from transfertwin.store import SQLiteResultStore
@@ -119,10 +129,8 @@ def cmd_study_run(args: argparse.Namespace) -> int:
                                     max_experiments=args.max_experiments,
                                     executor=executor)  # fmt: skip
         _print_summary(summarize(store.rows()), console)
-        console.print(
-            f"{outcome.ran} new results in {outcome.seconds:.1f} s ({outcome.rate:.2f} exp/s); "
-            f"{store.count()}/{plan.n_experiments} done"
-        )
+        console.print(run_summary_line(outcome.ran, outcome.seconds, store.count(),
+                                       plan.n_experiments))  # fmt: skip
         if adaptive:
             state = "finished" if outcome.finished else "not finished: rerun to continue"
             console.print(

@@ -6,11 +6,13 @@ import argparse
 import json
 import math
 import sys
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from rich.console import Console
 from rich.table import Table
 
+from transfertwin._errors import InputError
 from transfertwin.cli._common import add_state_args, parse_dock_error
 from transfertwin.cli._paths import out_dir, out_file
 from transfertwin.cli._progress import progress_bar
@@ -25,6 +27,24 @@ _RESULT_KEYS = (
     "dock_err_theta_deg", "status", "y1", "y2", "success", "t_end_1_s", "t_end_2_s",
     "t_end_s", "message",
 )  # fmt: skip
+
+
+def hull_notice(ref: str, units: str = "m") -> str:
+    """The line to print before a mesh's first CoACD decomposition (seconds to minutes),
+    or '' when its hulls are shipped or cached (or the reference is unusable: the
+    experiment then reports that itself)."""
+    from transfertwin.objects import MeshError, hull_cache_path
+
+    try:
+        path = hull_cache_path(ref, units=units)
+    except (InputError, MeshError, OSError, ValueError):
+        return ""
+    if path is None or path.is_file():
+        return ""
+    return (
+        f"computing convex hulls (CoACD) for {Path(ref).name}, once; cached by content hash "
+        f"in {path.parent}"
+    )
 
 
 def cmd_transfer(args: argparse.Namespace) -> int:
@@ -54,6 +74,9 @@ def cmd_transfer(args: argparse.Namespace) -> int:
         units=args.units,
         record=image is not None,
     )
+    notice = hull_notice(args.object, args.units)
+    if notice:
+        print(notice, file=sys.stderr, flush=True)
     result = run_experiment(spec, sensor=args.sensor)
     if image is not None:
         system = system_for(spec.object_ref, spec.units, spec.scene)
@@ -152,6 +175,19 @@ def cmd_objects_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def demo_row(r: ExperimentResult) -> list[str]:
+    """A demo table row; an outcome that was not determined (y2 after a failed first
+    transfer, anything of a result that is not 'ok') shows as '-', never 'None'."""
+
+    def cell(value: object) -> str:
+        missing = value is None or (isinstance(value, float) and math.isnan(value))
+        return "-" if missing else str(value)
+
+    t_end = "-" if r.t_end_s is None or math.isnan(r.t_end_s) else f"{r.t_end_s:.2f}"
+    return [r.face, r.conveyor, str(r.theta_deg), r.status, cell(r.y1), cell(r.y2),
+            cell(r.success), t_end]  # fmt: skip
+
+
 def cmd_demo(args: argparse.Namespace) -> int:
     """A short demo of single transfers with a real docking error."""
     from transfertwin.study.experiment import run_demo
@@ -166,8 +202,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     for col in ("face", "conveyor", "theta_deg", "status", "y1", "y2", "success", "t_end_s"):
         table.add_column(col)
     for r in results:
-        table.add_row(r.face, r.conveyor, str(r.theta_deg), r.status, str(r.y1), str(r.y2),
-                      str(r.success), f"{r.t_end_s:.2f}")  # fmt: skip
+        table.add_row(*demo_row(r))
     console.print(table)
     ok = [r for r in results if r.status == "ok"]
     share = sum(r.success for r in ok) / len(ok) if ok else float("nan")

@@ -30,7 +30,7 @@ from transfertwin.objects._core_spec import BUILTIN_COUNT, CoreSpec, Dent
 from transfertwin.objects._cores import generate_core
 from transfertwin.objects._features import features_document, prior_features
 from transfertwin.objects._hulls import decompose_hulls, default_cache_dir, merge_hulls
-from transfertwin.objects._load import export_object, load_object
+from transfertwin.objects._load import export_object, hull_cache_path, load_object
 from transfertwin.objects._mass import (
     DEFAULT_DENSITY_KG_M3,
     AxialSplit,
@@ -76,6 +76,7 @@ __all__ = [
     "features_document",
     "features_version",
     "generate_core",
+    "hull_cache_path",
     "is_builtin_id",
     "load_builtin",
     "load_mesh",

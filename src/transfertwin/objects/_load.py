@@ -9,14 +9,19 @@ import trimesh
 
 from transfertwin._errors import InputError
 from transfertwin.objects._builtin import builtin_ids, is_builtin_id, load_builtin
-from transfertwin.objects._hulls import decompose_hulls
+from transfertwin.objects._hulls import (
+    coacd_params,
+    decompose_hulls,
+    default_cache_dir,
+    hull_cache_key,
+)
 from transfertwin.objects._mass import mass_properties
 from transfertwin.objects._mesh import MESH_SUFFIXES, load_mesh
 from transfertwin.objects._model import ObjectModel
 from transfertwin.objects._proxy import PROXY_SUFFIX, proxy_model, read_proxy
 from transfertwin.objects._stl import mesh_content_hash, write_stl
 
-__all__ = ["export_object", "load_object"]
+__all__ = ["export_object", "hull_cache_path", "load_object"]
 
 
 def load_object(
@@ -81,6 +86,31 @@ def load_object(
         source=str(path),
         content_hash=mesh_content_hash(mesh),
     )
+
+
+def hull_cache_path(
+    ref: str | Path, *, units: str = "m", cache_dir: Path | None = None
+) -> Path | None:
+    """Where `load_object` keeps the CoACD hulls of a user mesh (exists once computed).
+
+    Lets a command say, before the first `load_object` of a mesh, that the decomposition
+    (seconds to minutes) runs now, once. None for a built-in core or a proxy of one (their
+    hulls are shipped); a proxy over a mesh file gives that mesh's path.
+
+    Raises:
+        InputError, MeshError: As `load_object` for an unusable reference.
+    """
+    if str(ref).endswith(PROXY_SUFFIX):
+        spec = read_proxy(ref)
+        if is_builtin_id(spec.base):
+            return None
+        base = spec.base if spec.base.endswith(PROXY_SUFFIX) else Path(ref).parent / spec.base
+        return hull_cache_path(base, units=units, cache_dir=cache_dir)
+    if is_builtin_id(ref):
+        return None
+    mesh = _centred(load_mesh(_mesh_path(ref), units))
+    directory = Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    return directory / f"{hull_cache_key(mesh, coacd_params(0.05, 24, 0))}.npz"
 
 
 def export_object(ref: str | Path, out_path: str | Path, *, units: str = "m") -> Path:

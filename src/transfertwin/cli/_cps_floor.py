@@ -21,7 +21,7 @@ __all__ = ["cmd_asset", "cmd_down", "cmd_locate", "cmd_up_floor", "floor_status"
 
 
 def _floor_spec(name: str):
-    from transfertwin.cps._floor_file import default_floor_spec, load_floor
+    from transfertwin.cps import default_floor_spec, load_floor
 
     return default_floor_spec() if name == "demo" else load_floor(name)
 
@@ -30,7 +30,7 @@ def cmd_up_floor(args: argparse.Namespace) -> int:
     """Start one process per asset of the floor; wait until the knowledge graph knows them
     all; then stay until SIGINT/SIGTERM (stopping the floor) or, with --detach, exit and
     leave the floor running."""
-    from transfertwin.cps._launcher import (
+    from transfertwin.cps import (
         check_workdir,
         launch,
         prepare_floor,
@@ -98,8 +98,9 @@ def _wait_online(wd: Path, expected: set[str], timeout_s: float, procs) -> set[s
             if p.poll() is not None:
                 log = wd / "logs" / f"{aid}.log"
                 tail = log.read_text().strip().splitlines()[-1:] if log.exists() else []
+                last = tail[0] if tail else "no output"
                 raise InputError(f"asset {aid} exited with code {p.returncode} while the floor "
-                                 f"started: {tail[0] if tail else 'no output'} ({log})")  # fmt: skip
+                                 f"started: {last} ({log})")
         try:
             doc = floor_status(wd, with_objects=False)
             online = {a["id"] for a in doc["assets"] if a["online"]}
@@ -116,8 +117,7 @@ def _wait_online(wd: Path, expected: set[str], timeout_s: float, procs) -> set[s
 
 def cmd_asset(args: argparse.Namespace) -> int:
     """Serve one asset until SIGINT/SIGTERM; announce the leave; exit 0."""
-    from transfertwin.cps._asset_config import load_asset_config
-    from transfertwin.cps._node import AssetNode
+    from transfertwin.cps import AssetNode, load_asset_config
 
     cfg = load_asset_config(args.config)
     logging.getLogger("transfertwin.cps").setLevel(logging.INFO)
@@ -145,7 +145,7 @@ def cmd_asset(args: argparse.Namespace) -> int:
 
 def cmd_down(args: argparse.Namespace) -> int:
     """Stop every asset process of a floor (SIGTERM: each announces its leave)."""
-    from transfertwin.cps._launcher import asset_pids, stop_floor
+    from transfertwin.cps import asset_pids, stop_floor
 
     wd = Path(args.workdir)
     pids = stop_floor(wd)

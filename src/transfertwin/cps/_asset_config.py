@@ -158,11 +158,11 @@ def write_asset_config(path: Path, cfg: AssetConfig) -> Path:
     tables = {
         "asset": {"id": cfg.asset_id, "floor": str(cfg.floor_file)},
         "network": {"host": cfg.host, "port": cfg.port, "seeds": list(cfg.seeds),
-                    "lease_s": cfg.lease_s, "allow_remote": cfg.allow_remote},  # fmt: skip
+                    "lease_s": cfg.lease_s, "allow_remote": cfg.allow_remote},
         "security": {"insecure": cfg.insecure, "cert_dir": str(cfg.cert_dir),
-                     "trust_dir": str(cfg.trust_dir)},  # fmt: skip
+                     "trust_dir": str(cfg.trust_dir)},
         "runtime": {"state_dir": str(cfg.state_dir), "seed": cfg.seed,
-                    "time_scale": cfg.time_scale, "docking": cfg.docking},  # fmt: skip
+                    "time_scale": cfg.time_scale, "docking": cfg.docking},
     }
     if cfg.credentials_file is not None:
         tables["security"]["credentials"] = str(cfg.credentials_file)

@@ -43,8 +43,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from transfertwin._errors import InputError
-from transfertwin.cps.aas import AssetDescriptor, AssetKind, Capability, PhysicalType
-from transfertwin.cps.aas._demo import DEMO_PLACEMENT, PHYSICAL_SUFFIX
+from transfertwin.cps.aas import (
+    DEMO_PLACEMENT,
+    AssetDescriptor,
+    AssetKind,
+    Capability,
+    PhysicalType,
+)
 
 if TYPE_CHECKING:
     from transfertwin.navigation import ShopFloor
@@ -147,7 +152,7 @@ class FloorSpec:
         objects = tuple(_virtual(o, "object", PhysicalType.B) for o, _ in self.objects)
         logical = tuple(
             AssetDescriptor(aid, AssetKind.LOGICAL, LOGICAL_ASSETS[aid][0],
-                            capabilities=(LOGICAL_ASSETS[aid][1],))  # fmt: skip
+                            capabilities=(LOGICAL_ASSETS[aid][1],))
             for aid in self.logical
         )
         return (*units, *modules, *objects, *logical)
@@ -159,21 +164,23 @@ class FloorSpec:
     def shop_floor(self) -> ShopFloor:
         """The navigation floor: walls around `size_m` and the stations (the default floor's
         obstacles too when the stations are the default ones)."""
-        from transfertwin.navigation import Station, default_floor
-        from transfertwin.navigation._floor import _wall
+        from transfertwin.navigation import Rect, ShopFloor, Station, default_floor
+
+        def wall(x0: float, y0: float, x1: float, y1: float) -> Rect:
+            return Rect((x0 + x1) / 2, (y0 + y1) / 2, x1 - x0, y1 - y0, 0.0, "wall")
 
         base = default_floor()
         goal = {s.mount: s.goal_in_edge for s in base.stations}
         stations = tuple(
             Station(s.name, s.x_m, s.y_m, math.radians(s.yaw_deg), s.mount,
-                    goal_in_edge=goal[s.mount])  # fmt: skip
+                    goal_in_edge=goal[s.mount])
             for s in self.stations
         )
         if stations == base.stations and self.size_m == base.size_m:
             return base
         w, h, t = self.size_m[0], self.size_m[1], 0.1
-        walls = (_wall(0.0, 0.0, w, t), _wall(0.0, h - t, w, h), _wall(0.0, 0.0, t, h),
-                 _wall(w - t, 0.0, w, h))  # fmt: skip
+        walls = (wall(0.0, 0.0, w, t), wall(0.0, h - t, w, h), wall(0.0, 0.0, t, h),
+                 wall(w - t, 0.0, w, h))  # fmt: skip
         return ShopFloor(self.size_m, walls, stations)
 
 
@@ -181,7 +188,7 @@ def _virtual(aid: str, cls: str, ptype: PhysicalType, caps: tuple[Capability, ..
              station: str | None = None) -> AssetDescriptor:  # fmt: skip
     return AssetDescriptor(aid, AssetKind.VIRTUAL_MODEL, cls, physical_type=ptype,
                            capabilities=caps, station=station,
-                           models=f"{aid}{PHYSICAL_SUFFIX}")  # fmt: skip
+                           models=f"{aid}_P")  # fmt: skip
 
 
 def _check(floor: FloorSpec) -> None:
@@ -219,7 +226,7 @@ def _check(floor: FloorSpec) -> None:
 def default_floor_spec() -> FloorSpec:
     """The demonstration floor (Sec. 5.3): stations A–D of `navigation.default_floor` with
     TU_A…TU_D, TM_1 at the home pose, o1…o5 as `DEMO_PLACEMENT`, the four logical assets."""
-    from transfertwin.cps.apps._floor import HOME_POSE
+    from transfertwin.cps.apps import HOME_POSE
     from transfertwin.navigation import default_floor
 
     base = default_floor()

@@ -12,6 +12,7 @@ depend on the launcher staying alive, and any asset can be restarted by hand wit
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import ipaddress
 import json
 import os
@@ -143,7 +144,7 @@ def write_floor_info(workdir: Path, configs: dict[str, AssetConfig], floor: Floo
                     "endpoint": cfg.endpoint,
                     "security_policy": "None" if cfg.insecure else "Basic256Sha256",
                     "config": str((workdir / "assets" / f"{aid}.toml").resolve())}
-                   for aid, cfg in sorted(configs.items())],  # fmt: skip
+                   for aid, cfg in sorted(configs.items())],
         "credentials_file": None if first.insecure else str(first.credentials_file),
         "cert_dir": str((workdir / "certs").resolve()),
         "trust_dir": str((workdir / "certs" / "trusted").resolve()),
@@ -169,10 +170,8 @@ def stop_floor(workdir: Path, sig: int = signal.SIGTERM) -> dict[str, int]:
     """Send `sig` to every asset process of the floor; returns those signalled."""
     pids = asset_pids(workdir)
     for pid in pids.values():
-        try:
+        with contextlib.suppress(OSError):
             os.kill(pid, sig)
-        except OSError:
-            pass
     return pids
 
 

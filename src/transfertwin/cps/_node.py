@@ -232,7 +232,7 @@ class AssetNode:
     def _open(self, url: str, aid: str, timeout_s: float = 10.0):
         cfg = self.cfg
         return connect(url, aid, credentials=self.credentials, role="operator",
-                       cert_dir=cfg.cert_dir, insecure=cfg.insecure, timeout_s=timeout_s)  # fmt: skip
+                       cert_dir=cfg.cert_dir, insecure=cfg.insecure, timeout_s=timeout_s)
 
     def _connector(self, url: str):
         return self._open(url, url.rsplit("/", 1)[-1], 5.0)

@@ -1,6 +1,6 @@
 """The transport module in its own process: it takes operations from the TMS, runs them
 through the flow of Fig. 5.9a (`run_transport_operation`, the same skills as the
-single-process CPS, `_VirtualTransport`) and reports every step, every moved object and
+single-process CPS, `VirtualTransport`) and reports every step, every moved object and
 the result back to the TMS.
 
 The module's process owns the simulation of itself and the unit it is docked at (its
@@ -16,6 +16,7 @@ restarts in the middle of an operation reports it failed, with the step it was i
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import functools
 import json
 import logging
@@ -95,8 +96,7 @@ class ModuleRole(Role):
 
     def __init__(self, node: AssetNode) -> None:
         super().__init__(node)
-        from transfertwin.cps.apps import Environment, FloorRobot
-        from transfertwin.cps.apps._floor import HOME_POSE
+        from transfertwin.cps.apps import HOME_POSE, Environment, FloorRobot
 
         spec = node.floor.module(self.aid)
         self.robot = FloorRobot(node.floor.shop_floor(), home=spec.home or HOME_POSE)
@@ -106,7 +106,7 @@ class ModuleRole(Role):
         self.env = Environment(load_scene(), node.cfg.time_scale)
         self.op: dict[str, Any] | None = None
         self._outbox_kick = asyncio.Event()
-        # what `_VirtualTransport` reads of the runtime it serves
+        # what `VirtualTransport` reads of the runtime it serves
         self.floor_robots = {self.aid: self.robot}
         self.config = SimpleNamespace(docking=node.cfg.docking, seed=node.cfg.seed,
                                       scene=self.env.scene)  # fmt: skip
@@ -194,8 +194,7 @@ class ModuleRole(Role):
         return True
 
     async def _run(self, op: dict[str, Any]) -> None:
-        from transfertwin.cps.apps._applications import _VirtualTransport
-        from transfertwin.cps.apps._transport import legs_of, run_transport_operation
+        from transfertwin.cps.apps import legs_of, run_transport_operation
 
         op_id, obj = op["operation"], op["object"]
         await self.set("CurrentTask", f"{op_id}: {obj} {op['source']} -> {op['target']}")
@@ -257,12 +256,10 @@ class ModuleRole(Role):
                 outbox.pop(0)
                 self.state.save()
             self._outbox_kick.clear()
-            try:
+            with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(self._outbox_kick.wait(), 0.5)
-            except TimeoutError:
-                pass
 
-    # -- what `_VirtualTransport` calls --------------------------------------------------------
+    # -- what `VirtualTransport` calls --------------------------------------------------------
     async def _publish_pose(self, tm: str) -> None:
         x, y, theta = (float(v) for v in self.robot.pose)
         for prop, value in (("PoseX", x), ("PoseY", y), ("PoseTheta", theta)):
@@ -343,10 +340,10 @@ def _warm_up() -> None:
 
 
 def _make_transport():
-    from transfertwin.cps.apps._applications import _VirtualTransport
+    from transfertwin.cps.apps import VirtualTransport
 
-    class ModuleTransport(_VirtualTransport):
-        """The skills of `_VirtualTransport`; a module that restarted with an object on
+    class ModuleTransport(VirtualTransport):
+        """The skills of `VirtualTransport`; a module that restarted with an object on
         board puts it back on its belts in the simulation before docking to deliver it."""
 
         async def dock(self, leg):
@@ -358,7 +355,7 @@ def _make_transport():
     return ModuleTransport
 
 
-def _ModuleTransport(*args):  # noqa: N802 - a class made on first use (imports the simulation)
+def _ModuleTransport(*args):
     return _make_transport()(*args)
 
 

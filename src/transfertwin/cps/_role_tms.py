@@ -39,7 +39,7 @@ class TmsRole(Role):
 
     def __init__(self, node: AssetNode) -> None:
         super().__init__(node)
-        from transfertwin.cps.apps._ledger import ObjectLedger
+        from transfertwin.cps.apps import ObjectLedger
 
         data = self.state.data
         modules = [m.asset_id for m in node.floor.modules]
@@ -287,7 +287,8 @@ class TmsRole(Role):
                         await asyncio.wait_for(self.node.peers.call(
                             aid, "SetPossessedObjects", ",".join(objs)), 5)  # fmt: skip
                     elif aid in self.ledger.locations():
-                        where = "" if aid in self.state.data["unknown"] else self.ledger.location(aid)
+                        lost = aid in self.state.data["unknown"]
+                        where = "" if lost else self.ledger.location(aid)
                         await asyncio.wait_for(self.node.peers.write(aid, "PossessedBy", where), 5)
                     self._pending.discard(aid)
                 except Exception as exc:

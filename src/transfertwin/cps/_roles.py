@@ -10,6 +10,7 @@ may write besides the externally synchronised ones), `live()` (its part of the h
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import logging
 import time
@@ -131,7 +132,7 @@ class PropsRole(Role):
 
     def __init__(self, node: AssetNode) -> None:
         super().__init__(node)
-        from transfertwin.cps.apps._props import PoseGraph
+        from transfertwin.cps.apps import PoseGraph
 
         self.poses = PoseGraph()
 
@@ -139,7 +140,7 @@ class PropsRole(Role):
         return {"ReportPose": self._report, "FusedPose": self._fused}
 
     async def _report(self, source, subject, x, y, theta, sigma_xy, sigma_theta) -> bool:
-        from transfertwin.cps.apps._props import PoseObservation
+        from transfertwin.cps.apps import PoseObservation
 
         self.poses.add(PoseObservation(source, subject, x, y, theta, sigma_xy, sigma_theta))
         await self.set("FusedPoses", len(self.poses.solve()))
@@ -280,10 +281,8 @@ class GraphRole(Role):
             now = time.monotonic()
             for aid in [a for a, t in self.leases.items() if t < now]:
                 del self.leases[aid]
-                try:
+                with contextlib.suppress(InputError):
                     self.kg.leave(aid)
-                except InputError:
-                    pass
                 log.info("KG: %s offline (lease of %.1f s expired)", aid, self.node.cfg.lease_s)
             await self._counts()
 

@@ -53,6 +53,7 @@ EXPECTED_ELEMENTS = {
         ],
         "ControlInterface": [
             "SetBeltSpeed", "Dock", "Undock", "QueueTransportTask", "StartTransfer",
+            "AssignOperation",
         ],
     },
     "o5": {
@@ -66,7 +67,9 @@ EXPECTED_ELEMENTS = {
         "Identification": ["AssetId", "AssetClass", "AssetKind", "Provenance"],
         "Capabilities": ["Allocate"],
         "OperationalData": ["State", "QueuedOperations", "CompletedOperations"],
-        "ControlInterface": ["SubmitTransportOperation", "OperationStatus"],
+        "ControlInterface": [
+            "SubmitTransportOperation", "OperationStatus", "ReportProgress", "Ledger", "Locate",
+        ],
     },
     "EM": {
         "Identification": ["AssetId", "AssetClass", "AssetKind", "Provenance"],
@@ -84,7 +87,7 @@ EXPECTED_ELEMENTS = {
         "Identification": ["AssetId", "AssetClass", "AssetKind", "Provenance"],
         "Capabilities": ["Knowledge"],
         "OperationalData": ["State", "Triples", "Assets"],
-        "ControlInterface": ["Query"],
+        "ControlInterface": ["Query", "Heartbeat", "Leave", "Status"],
     },
 }  # fmt: skip
 
@@ -111,6 +114,15 @@ EXPECTED_OPERATIONS = [
      [("ok", _B)]),
     ("PropS", "FusedPose", [("subject", _S)], [("pose_json", _S)]),
     ("KG", "Query", [("sparql", _S)], [("result_json", _S)]),
+    # one process per asset (docs/architecture.md, "Deployment")
+    ("TM_1", "AssignOperation",
+     [("operation_id", _S), ("source", _S), ("target", _S), ("object", _S)], [("ok", _B)]),
+    ("TMS", "ReportProgress", [("operation_id", _S), ("event_json", _S)], [("ok", _B)]),
+    ("TMS", "Ledger", [], [("ledger_json", _S)]),
+    ("TMS", "Locate", [("object", _S), ("holder", _S)], [("ok", _B)]),
+    ("KG", "Heartbeat", [("description_json", _S)], [("endpoints_json", _S)]),
+    ("KG", "Leave", [("asset_id", _S)], [("ok", _B)]),
+    ("KG", "Status", [], [("status_json", _S)]),
 ]  # fmt: skip
 
 

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 from transfertwin._lazy import lazy_exports
 
 if TYPE_CHECKING:
-    from transfertwin.cps.apps._applications import AssetApplications
+    from transfertwin.cps.apps._applications import AssetApplications, VirtualTransport
     from transfertwin.cps.apps._environment import Environment, ScaledClock
     from transfertwin.cps.apps._floor import HOME_POSE, FloorRobot, LegResult
     from transfertwin.cps.apps._ledger import ObjectLedger
@@ -50,6 +50,7 @@ __all__ = [
     "ScaledClock",
     "StepResult",
     "TransportSkills",
+    "VirtualTransport",
     "form_ots",
     "fuse_poses",
     "legs_of",

@@ -3,7 +3,7 @@
 What each asset's OPC UA operations do: the transfer units' belt drives and possession
 (external sync of a D/E asset), the transport module's docking and transport tasks (the flow
 of Fig. 5.9a, `_transport.run_transport_operation`, with the virtual module's skills in
-`_VirtualTransport`; it drives a docked unit only through its OPC UA interface), and the
+`VirtualTransport`; it drives a docked unit only through its OPC UA interface), and the
 logical assets: the Transport Module System, the Experiment Manager, PropS and the
 knowledge graph.
 
@@ -57,7 +57,7 @@ from transfertwin.study.experiment import (
     scene_controller,
 )
 
-__all__ = ["AssetApplications"]
+__all__ = ["AssetApplications", "VirtualTransport"]
 
 log = logging.getLogger("transfertwin.cps")
 
@@ -230,7 +230,7 @@ class AssetApplications:
             if leg is not None:
                 log.info("%s: %s (%s at %s)", tm, state, leg.name, leg.unit)
 
-        skills = _VirtualTransport(self, tm, source, target, obj)
+        skills = VirtualTransport(self, tm, source, target, obj)
         try:
             result = await run_transport_operation(skills, legs_of(source, target), on_state)
         finally:
@@ -330,7 +330,7 @@ class AssetApplications:
 SCAN_SIZE = (160, 120)
 
 
-class _VirtualTransport:
+class VirtualTransport:
     """The virtual transport module's skills (`TransportSkills`) in the demo CPS.
 
     With ``CpsConfig.docking == 'navigated'`` the module drives on the shop floor

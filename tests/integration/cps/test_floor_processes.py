@@ -1,0 +1,199 @@
+"""The DT network with one process per asset (issue: the floor on a shop floor): a floor of
+two transport modules as separate processes on their own loopback addresses; a unit killed
+with -9 is seen offline, restarted by hand and seen again; a module on standby joins at
+runtime and is given work; a module killed in the middle of an operation loses nothing."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from tests.integration.cps._cli import tt
+
+FLOOR = """
+name = "two-modules"
+size_m = [12.0, 8.0]
+logical = ["KG", "TMS"]
+
+[[station]]
+name = "A"
+x_m = 2.6
+y_m = 6.6
+yaw_deg = 90.0
+mount = "left"
+
+[[station]]
+name = "B"
+x_m = 7.6
+y_m = 6.6
+yaw_deg = 90.0
+mount = "right"
+
+[[module]]
+id = "TM_1"
+x_m = 6.0
+y_m = 5.2
+
+[[module]]
+id = "TM_2"
+x_m = 6.0
+y_m = 3.0
+standby = true
+
+[[object]]
+id = "o1"
+at = "TU_A"
+
+[[object]]
+id = "o2"
+at = "TU_B"
+"""
+
+LEASE_S = 2.0
+
+
+def status(wd: Path) -> dict:
+    from transfertwin.cli._cps_floor import floor_status
+
+    return floor_status(wd)
+
+
+def wait_for(wd: Path, check, timeout_s: float, what: str) -> tuple[dict, float]:
+    """Poll the floor's status until `check(doc)` holds; returns it and the time taken."""
+    t0 = time.monotonic()
+    last: dict | None = None
+    while time.monotonic() - t0 < timeout_s:
+        try:
+            last = status(wd)
+            if check(last):
+                return last, time.monotonic() - t0
+        except Exception:  # the graph restarting: try again
+            pass
+        time.sleep(0.2)
+    raise AssertionError(f"{what} not within {timeout_s} s; last status: {last}")
+
+
+def asset(doc: dict, aid: str) -> dict:
+    return next(a for a in doc["assets"] if a["id"] == aid)
+
+
+def start(wd: Path, aid: str) -> subprocess.Popen:
+    log = (wd / "logs" / f"{aid}.log").open("ab")
+    return subprocess.Popen(
+        [sys.executable, "-m", "transfertwin", "cps", "asset", "--config",
+         str(wd / "assets" / f"{aid}.toml")], stdout=log, stderr=subprocess.STDOUT,
+        start_new_session=True)  # fmt: skip
+
+
+def objects_consistent(doc: dict) -> None:
+    """Every object is in the ledger once, at an asset of the floor or unknown with where it
+    was last seen."""
+    assert set(doc["objects"]) == {"o1", "o2"}
+    holders = {"TU_A", "TU_B", "TM_1", "TM_2"}
+    for o, v in doc["objects"].items():
+        if v["unknown"]:
+            assert v["last_seen"] in holders and v["operation"].startswith("op"), (o, v)
+        else:
+            assert v["location"] in holders, (o, v)
+
+
+@pytest.fixture(scope="module")
+def floor(tmp_path_factory):
+    base = tmp_path_factory.mktemp("floor")
+    (base / "floor.toml").write_text(FLOOR)
+    wd = base / "w"
+    up = tt("cps", "up", "--floor", str(base / "floor.toml"), "--workdir", str(wd), "--detach",
+            "--time-scale", "0", "--lease", str(LEASE_S), "--start-timeout", "150", timeout=200)
+    assert up.returncode == 0, up.stderr
+    assert "7 asset processes" in up.stdout and "1 on standby" in up.stdout
+    yield wd
+    down = tt("cps", "down", "--workdir", str(wd))
+    assert down.returncode == 0, down.stdout + down.stderr
+
+
+def test_every_asset_is_its_own_process_on_its_own_address(floor):
+    doc = status(floor)
+    online = {a["id"]: a for a in doc["assets"] if a["online"]}
+    assert set(online) == {"KG", "TMS", "TU_A", "TU_B", "TM_1", "o1", "o2"}
+    assert len({a["pid"] for a in online.values()}) == 7
+    hosts = {a["address"].split("//")[1].split(":")[0] for a in online.values()}
+    assert len(hosts) == 7 and all(h.startswith("127.") for h in hosts)
+    assert all(a["address"].startswith("opc.tcp://") for a in online.values())
+    assert doc["objects"]["o1"] == {"location": "TU_A", "unknown": False, "moving": None}
+    # each asset's own configuration is there to restart it by hand, with its own certificate
+    for aid in online:
+        cfg = (floor / "assets" / f"{aid}.toml").read_text()
+        assert f'id = "{aid}"' in cfg and "insecure = false" in cfg
+        assert (floor / "assets" / aid / "certs" / "client-operator.der").is_file()
+    info = json.loads((floor / "cps.json").read_text())
+    assert info["mode"] == "processes"
+
+
+def test_a_unit_killed_with_minus_9_goes_offline_and_rejoins_when_restarted(floor):
+    pid = asset(status(floor), "TU_A")["pid"]
+    os.kill(pid, signal.SIGKILL)
+    _, took = wait_for(floor, lambda d: not asset(d, "TU_A")["online"], 10.0, "TU_A offline")
+    assert took < 10.0
+    proc = start(floor, "TU_A")
+    doc, _ = wait_for(floor, lambda d: asset(d, "TU_A")["online"], 60.0, "TU_A back")
+    assert asset(doc, "TU_A")["pid"] == proc.pid != pid
+    # it resumed what it had persisted: o1 still lies on it
+    state = json.loads((floor / "assets" / "TU_A" / "state" / "TU_A.json").read_text())
+    assert state["possessed"] == ["o1"]
+
+
+def test_a_module_joins_at_runtime_and_a_leave_is_announced(floor):
+    proc = start(floor, "TM_2")
+    deadline = time.monotonic() + 90
+    log = floor / "logs" / "TM_2.log"
+    while "TM_2 up at" not in (log.read_text() if log.exists() else ""):
+        assert proc.poll() is None and time.monotonic() < deadline, log.read_text()
+        time.sleep(0.2)
+    _, took = wait_for(floor, lambda d: asset(d, "TM_2")["online"], 5.0, "TM_2 joined")
+    assert took <= 5.0
+    proc.send_signal(signal.SIGTERM)  # a clean leave: announced, exit 0
+    assert proc.wait(30) == 0
+    wait_for(floor, lambda d: not asset(d, "TM_2")["online"], 3.0, "TM_2 left")
+    start(floor, "TM_2")
+    wait_for(floor, lambda d: asset(d, "TM_2")["online"], 90.0, "TM_2 back")
+
+
+def test_orders_flow_and_a_module_killed_mid_operation_loses_nothing(floor):
+    first = tt("cps", "order", "--workdir", str(floor), "--to", "TU_B", "--object", "o1",
+               timeout=300)  # fmt: skip
+    assert first.returncode in (0, 3), first.stderr
+    op1 = first.stdout.split()[1].rstrip(":")
+    doc = status(floor)
+    objects_consistent(doc)
+    # a second order; kill the module that took it while it works
+    obj = "o2" if not doc["objects"]["o2"]["unknown"] else "o1"
+    target = "TU_A" if doc["objects"][obj]["location"] != "TU_A" else "TU_B"
+    proc = subprocess.Popen([sys.executable, "-m", "transfertwin", "cps", "order", "--workdir",
+                             str(floor), "--to", target, "--object", obj],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
+    def working(d: dict) -> list[dict]:
+        return [a for a in d["assets"]
+                if a["class"] == "transport_module" and a["state"] not in ("idle", "offline")]
+
+    doc, _ = wait_for(floor, working, 60.0, "a module at work")
+    busy = working(doc)[0]
+    os.kill(busy["pid"], signal.SIGKILL)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode in (0, 3), err
+    op2 = out.split()[1].rstrip(":")
+    assert op2 != op1  # ids are unique on the floor
+    if proc.returncode == 3:
+        assert "finished: failed" in out and busy["id"] in out
+    doc = status(floor)
+    objects_consistent(doc)
+    assert doc["objects"][obj]["moving"] is None
+    # the module comes back with its state; the floor takes orders again
+    start(floor, busy["id"])
+    wait_for(floor, lambda d: asset(d, busy["id"])["online"], 90.0, "module back")

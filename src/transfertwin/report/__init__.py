@@ -34,7 +34,7 @@ from transfertwin.report._fidelity_plots import (
     fidelity_plot_data,
     plot_fidelity,
 )
-from transfertwin.report._figure import figure_png
+from transfertwin.report._figure import figure_png, yaw_tick_labels
 from transfertwin.report._html import REPORT_NAME, format_value, write_report
 from transfertwin.report._interval_plot import IntervalPlot, interval_plot_data, plot_intervals
 from transfertwin.report._navigation_plots import plot_docking_run
@@ -139,4 +139,5 @@ __all__ = [
     "write_rehearsal_curve_report",
     "write_rehearsal_report",
     "write_report",
+    "yaw_tick_labels",
 ]

@@ -11,8 +11,8 @@ one would hide the other. The line is a circular-kernel estimate of the success
 probability over θ (`circular_smooth`), the dots are the states' own rates k/n, and
 the best (star) and worst (×) state of Alg. 1–4 sit at their ȳ^MA (Eq. 6.27), the
 value the selection used, in the panel of the series they were chosen from. A spoke
-from the centre to the rim at the state's θ, labelled "best: θ = …°", keeps its angle
-readable even when it sits at radius 0.
+from the centre to the rim at the state's θ, and its θ written as the tick label there
+("best: θ = …°"), keep its angle readable even when it sits at radius 0.
 
 The study's ȳ^MA averages the angles present within ±window/2; for sparse data
 (e.g. the 191 real experiments, one per state) that is the raw 0/1 outcome of a
@@ -33,7 +33,14 @@ from matplotlib.figure import Figure
 
 from transfertwin._errors import InputError
 from transfertwin.ots import FACES
-from transfertwin.report._figure import FAILURE_COLOR, SUCCESS_COLOR, new_figure, setup_yaw_axes
+from transfertwin.report._figure import (
+    FAILURE_COLOR,
+    SUCCESS_COLOR,
+    YAW_TICK_STEP_DEG,
+    new_figure,
+    setup_yaw_axes,
+    signed_deg_label,
+)
 from transfertwin.study.fullstate import SelectedState, Selection, SeriesStats
 
 __all__ = [
@@ -222,8 +229,8 @@ _MARK = {
     "best": {"marker": "*", "s": 300, "color": SUCCESS_COLOR, "edgecolors": "black"},
     "worst": {"marker": "X", "s": 150, "color": FAILURE_COLOR, "edgecolors": "black"},
 }
-#: What the radius means, written next to each polar axes.
-RADIUS_NOTE = "radius = success rate\n(centre 0, rim 1)"
+#: What the radius means, written under each panel's title.
+RADIUS_NOTE = "radius = success rate (centre 0, rim 1)"
 #: Where the radius labels sit (degrees on the plot): between the 0° and 45° spokes.
 RLABEL_DEG = 22.5
 
@@ -241,10 +248,6 @@ def _setup_rate_axes(ax) -> None:
         label.set_fontsize("small")
         label.set_color("#444444")
         label.set_bbox({"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.8})
-    ax.text(
-        math.radians(RLABEL_DEG + 8), 1.32, RADIUS_NOTE, fontsize="small",
-        color="#444444", ha="center", va="center",
-    )  # fmt: skip
 
 
 def _draw_curve(ax, curve: PolarCurve) -> None:
@@ -260,17 +263,39 @@ def _draw_curve(ax, curve: PolarCurve) -> None:
 
 
 def _draw_marker(ax, m: PolarMarker) -> None:
-    """The state at (θ, ȳ^MA) and a labelled spoke at its θ (visible at radius 0 too)."""
+    """The state at (θ, ȳ^MA) and a dotted spoke at its θ (visible at radius 0 too)."""
     th = math.radians(m.theta_deg)
     color = _MARK[m.kind]["color"]
     ax.plot([th, th], [0.0, 1.05], color=color, linestyle=":", linewidth=1.6, zorder=4)
-    ax.text(
-        th, 1.3, f"{m.kind}: θ = {m.theta_deg}°", color="black", fontsize="small",
-        ha="center", va="center", zorder=6,
-        bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": color},
-    )  # fmt: skip
     label = f"{m.kind} state: θ = {m.theta_deg}°, " + r"$\bar{y}^{MA}$" + f" = {m.y_ma:.2f}"
     ax.scatter([th], [m.y_ma], label=label, zorder=5, **_MARK[m.kind])
+
+
+#: Grid ticks closer than this to a marked angle give way to its label, degrees.
+_MARK_CLEARANCE_DEG = 15
+
+
+def _label_marked_angles(ax, markers: Sequence[PolarMarker]) -> None:
+    """Tick labels name the best/worst angle: ``'worst: θ = -150°'`` at the state's θ,
+    framed in its colour; grid ticks within 15° of it are left out."""
+    marks: dict[int, list[str]] = {}
+    for m in markers:
+        marks.setdefault(m.theta_deg, []).append(m.kind)
+    if not marks:
+        return
+    far = [
+        a for a in range(0, 360, YAW_TICK_STEP_DEG)
+        if all(abs(_wrapped_deg(np.float64(a - t))) >= _MARK_CLEARANCE_DEG for t in marks)
+    ]  # fmt: skip
+    ticks = [(a, signed_deg_label(a), None) for a in far]
+    ticks += [(t % 360, f"{', '.join(k)}: θ = {t}°", k[0]) for t, k in marks.items()]
+    ticks.sort()
+    ax.set_xticks(np.radians([a for a, _, _ in ticks]), labels=[lab for _, lab, _ in ticks])
+    for label, (_, _, kind) in zip(ax.get_xticklabels(), ticks, strict=True):
+        if kind is not None:
+            label.set_fontweight("bold")
+            label.set_bbox({"boxstyle": "round,pad=0.2", "fc": "white",
+                            "ec": _MARK[kind]["color"]})  # fmt: skip
 
 
 def plot_polar_full_state(data: PolarFullState, fig: Figure | None = None) -> Figure:
@@ -291,14 +316,16 @@ def plot_polar_full_state(data: PolarFullState, fig: Figure | None = None) -> Fi
             ax = fig.add_subplot(len(data.faces), len(sides), i * len(sides) + j + 1,
                                  projection="polar")  # fmt: skip
             _setup_rate_axes(ax)
-            ax.set_title(f"{face.face} face, {_SERIES_LABEL[side]}", pad=48)
+            ax.set_title(f"{face.face} face, {_SERIES_LABEL[side]}\n{RADIUS_NOTE}", pad=14)
             name = f"{face.face}-{side}"
             for curve in (c for c in face.curves if c.series == name):
                 _draw_curve(ax, curve)
-            for m in (m for m in face.markers if m.series == name):
+            marks = [m for m in face.markers if m.series == name]
+            for m in marks:
                 _draw_marker(ax, m)
+            _label_marked_angles(ax, marks)
             if ax.get_legend_handles_labels()[0]:
-                ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.17), fontsize="small")
+                ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize="small")
     fig.suptitle(
         f"{data.object_id}: success rate over the yaw θ, one panel per face and conveyor "
         "(line: smoothed; dots: each state's k/n)"

@@ -18,6 +18,10 @@ def test_browser_shows_the_polar_map_and_hover_values(tiny_study, console_factor
     points.first.wait_for()
     n_points = points.count()
     assert n_points == 6  # one marker per state run so far
+    angles = page.eval_on_selector_all(
+        "#polar .angularaxistick text", "els => els.map((e) => e.textContent)"
+    )
+    assert "-150°" in angles and "210°" not in angles  # θ signed, -179..180 (issue 30.4)
     box = points.first.bounding_box()
     page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
     hover = page.locator(".hoverlayer .hovertext")

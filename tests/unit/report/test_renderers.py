@@ -79,7 +79,7 @@ def test_full_state_plot_says_what_the_radius_is_and_keeps_labels_off_the_rim() 
         polar_full_state_data(series_table(stats, "o1"), select(stats, "o1"))
     )
     for ax in fig.axes:
-        assert any(t.startswith("radius = success rate") for t in _texts(ax))
+        assert "radius = success rate (centre 0, rim 1)" in ax.get_title()
         # Radius tick labels sit off the 0° spoke, and none on the rim where curves run.
         assert ax.get_rlabel_position() != 0.0
         assert [t.get_text() for t in ax.get_yticklabels()][-1] == ""
@@ -124,7 +124,7 @@ def test_full_state_plot_shows_every_curve_in_its_own_panel() -> None:
     fig = plot_polar_full_state(data)
     polar = [ax for ax in fig.axes if ax.name == "polar"]
     assert len(polar) == 4
-    titles = [ax.get_title() for ax in polar]
+    titles = [ax.get_title().splitlines()[0] for ax in polar]
     assert titles == [
         "front face, left conveyor (c = left or both)",
         "front face, right conveyor (c = right or both)",
@@ -140,6 +140,8 @@ def test_full_state_plot_marks_the_angle_of_a_worst_state_at_radius_0() -> None:
     line from the centre to the rim at its θ and a label with θ in degrees."""
     import math
 
+    import numpy as np
+
     stats = state_table(_step30_rows())
     sel = select(stats, "o1")
     assert (sel.worst.theta_deg, sel.worst.y_ma) == (-150, 0.0)
@@ -150,4 +152,31 @@ def test_full_state_plot_marks_the_angle_of_a_worst_state_at_radius_0() -> None:
         if len(set(line.get_xdata())) == 1 and line.get_xdata()[0] == math.radians(-150)
     ]  # fmt: skip
     assert spokes and min(spokes[0].get_ydata()) == 0.0 and max(spokes[0].get_ydata()) >= 1.0
-    assert "worst: θ = -150°" in _texts(panel)
+    labels = dict(zip(np.degrees(panel.get_xticks()).round(6) % 360,
+                      (t.get_text() for t in panel.get_xticklabels()), strict=True))  # fmt: skip
+    assert labels[210.0] == "worst: θ = -150°"  # the tick label at its angle says so
+    assert "-150°" not in labels.values() and labels[240.0] == "-120°"  # grid gives way
+
+
+def test_issue_30_4_polar_axes_label_theta_signed_every_30_degrees() -> None:
+    """θ runs over -179..180 (DESIGN), as in the tables: ticks every 30°, signed, so a
+    state at θ = -150° is read off the plot under the label '-150°'."""
+    from transfertwin.report import yaw_tick_labels
+
+    signed = ["0°", "30°", "60°", "90°", "120°", "150°", "180°",
+              "-150°", "-120°", "-90°", "-60°", "-30°"]  # fmt: skip
+    assert yaw_tick_labels() == signed
+    stats = state_table(_step30_rows())
+    figs = (
+        plot_polar_full_state(
+            polar_full_state_data(series_table(stats, "o1"), select(stats, "o1"))
+        ),
+        plot_binary_polar(binary_polar_data(_step30_rows(), "o1")),
+    )
+    for fig in figs:
+        for ax in (a for a in fig.axes if a.name == "polar"):
+            labels = [t.get_text() for t in ax.get_xticklabels()]
+            if not any(":" in lab for lab in labels):  # no best/worst state in this panel
+                assert labels == signed
+            for lab in labels:
+                assert -179 <= int(lab.rsplit(" ", 1)[-1].rstrip("°")) <= 180

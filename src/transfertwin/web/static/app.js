@@ -208,6 +208,8 @@ $("map-study").addEventListener("change", () => { fillObjects(); drawMap(); draw
 $("map-object").addEventListener("change", () => { drawMap(); drawAnalysis(); });
 
 const SYMBOL = { left: "triangle-up", both: "circle", right: "triangle-down" };
+// θ is signed, -179..180 (as in the tables and the report): ticks every 30°, 210° reads -150°.
+const YAW_TICKS = Array.from({ length: 12 }, (_, i) => 30 * i);
 async function drawMap() {
   const name = $("map-study").value, obj = $("map-object").value;
   if (!name || !obj || typeof Plotly === "undefined") return;
@@ -222,7 +224,8 @@ async function drawMap() {
     const key = i === 0 ? "polar" : "polar" + (i + 1);
     const w = 1 / faces.length;
     layout[key] = { domain: { x: [i * w + 0.03, (i + 1) * w - 0.03], y: [0, 0.92] },
-      angularaxis: { rotation: 90, direction: "counterclockwise", dtick: 30 },
+      angularaxis: { rotation: 90, direction: "counterclockwise", tickmode: "array",
+        tickvals: YAW_TICKS, ticktext: YAW_TICKS.map((a) => (a <= 180 ? a : a - 360) + "°") },
       radialaxis: { range: [0, 1.1], showticklabels: false, ticks: "" } };
     layout.annotations.push({ text: face, showarrow: false, xref: "paper", yref: "paper",
       x: (i + 0.5) * w - 0.12, y: 1.0, font: { size: 13 } });

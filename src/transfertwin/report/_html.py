@@ -38,6 +38,7 @@ from transfertwin.report._advice import state_short as _state_short
 from transfertwin.report._binary_polar import binary_polar_data, plot_binary_polar
 from transfertwin.report._figure import figure_png, write_atomic
 from transfertwin.report._interval_plot import interval_plot_data, plot_intervals
+from transfertwin.report._mesh_convention import mesh_convention_html
 from transfertwin.report._polar_full_state import plot_polar_full_state, polar_full_state_data
 from transfertwin.study.fullstate import (
     AnalysisResult,
@@ -428,6 +429,7 @@ def write_report(
         "<p class='lead'>Will the object make it from the transport module (TM) to the "
         "transfer unit (TU) and back, and how should it be put on the belt?</p>",
         _summary_section(analysis, params),
+        mesh_convention_html(params),
         "<section id='figures'><h2>Figures</h2>",
         _HOW_TO_READ,
     ]

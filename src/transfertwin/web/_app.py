@@ -234,7 +234,8 @@ def create_app(config: WebConfig) -> Starlette:
     async def api_assets(request: Request) -> Response:
         check_read(request)
         gw = gateway()
-        return JSONResponse({"assets": gw.assets(), "kg_error": gw.kg_error,
+        return JSONResponse({"assets": gw.assets(), "kg_error": gw.floor_error or gw.kg_error,
+                             "tms_error": gw.tms_error, "mode": gw.info.mode,
                              "objects": gw.ids_of("object"),
                              "units": gw.ids_of("transfer_unit")})  # fmt: skip
 
@@ -253,7 +254,7 @@ def create_app(config: WebConfig) -> Starlette:
             n = 0
             while not max_events or n < max_events:
                 payload = gw.live()
-                payload["orders"] = [o.public() for o in gw.orders.values()]
+                payload["orders"] = gw.order_rows()
                 yield f"event: live\ndata: {json.dumps(payload)}\n\n"
                 n += 1
                 if await request.is_disconnected():
@@ -268,7 +269,7 @@ def create_app(config: WebConfig) -> Starlette:
         gw = gateway()
         if request.method == "GET":
             check_read(request)
-            return JSONResponse({"orders": [o.public() for o in gw.orders.values()]})
+            return JSONResponse({"orders": gw.order_rows()})
         body = await body_of(request)
         client = check_write(request, body, "placing an order")
         obj, source, target = await gw.validate_order(body)
@@ -278,11 +279,7 @@ def create_app(config: WebConfig) -> Starlette:
     @_api
     async def api_order(request: Request) -> Response:
         check_read(request)
-        oid = request.path_params["oid"]
-        order = gateway().orders.get(oid)
-        if order is None:
-            raise LookupError(f"no order {oid[:40]!r}")
-        return JSONResponse(order.public())
+        return JSONResponse(gateway().order(request.path_params["oid"]))
 
     @_api
     async def api_studies(request: Request) -> Response:

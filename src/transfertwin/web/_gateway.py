@@ -6,19 +6,22 @@ and talks to the assets through the CPS client API (`transfertwin.cps.opcua.conn
 *viewer* session per asset for the live values and browsing, *operator* sessions for the
 knowledge-graph queries and the orders (the only calls). Credentials stay in this process;
 nothing returned to the browser carries them.
+
+It follows the floor as it changes (issue 27, item 8): ``cps.json`` is read again every
+second, and a CPS started again in the same folder (new ports) is picked up; on a process
+floor the knowledge graph's ``Status`` names the assets that joined at runtime and those
+whose lease expired; a session that breaks is opened again (an asset process that restarts
+keeps its endpoint); values of an asset that stopped answering are kept but marked stale,
+with the time of the last read and the reason.
 """
 
 from __future__ import annotations
 
 import asyncio
-import contextlib
-import itertools
 import json
 import logging
 import re
 import time
-from dataclasses import dataclass, field
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -34,11 +37,19 @@ from transfertwin.cps.opcua import (
     node_id,
 )
 from transfertwin.cps.opcua import load_credentials as _load_credentials
+from transfertwin.web._floor import (
+    FloorInfo,
+    asset_condition,
+    current_run_operations,
+    merge_assets,
+    order_rows,
+    read_floor_info,
+)
+from transfertwin.web._orders import LOCATION_QUERY, Order, OrderDesk
 
 __all__ = ["ASSETS_QUERY", "CAPABILITIES_QUERY", "CpsGateway", "Order"]
 
 log = logging.getLogger("transfertwin.web")
-audit = logging.getLogger("transfertwin.web.audit")
 
 # rdflib cannot GROUP_CONCAT(DISTINCT ...) a variable left unbound by an OPTIONAL: the
 # capabilities (which not every asset has) come from a query of their own.
@@ -64,13 +75,6 @@ SELECT ?id ?cap WHERE {
 } ORDER BY ?id ?cap
 """
 
-_LOCATION_QUERY = """
-PREFIX tt: <https://transfertwin.dev/ontology#>
-SELECT ?holder WHERE {
-  { ?h tt:possesses ?o . } UNION { ?o tt:locatedAt ?h . }
-  ?o tt:assetId "%s" . ?h tt:assetId ?holder .
-}
-"""
 _ID = re.compile(r"^[A-Za-z0-9_]{1,64}$")
 _KINDS = ("PhysicalAsset", "LogicalAsset", "VirtualModel")
 _TYPE_LABEL = {"TypeA": "A", "TypeB": "B", "TypeC": "C", "TypeD": "D", "TypeE": "E",
@@ -93,99 +97,155 @@ def _jsonable(value: Any) -> Any:
     return str(value)
 
 
-@dataclass
-class Order:
-    """A transport order placed through the console."""
-
-    id: str
-    object: str
-    source: str
-    target: str
-    submitted_utc: str
-    client: str
-    operation: str | None = None
-    state: str = "submitted"  # submitted | running | finished | refused | lost
-    outcome: str | None = None
-    steps: list[dict[str, str]] = field(default_factory=list)
-
-    def step(self, text: str) -> None:
-        """Append a timestamped step (once per distinct text in a row)."""
-        if not self.steps or self.steps[-1]["text"] != text:
-            self.steps.append({"t": datetime.now(UTC).isoformat(timespec="milliseconds"),
-                               "text": text})  # fmt: skip
-
-    def public(self) -> dict[str, object]:
-        """The order as the browser sees it."""
-        return {"id": self.id, "object": self.object, "source": self.source,
-                "target": self.target, "submitted_utc": self.submitted_utc,
-                "operation": self.operation, "state": self.state, "outcome": self.outcome,
-                "steps": list(self.steps)}  # fmt: skip
-
-
-class CpsGateway:
+class CpsGateway(OrderDesk):
     """Live view of a running CPS and its order desk (start with `start`, end with `stop`)."""
 
     def __init__(self, workdir: Path, period_s: float = 0.5) -> None:
-        info = json.loads((workdir / "cps.json").read_text())
+        info = read_floor_info(workdir)
+        if info is None:
+            raise InputError(f"{workdir}: no CPS there (no cps.json)")
         self.workdir = workdir
         self.period_s = period_s
-        self._insecure = bool(info.get("insecure"))
-        self._cert_dir = Path(info["cert_dir"])
-        self._creds: Credentials | None = (
-            None if self._insecure else _load_credentials(Path(info["credentials_file"]))
-        )
-        self._assets: dict[str, dict[str, Any]] = {a["id"]: a for a in info["assets"]}
+        self.info = info
+        self._creds: Credentials | None = None
+        self._assets: dict[str, dict[str, Any]] = {}
+        self._watchers: dict[str, tuple[str, asyncio.Task]] = {}
         self._sessions: dict[str, AssetClient] = {}
         self._kg: AssetClient | None = None
-        self.values: dict[str, dict[str, Any]] = {a: {} for a in self._assets}
-        self.online: dict[str, bool] = dict.fromkeys(self._assets, False)
+        self.values: dict[str, dict[str, Any]] = {}
+        self.online: dict[str, bool] = {}  # a viewer session reads the asset now
+        self.errors: dict[str, str] = {}  # why the last session attempt failed
+        self.seen: dict[str, float] = {}  # time of the last good read (s since the epoch)
         self.kg_rows: list[dict[str, Any]] = []
+        self.kg_status: dict[str, dict[str, Any]] | None = None  # process floors' Status
         self.kg_error: str | None = None
+        self.floor_error: str | None = None
+        self.ledger: list[dict[str, Any]] | None = None  # the TMS's operations
+        self.tms_error: str | None = None
         self.orders: dict[str, Order] = {}
-        self._order_ids = itertools.count(1)
+        self._log_cache: tuple[tuple[int, int], dict[str, dict[str, Any]]] | None = None
         self._tasks: list[asyncio.Task] = []
+        self._floor_tasks: list[asyncio.Task] = []
         self._order_tasks: set[asyncio.Task] = set()
         self.updated = 0.0
+        self._use(info)
+
+    @property
+    def processes(self) -> bool:
+        """One process per asset (``cps up --floor``): the graph has Status, the TMS Ledger."""
+        return self.info.mode == "processes"
+
+    def _use(self, info: FloorInfo) -> None:
+        """Take a (new) cps.json: its credentials, certificates and assets."""
+        self.info = info
+        self._creds = None if info.insecure else _load_credentials(info.credentials_file)
+        self._assets = merge_assets(info.assets, None)
 
     # -- life cycle -------------------------------------------------------------------------
     async def start(self) -> None:
         """Open the sessions (in the background: assets that are down come up later)."""
-        if not self._insecure:
+        await self._certificates()
+        self._sync_watchers()
+        self._start_floor_tasks()
+        self._tasks.append(asyncio.create_task(self._discover()))
+
+    async def _certificates(self) -> None:
+        if not self.info.insecure:
             for role in ("viewer", "operator"):  # once, before sessions race to make them
-                await ensure_certificate(self._cert_dir, f"client-{role}")
-        self._tasks = [asyncio.create_task(self._watch(aid)) for aid in self._assets]
-        self._tasks.append(asyncio.create_task(self._watch_graph()))
+                await ensure_certificate(self.info.cert_dir, f"client-{role}")
+
+    def _start_floor_tasks(self) -> None:
+        self._floor_tasks = [asyncio.create_task(self._watch_graph())]
+        if self.processes:
+            self._floor_tasks.append(asyncio.create_task(self._watch_ledger()))
 
     async def stop(self) -> None:
         """Close every session."""
-        tasks = [*self._tasks, *self._order_tasks]
+        tasks = [*self._tasks, *self._floor_tasks, *self._order_tasks,
+                 *(t for _, t in self._watchers.values())]  # fmt: skip
         for task in tasks:
             task.cancel()
         await asyncio.gather(*tasks, return_exceptions=True)
         self._tasks.clear()
+        self._floor_tasks.clear()
+        self._watchers.clear()
 
-    def _session(self, aid: str, role: str, timeout_s: float = 10.0):
-        return connect(self._assets[aid]["endpoint"], aid, credentials=self._creds, role=role,
-                       cert_dir=self._cert_dir, insecure=self._insecure,
+    def _session(self, aid: str, role: str, timeout_s: float = 10.0, endpoint: str | None = None):
+        return connect(endpoint or self._assets[aid]["endpoint"], aid, credentials=self._creds,
+                       role=role, cert_dir=self.info.cert_dir, insecure=self.info.insecure,
                        timeout_s=timeout_s)  # fmt: skip
 
-    async def _watch(self, aid: str) -> None:
+    # -- following the floor ----------------------------------------------------------------
+    async def _discover(self) -> None:
+        """Read cps.json again each second; a new one (a CPS started again) is taken."""
+        while True:
+            await asyncio.sleep(1.0)
+            info = read_floor_info(self.workdir)
+            if info is None:
+                self.floor_error = (f"the CPS is not running (no cps.json in {self.workdir}); "
+                                    "start it with 'transfertwin cps up'")  # fmt: skip
+                continue
+            self.floor_error = None
+            if info.stamp != self.info.stamp:
+                await self._restart(info)
+            self._sync_watchers()
+
+    async def _restart(self, info: FloorInfo) -> None:
+        """A new cps.json: new endpoints (and maybe certificates); sessions open again."""
+        log.info("%s: cps.json changed; following the new floor", self.workdir)
+        try:
+            self._use(info)
+            await self._certificates()
+        except (OSError, ValueError, KeyError, InputError) as exc:  # half written: next time
+            log.debug("cps.json not usable yet: %s", exc)
+            return
+        for task in self._floor_tasks:
+            task.cancel()
+        await asyncio.gather(*self._floor_tasks, return_exceptions=True)
+        self.kg_rows, self.kg_status, self.ledger = [], None, None
+        self.kg_error = self.tms_error = "connecting to the restarted CPS"
+        self._start_floor_tasks()
+
+    def _sync_watchers(self) -> None:
+        """One watcher per asset and endpoint: new assets get one, a changed endpoint a new
+        one, an asset gone from the floor loses its own."""
+        status = list(self.kg_status.values()) if self.kg_status else None
+        self._assets = merge_assets(self.info.assets, status)
+        for aid, (endpoint, task) in list(self._watchers.items()):
+            if self._assets.get(aid, {}).get("endpoint") != endpoint:
+                task.cancel()
+                del self._watchers[aid]
+                self.online[aid] = False
+        for aid in [a for a in self.values if a not in self._assets]:
+            for table in (self.values, self.online, self.errors, self.seen):
+                table.pop(aid, None)
+        for aid, a in self._assets.items():
+            if aid not in self._watchers:
+                self.values.setdefault(aid, {})
+                self.online.setdefault(aid, False)
+                task = asyncio.create_task(self._watch(aid, a["endpoint"]))
+                self._watchers[aid] = (a["endpoint"], task)
+
+    async def _watch(self, aid: str, endpoint: str) -> None:
         """Keep a viewer session with one asset; read its operational data each period."""
         while True:
             try:
-                async with self._session(aid, "viewer", timeout_s=5.0) as s:
+                async with self._session(aid, "viewer", 5.0, endpoint) as s:
                     nodes = await self._variables(s, "OperationalData")
                     self._sessions[aid] = s
                     while True:
-                        vals = await s.client.read_values([n for _, n in nodes]) if nodes else []
+                        vals = (await asyncio.wait_for(s.client.read_values(
+                            [n for _, n in nodes]), 5.0) if nodes else [])  # fmt: skip
                         self.values[aid] = {k: _jsonable(v) for (k, _), v in
                                             zip(nodes, vals, strict=True)}  # fmt: skip
-                        self.online[aid] = True
+                        self.online[aid], self.seen[aid] = True, time.time()
+                        self.errors.pop(aid, None)
                         self.updated = time.time()
                         await asyncio.sleep(self.period_s)
             except asyncio.CancelledError:
                 raise
             except Exception as exc:  # down, refused, timed out: offline, try again later
+                self.errors[aid] = type(exc).__name__
                 log.debug("%s: %s", aid, exc)
             finally:
                 self._sessions.pop(aid, None)
@@ -193,7 +253,8 @@ class CpsGateway:
             await asyncio.sleep(1.0)
 
     async def _watch_graph(self) -> None:
-        """Keep an operator session with the knowledge graph; refresh the assets each second."""
+        """Keep an operator session with the knowledge graph; refresh the assets each second
+        (and, on a process floor, the graph's Status: who is online, who joined)."""
         if "KG" not in self._assets:
             self.kg_error = "the CPS has no knowledge graph asset"
             return
@@ -202,20 +263,44 @@ class CpsGateway:
                 async with self._session("KG", "operator") as kg:
                     self._kg = kg
                     while True:
-                        rows = json.loads(await kg.call("Query", ASSETS_QUERY))
-                        caps: dict[str, list[str]] = {}
-                        for r in json.loads(await kg.call("Query", CAPABILITIES_QUERY)):
-                            caps.setdefault(r["id"], []).append(r["cap"])
-                        for r in rows:
-                            r["capabilities"] = caps.get(r["id"], [])
-                        self.kg_rows, self.kg_error = rows, None
+                        await self._read_graph(kg)
                         await asyncio.sleep(1.0)
             except asyncio.CancelledError:
                 raise
             except Exception as exc:
                 self.kg_error = f"knowledge graph not answering ({type(exc).__name__})"
+                self.kg_rows, self.kg_status = [], None  # nothing stale shown as current
             finally:
                 self._kg = None
+            await asyncio.sleep(1.0)
+
+    async def _read_graph(self, kg: AssetClient) -> None:
+        rows = json.loads(await kg.call("Query", ASSETS_QUERY))
+        caps: dict[str, list[str]] = {}
+        for r in json.loads(await kg.call("Query", CAPABILITIES_QUERY)):
+            caps.setdefault(r["id"], []).append(r["cap"])
+        for r in rows:
+            r["capabilities"] = caps.get(r["id"], [])
+        if self.processes:
+            status = json.loads(await kg.call("Status"))["assets"]
+            self.kg_status = {r["id"]: r for r in status}
+            if set(self.kg_status) - set(self._assets):
+                self._sync_watchers()  # an asset joined at runtime
+        self.kg_rows, self.kg_error = rows, None
+
+    async def _watch_ledger(self) -> None:
+        """Process floors: the TMS's ledger (operations with their histories) each second."""
+        while True:
+            try:
+                async with self._session("TMS", "operator") as tms:
+                    while True:
+                        self.ledger = json.loads(await tms.call("Ledger"))["operations"]
+                        self.tms_error = None
+                        await asyncio.sleep(1.0)
+            except asyncio.CancelledError:
+                raise
+            except Exception as exc:
+                self.tms_error = f"the TMS is not answering ({type(exc).__name__})"
             await asyncio.sleep(1.0)
 
     async def _query(self, sparql: str) -> list[dict[str, Any]]:
@@ -234,33 +319,60 @@ class CpsGateway:
                 out.append((ref.BrowseName.Name, s.client.get_node(ref.NodeId)))
         return out
 
+    def condition(self, aid: str) -> tuple[bool, str | None]:
+        """(online, reason offline) of an asset (see `asset_condition`)."""
+        kg_row = (self.kg_status or {}).get(aid)
+        return asset_condition(self.online.get(aid, False), self.errors.get(aid), kg_row,
+                               self.floor_error)  # fmt: skip
+
+    def _kg_status_word(self, aid: str, row: dict[str, Any]) -> str:
+        if self.floor_error or self.kg_error:
+            return "unknown"
+        if self.kg_status is not None and aid in self.kg_status:
+            return "online" if self.kg_status[aid].get("online") else "offline"
+        return row.get("status") or ("not joined" if self.processes else "offline")
+
     def assets(self) -> list[dict[str, Any]]:
-        """Every asset of the CPS: its knowledge-graph description and whether it answers."""
+        """Every asset of the floor: its knowledge-graph description, whether it answers and
+        why not."""
         by_id = {r.get("id"): r for r in self.kg_rows}
         out = []
         for aid, a in self._assets.items():
             r = by_id.get(aid, {})
             classes = [c for c in str(r.get("class") or "").split("/") if c]
             kind = next((c for c in classes if c in _KINDS), a.get("kind"))
-            caps = sorted(r.get("capabilities") or [])
+            online, reason = self.condition(aid)
+            st = (self.kg_status or {}).get(aid, {})
             out.append({
                 "id": aid,
                 "class": a.get("class"),
                 "kind": kind,
                 "type": _TYPE_LABEL.get(str(r.get("type")), a.get("type")),
-                "capabilities": caps,
+                "capabilities": sorted(r.get("capabilities") or []),
                 "station": r.get("station"),
-                "status": r.get("status") or ("unknown" if self.kg_error else "offline"),
-                "state": r.get("state"),
+                "status": self._kg_status_word(aid, r),
+                "state": r.get("state") if not self.kg_error else None,
                 "endpoint": r.get("endpoint") or a.get("endpoint"),
                 "security": r.get("security") or a.get("security_policy"),
-                "reachable": self.online.get(aid, False),
+                "reachable": online,
+                "reason": reason,
+                "pid": st.get("pid"),
+                "joined": bool(a.get("joined")),
             })  # fmt: skip
         return out
 
     def live(self) -> dict[str, Any]:
-        """The latest live values of every asset."""
-        return {"t": self.updated, "online": dict(self.online), "values": self.values}
+        """The latest values of every asset; an offline asset's are its last ones, marked
+        stale with the time they were read and why it is offline."""
+        conditions = {aid: self.condition(aid) for aid in self._assets}
+        return {"t": self.updated,
+                "online": {aid: c[0] for aid, c in conditions.items()},
+                "reason": {aid: c[1] for aid, c in conditions.items() if not c[0]},
+                "stale": [aid for aid, c in conditions.items()
+                          if not c[0] and self.values.get(aid)],
+                "seen": {aid: self.seen[aid] for aid in self._assets if aid in self.seen},
+                "values": {aid: self.values.get(aid, {}) for aid in self._assets},
+                "kg_error": self.floor_error or self.kg_error}  # fmt: skip
 
     async def aas(self, aid: str) -> list[dict[str, Any]]:
         """The asset's AAS as its server exposes it: submodels, their elements and values."""
@@ -299,126 +411,70 @@ class CpsGateway:
         """Asset ids of one class (from cps.json), e.g. 'transfer_unit', 'object'."""
         return [aid for aid, a in self._assets.items() if a.get("class") == cls]
 
-    # -- orders ---------------------------------------------------------------------------
-    def _unit(self, what: str, value: object) -> str:
-        """A transfer unit id, or the unit standing at a station named by its id."""
-        units = self.ids_of("transfer_unit")
-        if not isinstance(value, str) or not _ID.match(value):
-            raise InputError(f"{what} must be a transfer unit or station id, got {value!r:.70}")
-        if value in units:
-            return value
-        at = [r["id"] for r in self.kg_rows if r.get("station") == value and r["id"] in units]
-        if len(at) == 1:
-            return at[0]
-        raise InputError(f"{what} {value}: no such transfer unit or station; units: "
-                         f"{', '.join(units)}")  # fmt: skip
+    # -- orders: the floor's operations by their unique id ----------------------------------
+    def _run_stamp(self) -> tuple[int, int, int] | None:
+        return self.info.stamp
 
-    async def validate_order(self, body: dict[str, Any]) -> tuple[str, str, str]:
-        """(object, source unit, target unit) of an order, or InputError with the reason."""
-        unknown = sorted(set(body) - {"object", "source", "target", "token"})
-        if unknown:
-            raise InputError(f"unknown field(s): {', '.join(unknown)}")
-        obj = body.get("object")
-        objects = self.ids_of("object")
-        if not isinstance(obj, str) or obj not in objects:
-            raise InputError(f"object must be one of {', '.join(objects)}, got {obj!r:.70}")
-        target = self._unit("target", body.get("target"))
-        source = body.get("source") or None
-        if source is None:
-            holders = [r["holder"] for r in await self._query(_LOCATION_QUERY % obj)]
-            holders = [h for h in holders if h in self.ids_of("transfer_unit")]
-            if not holders:
-                raise InputError(f"where {obj} is is not known: give the source unit")
-            source = holders[0]
-        source = self._unit("source", source)
-        if source == target:
-            raise InputError(f"source and target are both {source}: nothing to transport")
-        return obj, source, target
-
-    async def submit(self, obj: str, source: str, target: str, client: str) -> Order:
-        """Place a validated order with the TMS; it is followed in the background."""
-        order = Order(f"w{next(self._order_ids)}", obj, source, target,
-                      datetime.now(UTC).isoformat(timespec="seconds"), client)  # fmt: skip
+    def _run_operations(self) -> dict[str, dict[str, Any]]:
+        """A single-process CPS's operations of this run, from cps.log (cached by size)."""
+        path = self.workdir / "cps.log"
         try:
-            async with self._session("TMS", "operator", timeout_s=30) as tms:
-                order.operation = str(await tms.call("SubmitTransportOperation", source,
-                                                     target, obj))  # fmt: skip
-        except ua.UaStatusCodeError as exc:
-            reason = getattr(exc, "reason", None) or _status_text(exc)
-            audit.info("order refused: %s %s -> %s from %s: %s", obj, source, target, client,
-                       reason)  # fmt: skip
-            raise InputError(f"the TMS refused the order: {reason}") from None
-        self.orders[order.id] = order
-        order.state = "running"
-        order.step(f"submitted to the TMS as {order.operation}: {obj} {source} -> {target}")
-        audit.info("order %s (%s): %s %s -> %s from %s", order.id, order.operation, obj,
-                   source, target, client)  # fmt: skip
+            st = path.stat()
+        except OSError:
+            return {}
+        key = (st.st_size, st.st_mtime_ns)
+        if self._log_cache is None or self._log_cache[0] != key:
+            lines = path.read_text(errors="replace").splitlines()
+            self._log_cache = (key, current_run_operations(lines, self.info.started))
+        return self._log_cache[1]
+
+    def order_rows(self) -> list[dict[str, Any]]:
+        """The Orders tab: every operation of the floor (placed here or from the command
+        line), keyed by its operation id; orders of an earlier run of the CPS first."""
+        now = self.info.stamp
+        earlier = [
+            o.public() | {"placed_by": "console", "earlier_run": True}
+            for o in self.orders.values()
+            if o.run != now
+        ]
+        placed = [o.public() for o in self.orders.values() if o.run == now]
+        if self.processes:
+            rows = order_rows(self.ledger or [], placed, from_ledger=True)
+        else:
+            rows = order_rows(list(self._run_operations().values()), placed, from_ledger=False)
+        return earlier + rows
+
+    def order(self, oid: str) -> dict[str, Any]:
+        """One row of `order_rows`, by console id or operation id."""
+        for row in self.order_rows():
+            if oid in (row["id"], row.get("operation")):
+                return row
+        raise LookupError(f"no order {oid[:40]!r}")
+
+    async def _tms_call(self, operation: str, *args: object) -> Any:
+        async with self._session("TMS", "operator", timeout_s=30) as tms:
+            return await tms.call(operation, *args)
+
+    def _follow_later(self, order: Order) -> None:
+        if self.processes:  # the ledger carries the operation's history and outcome
+            return
         task = asyncio.create_task(self._follow(order))
         self._order_tasks.add(task)
         task.add_done_callback(self._order_tasks.discard)
-        return order
 
-    async def _operation_status(self, op: str) -> dict[str, Any] | None:
-        """The TMS's own record of an operation, where it offers OperationStatus."""
-        try:
-            async with self._session("TMS", "operator") as tms:
-                return json.loads(await tms.call("OperationStatus", op))
-        except ua.UaStatusCodeError:
-            return None
-
-    def _log_lines(self, op: str) -> list[str]:
-        """The CPS log's lines of one operation (from its allocation to its end)."""
-        path = self.workdir / "cps.log"
-        if not path.is_file():
-            return []
-        lines = path.read_text(errors="replace").splitlines()
-        start = next((i for i, ln in enumerate(lines) if f"TMS: {op} " in ln), None)
-        if start is None:
-            return []
-        out = []
-        for ln in lines[start:]:
-            out.append(ln.split(" ", 2)[-1] if re.match(r"^\d{4}-\d\d-\d\d ", ln) else ln)
-            if f"TMS: {op} finished" in ln:
-                break
-        return out
-
-    async def _follow(self, order: Order, timeout_s: float = 1800.0) -> None:
-        """Record the order's steps (the transport modules' state, the CPS log) to its end."""
-        tms_status = True
-        tms_ids = self.ids_of("transport_module")
-        seen_log = 0
-        deadline = time.monotonic() + timeout_s
-        op = str(order.operation)
-        while time.monotonic() < deadline:
-            lines = self._log_lines(op)
-            for tm in tms_ids if not lines else ():  # no CPS log: what the modules report
-                v = self.values.get(tm, {})
-                if v.get("State") not in (None, "", "idle") or v.get("DockedAt"):
-                    docked = f", docked at {v['DockedAt']}" if v.get("DockedAt") else ""
-                    task = f" ({v['CurrentTask']})" if v.get("CurrentTask") else ""
-                    order.step(f"{tm}: {v.get('State')}{docked}{task}")
-            for ln in lines[seen_log:]:
-                order.step(ln)
-            seen_log = len(lines)
-            finished = next((ln for ln in lines if f"TMS: {op} finished: " in ln), None)
-            status = await self._operation_status(op) if tms_status else None
-            tms_status = status is not None
-            if status is not None and status.get("state") == "finished":
-                result = status.get("result") or {}
-                order.outcome = str(result.get("status", "finished"))
-            elif finished is not None:
-                order.outcome = finished.split(f"TMS: {op} finished: ", 1)[1].strip()
-            if order.outcome is not None:
-                order.state = "finished"
-                order.step(f"finished: {order.outcome}")
-                audit.info("order %s (%s) finished: %s", order.id, op, order.outcome)
-                return
-            await asyncio.sleep(self.period_s)
-        order.state = "lost"
-        order.step(f"no outcome within {timeout_s:g} s")
-
-
-def _status_text(exc: ua.UaStatusCodeError) -> str:
-    with contextlib.suppress(Exception):
-        return ua.StatusCode(exc.code).name
-    return str(exc)
+    async def _where(self, obj: str) -> str:
+        units = self.ids_of("transfer_unit")
+        if self.processes:
+            ledger = json.loads(await self._tms_call("Ledger"))
+            if obj in ledger["unknown"]:
+                u = ledger["unknown"][obj]
+                raise InputError(f"where {obj} is is unknown since {u['operation']} (last seen "
+                                 f"at {u['last_seen']}); say where it is with "
+                                 "'transfertwin cps locate'")  # fmt: skip
+            holders = [ledger["locations"].get(obj)]
+        else:
+            holders = [r["holder"] for r in await self._query(LOCATION_QUERY % obj)]
+        holders = [h for h in holders if h in units]
+        if not holders:
+            raise InputError(f"where {obj} is is not known: give the source unit")
+        return holders[0]

@@ -46,8 +46,7 @@ let assetIds = [];
 async function loadAssets() {
   let data;
   try { data = await api("/api/assets"); } catch (e) { return; }
-  $("kg-error").hidden = !data.kg_error;
-  $("kg-error").textContent = data.kg_error || "";
+  showFloorError(data.kg_error);
   const tbody = document.querySelector("#assets tbody");
   const ids = data.assets.map((a) => a.id);
   if (ids.join() !== assetIds.join()) {
@@ -70,6 +69,11 @@ async function loadAssets() {
     set("capabilities", a.capabilities.join(", ")); set("status", a.status);
     set("state", a.state || ""); set("endpoint", a.endpoint);
   }
+}
+
+function showFloorError(text) {
+  $("kg-error").hidden = !text;
+  $("kg-error").textContent = text || "";
 }
 
 function fillOrderForm(data) {
@@ -112,15 +116,23 @@ function connectLive() {
     const data = JSON.parse(ev.data);
     events += 1;
     $("live-status").textContent = "live: " + events + " updates, " + new Date().toLocaleTimeString();
+    showFloorError(data.kg_error);
+    const stale = new Set(data.stale || []);
     for (const [id, online] of Object.entries(data.online)) {
       const tr = $("asset-" + id);
-      if (!tr) continue;
+      if (!tr) { loadAssets(); continue; }  // an asset joined: its row comes with the list
       const cell = tr.querySelector(".c-reachable");
-      cell.textContent = online ? "online" : "offline";
+      const reason = (data.reason || {})[id];
+      cell.textContent = online ? "online" : "offline" + (reason ? ": " + reason : "");
       cell.className = "c-reachable " + (online ? "on" : "off");
+      tr.dataset.online = online ? "yes" : "no";
       const vals = data.values[id] || {};
-      tr.querySelector(".c-live").replaceChildren(el("span", { class: "live",
-        text: Object.entries(vals).map(([k, v]) => k + "=" + fmt(v)).join("  ") }));
+      const text = Object.entries(vals).map(([k, v]) => k + "=" + fmt(v === "" ? "–" : v)).join("  ");
+      const seen = (data.seen || {})[id];
+      tr.querySelector(".c-live").replaceChildren(stale.has(id)
+        ? el("span", { class: "live stale", text: "stale (last read " +
+            (seen ? new Date(1000 * seen).toLocaleTimeString() : "?") + "): " + text })
+        : el("span", { class: "live", text: text }));
     }
     renderOrders(data.orders);
   });
@@ -131,9 +143,13 @@ function connectLive() {
 function renderOrders(orders) {
   const tbody = document.querySelector("#orders tbody");
   tbody.replaceChildren(...orders.slice().reverse().map((o) => {
-    const steps = el("ol", { class: "steps" }, ...o.steps.map((s) => el("li", { text: s.text })));
-    const tr = el("tr", { id: "order-" + o.id, "data-state": o.state });
-    for (const v of [o.id, o.operation || "", o.object, o.source, o.target, o.state, o.outcome || ""]) {
+    // one row per operation id (unique on the floor), placed here or from the command line
+    const when = (t) => (typeof t === "number" ? new Date(1000 * t).toLocaleTimeString() + " " : "");
+    const steps = el("ol", { class: "steps" }, ...o.steps.map((s) => el("li", { text: when(s.t) + s.text })));
+    const tr = el("tr", { id: "order-" + o.id, "data-state": o.state, "data-operation": o.operation || "",
+      "data-placed-by": o.placed_by || "console" });
+    const by = o.placed_by === "console" ? o.id + (o.earlier_run ? " (earlier run)" : "") : "command line";
+    for (const v of [by, o.operation || "", o.object, o.source, o.target, o.state, o.outcome || ""]) {
       tr.append(el("td", { text: v }));
     }
     tr.children[6].className = "outcome";

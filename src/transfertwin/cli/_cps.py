@@ -279,7 +279,10 @@ def cmd_trust(args: argparse.Namespace) -> int:
     """Put a client certificate on the trust list of the CPS's OPC UA servers.
 
     The servers read the list on every new session: a running CPS accepts the client at
-    once. The list is ``WORKDIR/certs/trusted`` (created by the first ``cps up``).
+    once. The list is ``WORKDIR/certs/trusted`` (created by the first ``cps up``); on a
+    floor with one process per asset every asset has its own list
+    (``WORKDIR/assets/<id>/trusted``): the certificate goes on all of them, or with
+    ``--asset`` on that asset's only.
     """
     from cryptography.hazmat.primitives import hashes
 
@@ -293,9 +296,19 @@ def cmd_trust(args: argparse.Namespace) -> int:
         cert = read_certificate(Path(args.cert))
     except ValueError as exc:
         raise InputError(str(exc)) from None
-    path = trust_certificate(wd / "certs" / "trusted", cert)
+    per_asset = sorted(p for p in (wd / "assets").glob("*/trusted") if p.is_dir())
+    if args.asset is not None:
+        per_asset = [p for p in per_asset if p.parent.name == args.asset]
+        if not per_asset:
+            raise InputError(f"--asset {args.asset}: no such asset process in {wd}/assets")
+        folders = per_asset
+    else:
+        folders = [wd / "certs" / "trusted", *per_asset]
+    for folder in folders:
+        path = trust_certificate(folder, cert)
+    where = path if len(folders) == 1 else f"{len(folders)} trust lists ({wd})"
     print(f"trusted {cert.subject.rfc4514_string()} "
-          f"(SHA-256 {cert.fingerprint(hashes.SHA256()).hex()[:16]}...): {path}")  # fmt: skip
+          f"(SHA-256 {cert.fingerprint(hashes.SHA256()).hex()[:16]}...): {where}")  # fmt: skip
     info = json.loads((wd / "cps.json").read_text()) if (wd / "cps.json").is_file() else {}
     if info.get("insecure"):
         print("note: this CPS runs with --insecure (NoSecurity): it checks no certificates")
@@ -419,6 +432,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = csub.add_parser("trust", help="trust a client certificate (DER or PEM) for the servers")
     p.add_argument("cert", metavar="CERT", help="the client's application certificate")
     p.add_argument("--workdir", default=".", help="the CPS's workdir (default: .)")
+    p.add_argument("--asset", help="on a --floor floor: trust it for this asset only "
+                                   "(default: every asset of the floor)")  # fmt: skip
     p.set_defaults(func=cmd_trust)
     p = csub.add_parser("experiment",
                         help="run experiments through the Experiment Manager: E^V on a "

@@ -153,12 +153,15 @@ class TmsRole(Role):
 
     async def _allocate(self, op_id: str) -> str:
         """Wait for an online, idle transport module that holds no operation; claim it
-        (the module the object lies on, for an order from a module onward)."""
+        (the module the object lies on, for an order from a module onward). A module that
+        carries an object takes no other order: objects travel one at a time."""
         source = self.ops[op_id]["source"]
         carrier = source if source not in self.node.floor.units else None
         while True:
             for m in await self._modules() or []:
                 if carrier is not None and m["id"] != carrier:
+                    continue
+                if carrier is None and m.get("possesses"):
                     continue
                 if m["online"] and m["state"] == "idle" and m["id"] not in self._claimed:
                     self._claimed[m["id"]] = op_id

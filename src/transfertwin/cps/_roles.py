@@ -294,7 +294,7 @@ class GraphRole(Role):
                          "address": d.get("endpoint"), "pid": d.get("pid"), "online": online,
                          "state": d.get("state") if online else "offline",
                          "docked": d.get("docked"), "location": d.get("location"),
-                         "pose": d.get("pose"),
+                         "pose": d.get("pose"), "possesses": d.get("possesses"),
                          "last_seen_s": round(time.time() - d["seen"], 2)})  # fmt: skip
         return json.dumps({"assets": rows})
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from contextlib import ExitStack
 from pathlib import Path
 
@@ -188,21 +189,42 @@ def cmd_study_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def _progress(plan_json: str, rows: list[dict[str, object]]):  # -> StudyProgress
+    """Done/planned of a study db's rows against its stored plan."""
+    from transfertwin.report import StudyProgress
+    from transfertwin.study.experiment import StudyPlan
+
+    plan = StudyPlan.from_json(plan_json)
+    keys = {(r["object_id"], r["face"], r["conveyor"], r["theta_deg"]) for r in rows}
+    return StudyProgress(
+        done=len(rows), planned=plan.n_experiments, states_done=len(keys),
+        states_planned=len(plan.objects) * len(plan.states()),
+        adaptive=plan.sampling == "adaptive",
+    )  # fmt: skip
+
+
 def cmd_analyze(args: argparse.Namespace) -> int:
-    """Per-state statistics, best/worst states, plots and report of a result table."""
-    from transfertwin.report import analyze_and_report
+    """Per-state statistics, best/worst states, plots and report of a result table.
+
+    A study db whose plan is not finished is analysed as it stands; the report opens with
+    a banner and stderr gets one line saying done/planned (issue 30.5)."""
+    from transfertwin.report import analyze_and_report, partial_line
     from transfertwin.store import SQLITE_SUFFIXES, SQLiteResultStore, read_results
     from transfertwin.study.experiment import plan_parameters
 
     out = out_dir(args.out)
     rows = read_results(args.results)
     params: dict[str, object] = {"results": str(args.results), "rows": len(rows)}
+    progress = None
     if Path(args.results).suffix.lower() in SQLITE_SUFFIXES:
         with SQLiteResultStore(args.results, create=False) as store:
             stored = store.plan()
         if stored is not None:
             params.update(plan_parameters(stored.plan_json))
-    _, report = analyze_and_report(rows, out, params)
+            progress = _progress(stored.plan_json, rows)
+    _, report = analyze_and_report(rows, out, params, progress=progress)
+    if progress is not None and progress.partial:
+        print(f"transfertwin: {partial_line(progress)}", file=sys.stderr)
     print(report)
     return 0
 

@@ -38,6 +38,7 @@ from transfertwin.report._figure import figure_png, yaw_tick_labels
 from transfertwin.report._html import REPORT_NAME, format_value, write_report
 from transfertwin.report._interval_plot import IntervalPlot, interval_plot_data, plot_intervals
 from transfertwin.report._navigation_plots import plot_docking_run
+from transfertwin.report._partial import StudyProgress, partial_banner_html, partial_line
 from transfertwin.report._pipeline import analyze_and_report
 from transfertwin.report._polar_full_state import (
     SMOOTH_GRID_DEG,
@@ -104,6 +105,7 @@ __all__ = [
     "ScoreDistribution",
     "SensitivityPanel",
     "ShareBar",
+    "StudyProgress",
     "ValidatedState",
     "ValidationPlot",
     "analyze_and_report",
@@ -117,6 +119,8 @@ __all__ = [
     "format_value",
     "interval_plot_data",
     "morris_plot_data",
+    "partial_banner_html",
+    "partial_line",
     "plot_binary_polar",
     "plot_correlation_matrices",
     "plot_docking_histograms",

@@ -39,6 +39,7 @@ from transfertwin.report._binary_polar import binary_polar_data, plot_binary_pol
 from transfertwin.report._figure import figure_png, write_atomic
 from transfertwin.report._interval_plot import interval_plot_data, plot_intervals
 from transfertwin.report._mesh_convention import mesh_convention_html
+from transfertwin.report._partial import StudyProgress, partial_banner_html
 from transfertwin.report._polar_full_state import plot_polar_full_state, polar_full_state_data
 from transfertwin.study.fullstate import (
     AnalysisResult,
@@ -59,6 +60,7 @@ _STYLE = (
     "td,th{border:1px solid #ccc;padding:4px 8px;text-align:left;vertical-align:top}"
     "th{background:#f0f0f0}td.num{text-align:right;font-variant-numeric:tabular-nums}"
     ".todo li{margin:0.5em 0}.warn{color:#8a4b00}.ok{color:#1d6b1d}"
+    ".banner{background:#fff6e5;border:1px solid #e0b070;border-radius:4px;padding:0.6em 0.9em}"
     "details{margin:0.8em 0;border:1px solid #ddd;border-radius:4px;padding:0.4em 0.8em}"
     "details details{border:none;padding:0;margin:0.2em 0}"
     "summary{cursor:pointer;font-weight:600}"
@@ -406,7 +408,11 @@ def _figures(analysis: AnalysisResult) -> list[tuple[str, str, bytes]]:
 
 
 def write_report(
-    out_dir: str | os.PathLike[str], analysis: AnalysisResult, params: Mapping[str, object]
+    out_dir: str | os.PathLike[str],
+    analysis: AnalysisResult,
+    params: Mapping[str, object],
+    *,
+    progress: StudyProgress | None = None,
 ) -> Path:
     """Write ``out_dir/report.html`` (and ``out_dir/figures/*.png``) atomically.
 
@@ -416,6 +422,8 @@ def write_report(
         params: Study parameters to list (e.g. runs, seed, profile), any values; keys
             ``group.name`` (plan, scene, physics, layout, placement) are grouped, the key
             ``results`` names the source in the summary.
+        progress: Done/planned of the study the rows come from; a partial study gets a
+            banner at the top (`partial_banner_html`).
 
     Returns:
         Path of the HTML file.
@@ -428,6 +436,7 @@ def write_report(
         "<h1>Transfer study report</h1>",
         "<p class='lead'>Will the object make it from the transport module (TM) to the "
         "transfer unit (TU) and back, and how should it be put on the belt?</p>",
+        partial_banner_html(progress) if progress is not None else "",
         _summary_section(analysis, params),
         mesh_convention_html(params),
         "<section id='figures'><h2>Figures</h2>",

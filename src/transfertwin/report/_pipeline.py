@@ -7,6 +7,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 from transfertwin.report._html import write_report
+from transfertwin.report._partial import StudyProgress
 from transfertwin.study.fullstate import AnalysisResult, ResultRecord, analyze
 
 __all__ = ["analyze_and_report"]
@@ -18,6 +19,7 @@ def analyze_and_report(
     params: Mapping[str, object] | None = None,
     *,
     window: int = 21,
+    progress: StudyProgress | None = None,
 ) -> tuple[AnalysisResult, Path]:
     """`transfertwin.study.analyze` followed by `write_report`.
 
@@ -29,6 +31,7 @@ def analyze_and_report(
         out_dir: Output folder, created if needed.
         params: Study parameters listed in the report.
         window: Moving-average window of Eq. 6.27, degrees.
+        progress: Done/planned of the study; a partial study's report says so.
 
     Returns:
         The analysis and the path of ``report.html``.
@@ -37,4 +40,4 @@ def analyze_and_report(
         InputError: On bad rows or window.
     """
     analysis = analyze(rows, out_dir, window=window)
-    return analysis, write_report(out_dir, analysis, dict(params or {}))
+    return analysis, write_report(out_dir, analysis, dict(params or {}), progress=progress)

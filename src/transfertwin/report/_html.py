@@ -269,7 +269,11 @@ def _summary_section(analysis: AnalysisResult, params: Mapping[str, object]) -> 
         "towards the pinion) from the direction of travel, counter-clockwise seen from "
         "above. Best and worst states are chosen by Alg. 1–4 on the success rate smoothed "
         f"over neighbouring angles ({_YMA}, window {analysis.window}°); k/n and the "
-        "Clopper–Pearson interval are those of the state itself.</p></section>"
+        "Clopper–Pearson interval are those of the state itself. The advice names a "
+        "conveyor and angle only when the best state is separated on its face: some other "
+        "state of that face has a 95 % interval wholly below the best's. Otherwise the "
+        "choice on that face is a tie in these data, and the advice says any placement "
+        "on that face will do.</p></section>"
     )
     return "\n".join(parts)
 

@@ -196,6 +196,7 @@ def test_issue_30_3_a_tie_on_the_best_face_is_not_presented_as_a_placement(tmp_p
     text = write_report(tmp_path, analyze(rows), {}).read_text(encoding="utf-8")
     advice = _advice_of(text, "o18")
     assert "any front placement works" in advice
+    assert "only when the best state is separated on its face" in text  # the rule, stated
     assert "turned" not in advice and "clockwise" not in advice
     assert "Avoid the <b>back</b> face" in advice
 

@@ -6,6 +6,8 @@ chromium through Playwright (marked slow)."""
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 import time
 
 import pytest
@@ -144,3 +146,54 @@ def test_browser_sees_assets_and_places_an_order(cps_workdir, console_factory, p
     console.stop()
     audit = (cps_workdir / "web-audit.log").read_text()
     assert "o2 TU_B -> TU_C" in audit
+
+
+def _cps_up(wd) -> subprocess.Popen:
+    up = subprocess.Popen(
+        [sys.executable, "-m", "transfertwin", "cps", "up", "--workdir", str(wd),
+         "--time-scale", "0"], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+    )  # fmt: skip
+    line = up.stdout.readline()
+    assert line.startswith("CPS up"), line
+    return up
+
+
+@pytest.mark.slow
+def test_item8_1_a_cps_restarted_in_the_same_folder_is_followed(tmp_path):
+    """The console keeps no old ports: stopped, every asset says why; started again in the
+    same folder (new ports), it reads the new cps.json and every asset is online again."""
+    from tests.integration.web.conftest import _stop
+
+    wd = tmp_path / "wd"
+    up = _cps_up(wd)
+    try:
+        with TestClient(create_app(WebConfig(cps=wd)), base_url="http://127.0.0.1") as c:
+
+            def assets():
+                return {a["id"]: a for a in c.get("/api/assets").json()["assets"]}
+
+            def all_online():
+                a = assets()
+                return a if all(x["reachable"] and x["status"] == "online"
+                                for x in a.values()) else None  # fmt: skip
+
+            before = wait_for(all_online, 120, "every asset online")
+            _stop(up)
+            down = wait_for(lambda: (a := assets()) and not any(x["reachable"] for x in
+                            a.values()) and a, 30, "every asset offline")  # fmt: skip
+            assert {x["status"] for x in down.values()} == {"unknown"}  # no old 'online'
+            assert {x["reason"] for x in down.values()} == {
+                f"the CPS is not running (no cps.json in {wd}); start it with "
+                "'transfertwin cps up'"}  # fmt: skip
+            up = _cps_up(wd)
+            after = wait_for(all_online, 120, "every asset online after the restart")
+            info = json.loads((wd / "cps.json").read_text())
+            assert {a["id"]: a["endpoint"] for a in info["assets"]} == {
+                aid: a["endpoint"] for aid, a in after.items()}  # fmt: skip
+            assert after["TU_A"]["endpoint"] != before["TU_A"]["endpoint"]
+            live = c.get("/api/live?max_events=1").text
+            event = json.loads(next(ln[6:] for ln in live.splitlines() if ln.startswith("data: ")))
+            assert all(event["online"].values()) and not event["stale"]
+            assert event["kg_error"] is None
+    finally:
+        _stop(up)

@@ -20,6 +20,7 @@ import argparse
 import asyncio
 import contextlib
 import json
+import logging
 import os
 import random
 import signal
@@ -110,7 +111,8 @@ async def wait_online(floor: Floor, aid: str, online: bool, timeout_s: float,
 async def order_flow(floor: Floor, rng: random.Random, stop: asyncio.Event,
                      submitted: list[str], refused: Counter, modules: int) -> None:  # fmt: skip
     """Keep about one order per module in flight: a random object with a known place to a
-    random other unit."""
+    random other unit; an object a module still carries after a failed delivery first (a
+    module carries one object at a time, so it takes no other order until then)."""
     units = sorted(a for a, c in floor.cls.items() if c == "transfer_unit")
     while not stop.is_set():
         ledger = await floor.ledger()
@@ -124,8 +126,9 @@ async def order_flow(floor: Floor, rng: random.Random, stop: asyncio.Event,
             if obj not in ledger["moving"]:
                 with contextlib.suppress(Exception):
                     await floor.call("TMS", "Locate", obj, u["last_seen"])
-        if running < modules and free:
-            obj = rng.choice(sorted(free))
+        carried = [o for o in free if floor.cls.get(ledger["locations"][o]) == "transport_module"]
+        if running < modules and free:  # what a module still carries goes on first
+            obj = rng.choice(sorted(carried or free))
             source = ledger["locations"][obj]
             target = rng.choice([u for u in units if u != source])
             try:
@@ -235,11 +238,12 @@ def report(ledger, submitted, refused, kills, detect, rejoin, held, floor) -> in
 
 
 def main() -> int:
+    logging.getLogger("asyncua").setLevel(logging.ERROR)  # one warning per session otherwise
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--floor", default=str(ROOT / "examples" / "floor-demo.toml"))
     ap.add_argument("--kills", type=int, default=10)
     ap.add_argument("--period", type=float, default=8.0, help="seconds between kills")
-    ap.add_argument("--lease", type=float, default=3.0)
+    ap.add_argument("--lease", type=float, default=5.0)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--drain", type=float, default=120.0,
                     help="seconds to let operations end after the last kill")  # fmt: skip

@@ -124,6 +124,8 @@ def cmd_asset(args: argparse.Namespace) -> int:
     handler = logging.StreamHandler()
     handler.setFormatter(logging.Formatter("%(asctime)s %(message)s"))
     logging.getLogger("transfertwin.cps").addHandler(handler)
+    # a peer that died leaves a session asyncua cannot close; it logs that with a traceback
+    logging.getLogger("asyncua.client.client").setLevel(logging.CRITICAL)
     pid_file = cfg.state_dir / "pid"
 
     async def serve() -> None:

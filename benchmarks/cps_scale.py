@@ -1,0 +1,178 @@
+"""How a process floor grows: floors of 10, 50 and 200 asset processes (objects included),
+one process per asset on its own loopback address.
+
+    PYTHONPATH=src .venv/bin/python benchmarks/cps_scale.py --sizes 10,50,200
+
+For each size it prints the start-up time (launch until the knowledge graph lists every
+asset online: discovery convergence through the leases), the memory of one asset process
+(RSS and PSS, median and largest, by class), the traffic on the loopback interface per
+asset per minute while the floor idles (heartbeats, gossip), and the latency of a status
+query (the graph's `Status`, median and 95th percentile of 20). A size whose processes
+would not fit in the memory available is skipped with the reason (its figures are then a
+projection, docs/scaling.md). Ratios against the smallest floor are printed in the same run.
+
+Objects beyond the 37 built-in cores are ids only here: nothing is transported.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import json
+import logging
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+
+def floor_of(n: int):
+    """A floor of `n` asset processes: KG, TMS, one module per 25 assets, one station per
+    10, the rest objects."""
+    from transfertwin.cps import FloorSpec, ModuleSpec, StationSpec
+
+    modules = max(1, n // 25)
+    stations = max(2, n // 10)
+    objects = n - 2 - modules - stations
+    if objects < 1:
+        raise SystemExit(f"--sizes: {n} is too small for a floor (at least 5)")
+    width = 4.0 + 4.5 * ((stations + 1) // 2)
+    st = tuple(StationSpec(f"S{i}", 3.0 + 4.5 * (i // 2), 10.6 if i % 2 == 0 else 1.4,
+                           90.0 if i % 2 == 0 else -90.0, "left")
+               for i in range(stations))  # fmt: skip
+    mods = tuple(ModuleSpec(f"TM_{i + 1}", 3.0 + 2.0 * i, 6.0) for i in range(modules))
+    objs = tuple((f"o{i + 1}", st[i % stations].unit) for i in range(objects))
+    return FloorSpec(f"scale{n}", (width, 12.0), st, mods, objs, ("KG", "TMS"))
+
+
+def memory(pid: int) -> tuple[float, float]:
+    """(RSS, PSS) of a process, MB."""
+    rss = pss = 0.0
+    try:
+        for line in Path(f"/proc/{pid}/smaps_rollup").read_text().splitlines():
+            if line.startswith("Rss:"):
+                rss = float(line.split()[1]) / 1024
+            elif line.startswith("Pss:"):
+                pss = float(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return rss, pss
+
+
+def lo_bytes() -> int:
+    base = Path("/sys/class/net/lo/statistics")
+    return int((base / "rx_bytes").read_text())
+
+
+def available_mb() -> float:
+    for line in Path("/proc/meminfo").read_text().splitlines():
+        if line.startswith("MemAvailable:"):
+            return float(line.split()[1]) / 1024
+    return 0.0
+
+
+async def status_latency(wd: Path, repeats: int = 20) -> list[float]:
+    from transfertwin.cps.opcua import connect, load_credentials
+
+    info = json.loads((wd / "cps.json").read_text())
+    kg = next(a["endpoint"] for a in info["assets"] if a["id"] == "KG")
+    creds = load_credentials(Path(info["credentials_file"]))
+    out = []
+    async with connect(kg, "KG", credentials=creds, cert_dir=Path(info["cert_dir"]),
+                       timeout_s=30) as s:  # fmt: skip
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            await s.call("Status")
+            out.append(time.perf_counter() - t0)
+    return out
+
+
+def run_size(n: int, base: Path, lease: float, idle_s: float, per_process_mb: float | None):
+    from transfertwin.cli._cps_floor import _wait_online
+    from transfertwin.cps import asset_pids, launch, prepare_floor, stop_floor, write_floor_info
+
+    if per_process_mb is not None and n * per_process_mb * 1.3 > available_mb():
+        return {"n": n, "skipped": f"needs about {n * per_process_mb * 1.3 / 1024:.1f} GB, "
+                                   f"{available_mb() / 1024:.1f} GB available"}  # fmt: skip
+    floor = floor_of(n)
+    wd = base / f"floor{n}"
+    t0 = time.monotonic()
+    configs = prepare_floor(floor, wd, time_scale=0.0, lease_s=lease)
+    t_prep = time.monotonic() - t0
+    write_floor_info(wd, configs, floor)
+    t1 = time.monotonic()
+    procs = launch(configs, wd)
+    try:
+        _wait_online(wd, set(procs), 60.0 + 3.0 * n, procs)
+        t_up = time.monotonic() - t1
+        pids = asset_pids(wd)
+        mem = {aid: memory(pid) for aid, pid in pids.items()}
+        b0, m0 = lo_bytes(), time.monotonic()
+        time.sleep(idle_s)
+        traffic = (lo_bytes() - b0) / (time.monotonic() - m0) * 60.0 / n
+        lat = asyncio.run(status_latency(wd))
+    finally:
+        stop_floor(wd)
+        for p in procs.values():
+            try:
+                p.wait(30)
+            except Exception:
+                p.kill()
+    by_class: dict[str, list[float]] = {}
+    for aid, (_, pss) in mem.items():
+        by_class.setdefault(configs[aid].asset_id.split("_")[0] if aid[0] != "o" else "object",
+                            []).append(pss)  # fmt: skip
+    rss = [r for r, _ in mem.values()]
+    pss = [p for _, p in mem.values()]
+    return {"n": n, "prepare_s": t_prep, "startup_s": t_up,
+            "rss_median_mb": statistics.median(rss), "rss_max_mb": max(rss),
+            "pss_median_mb": statistics.median(pss), "pss_total_mb": sum(pss),
+            "pss_by_class": {k: round(statistics.median(v), 1) for k, v in by_class.items()},
+            "lo_bytes_per_asset_min": traffic,
+            "status_median_ms": 1000 * statistics.median(lat),
+            "status_p95_ms": 1000 * sorted(lat)[int(0.95 * (len(lat) - 1))]}  # fmt: skip
+
+
+def main() -> int:
+    logging.getLogger("asyncua").setLevel(logging.ERROR)  # one warning per session otherwise
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--sizes", default="10,50,200")
+    ap.add_argument("--lease", type=float, default=5.0)
+    ap.add_argument("--idle", type=float, default=30.0, help="seconds of idle traffic measured")
+    ap.add_argument("--workdir")
+    args = ap.parse_args()
+    sizes = [int(s) for s in args.sizes.split(",")]
+    base = Path(args.workdir or tempfile.mkdtemp(prefix="cps-scale-"))
+    rows = []
+    per_process = None
+    for n in sizes:
+        row = run_size(n, base, args.lease, args.idle, per_process)
+        rows.append(row)
+        if "skipped" in row:
+            print(f"{n:4d} assets: skipped ({row['skipped']})", flush=True)
+            continue
+        per_process = row["rss_max_mb"]
+        print(f"{n:4d} assets: up in {row['startup_s']:.1f} s (certificates "
+              f"{row['prepare_s']:.1f} s before), RSS median {row['rss_median_mb']:.0f} MB "
+              f"(max {row['rss_max_mb']:.0f}), PSS median {row['pss_median_mb']:.0f} MB, "
+              f"total PSS {row['pss_total_mb'] / 1024:.2f} GB, by class {row['pss_by_class']}, "
+              f"loopback {row['lo_bytes_per_asset_min'] / 1024:.1f} KiB per asset per min, "
+              f"status {row['status_median_ms']:.1f} ms (p95 {row['status_p95_ms']:.1f})",
+              flush=True)  # fmt: skip
+    done = [r for r in rows if "skipped" not in r]
+    if len(done) > 1:
+        a = done[0]
+        for r in done[1:]:
+            k = r["n"] / a["n"]
+            print(f"{r['n']} vs {a['n']} assets ({k:.0f}x): start-up "
+                  f"{r['startup_s'] / a['startup_s']:.1f}x, traffic per asset "
+                  f"{r['lo_bytes_per_asset_min'] / a['lo_bytes_per_asset_min']:.2f}x, "
+                  f"status latency {r['status_median_ms'] / a['status_median_ms']:.1f}x, "
+                  f"PSS per asset {r['pss_median_mb'] / a['pss_median_mb']:.2f}x")  # fmt: skip
+    print(json.dumps(rows))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -132,8 +132,8 @@ def asset_condition(
         return True, None
     if kg_row is not None and not kg_row.get("online"):
         seen = kg_row.get("last_seen_s")
-        ago = f", last heartbeat {seen:.0f} s ago" if isinstance(seen, int | float) else ""
-        return False, f"left the floor (lease expired{ago})"
+        ago = f"last heartbeat {seen:.0f} s ago" if isinstance(seen, int | float) else "no lease"
+        return False, f"left the floor ({ago})"  # a leave announced or a lease expired
     if session_error:
         return False, f"not answering ({session_error})"
     return False, "connecting"

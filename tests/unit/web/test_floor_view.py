@@ -69,7 +69,7 @@ def test_item8_1_offline_assets_say_why():
         False, "not answering (ConnectionRefusedError)")  # fmt: skip
     online, reason = asset_condition(False, "TimeoutError",
                                      {"online": False, "last_seen_s": 4.2})  # fmt: skip
-    assert not online and reason == "left the floor (lease expired, last heartbeat 4 s ago)"
+    assert not online and reason == "left the floor (last heartbeat 4 s ago)"
     assert asset_condition(True, None, None, "the CPS is not running") == (
         False, "the CPS is not running")  # fmt: skip
     assert asset_condition(False, None, None) == (False, "connecting")
@@ -167,7 +167,7 @@ def test_item8_4_values_of_an_asset_that_stopped_answering_are_stale(tmp_path):
     live = gw.live()
     assert live["online"] == {"KG": False, "TU_A": False, "o1": True}
     assert live["stale"] == ["TU_A"] and live["seen"] == {"TU_A": 100.0}
-    assert live["reason"]["TU_A"].startswith("left the floor (lease expired")
+    assert live["reason"]["TU_A"].startswith("left the floor (last heartbeat")
     assert "o1" not in live["reason"]
     rows = {a["id"]: a for a in gw.assets()}
     assert rows["TU_A"]["status"] == "offline" and not rows["TU_A"]["reachable"]

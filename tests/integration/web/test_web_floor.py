@@ -1,0 +1,160 @@
+"""The console on a floor of one process per asset (issue 27, items 3, 7 and 8): it follows
+the floor as assets come and go. A unit killed with -9 shows offline with the reason and
+its last values marked stale, and online again once restarted by hand; a module on standby
+started later appears; an order placed from the command line is in the Orders tab under its
+unique operation id, with the TMS's history. Marked slow: a floor takes ~40 s to start here.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from starlette.testclient import TestClient
+
+from tests.integration.cps._cli import tt
+from tests.integration.web.conftest import save_screenshot, wait_for
+from transfertwin.web import WebConfig, create_app
+
+pytestmark = pytest.mark.slow
+
+FLOOR = """
+name = "console-floor"
+size_m = [12.0, 8.0]
+logical = ["KG", "TMS"]
+
+[[station]]
+name = "A"
+x_m = 2.6
+y_m = 6.6
+yaw_deg = 90.0
+mount = "left"
+
+[[station]]
+name = "B"
+x_m = 7.6
+y_m = 6.6
+yaw_deg = 90.0
+mount = "right"
+
+[[module]]
+id = "TM_1"
+x_m = 6.0
+y_m = 5.2
+
+[[module]]
+id = "TM_2"
+x_m = 6.0
+y_m = 3.0
+standby = true
+
+[[object]]
+id = "o1"
+at = "TU_A"
+"""
+
+
+@pytest.fixture(scope="module")
+def floor(tmp_path_factory):
+    """`cps up --floor F --detach --lease 2 --time-scale 0`; `cps down` at the end."""
+    base = tmp_path_factory.mktemp("webfloor")
+    (base / "floor.toml").write_text(FLOOR)
+    wd = base / "w"
+    up = tt("cps", "up", "--floor", str(base / "floor.toml"), "--workdir", str(wd), "--detach",
+            "--time-scale", "0", "--lease", "2", "--start-timeout", "150", timeout=200)
+    try:
+        assert up.returncode == 0, up.stdout + up.stderr
+        yield wd
+    finally:
+        down = tt("cps", "down", "--workdir", str(wd))
+        assert down.returncode == 0, down.stdout + down.stderr
+
+
+def restart(wd: Path, aid: str) -> subprocess.Popen:
+    """`transfertwin cps asset --config W/assets/<id>.toml`, as a user restarts one asset."""
+    log = (wd / "logs" / f"{aid}.log").open("ab")
+    return subprocess.Popen(
+        [sys.executable, "-m", "transfertwin", "cps", "asset", "--config",
+         str(wd / "assets" / f"{aid}.toml")], stdout=log, stderr=subprocess.STDOUT,
+        start_new_session=True)  # fmt: skip
+
+
+def pid_of(wd: Path, aid: str) -> int:
+    return int((wd / "assets" / aid / "state" / "pid").read_text())
+
+
+def test_item8_3_cli_orders_are_in_the_orders_tab_and_a_joining_module_appears(floor):
+    with TestClient(create_app(WebConfig(cps=floor)), base_url="http://127.0.0.1") as c:
+
+        def assets() -> dict:
+            return {a["id"]: a for a in c.get("/api/assets").json()["assets"]}
+
+        def all_up() -> dict | None:
+            a = assets()
+            up = {k for k, v in a.items() if v["reachable"] and v["status"] == "online"}
+            return a if up >= {"KG", "TMS", "TU_A", "TU_B", "TM_1", "o1"} else None
+
+        a = wait_for(all_up, 60, "the floor's assets online")
+        assert not a["TM_2"]["reachable"] and a["TM_2"]["reason"]  # standby: not started
+        assert a["TU_A"]["pid"] == pid_of(floor, "TU_A")
+
+        order = tt("cps", "order", "--workdir", str(floor), "--to", "TU_B", "--object", "o1",
+                   timeout=200)  # fmt: skip
+        assert order.returncode in (0, 3), order.stdout + order.stderr
+        op = order.stdout.split()[1].rstrip(":")
+
+        def listed() -> dict | None:
+            rows = {r["operation"]: r for r in c.get("/api/orders").json()["orders"]}
+            row = rows.get(op)
+            return row if row and row["state"] == "finished" else None
+
+        row = wait_for(listed, 20, f"{op} finished in the Orders tab")
+        assert row["placed_by"] == "cps" and row["object"] == "o1" and row["target"] == "TU_B"
+        assert row["outcome"].startswith(("delivered", "failed"))
+        assert row["steps"][0]["text"] == "queued" and len(row["steps"]) >= 3
+        assert c.get(f"/api/orders/{op}").json()["operation"] == op
+
+        proc = restart(floor, "TM_2")  # the standby module joins at runtime
+        try:
+            wait_for(lambda: (r := assets()["TM_2"])["reachable"] and r["status"] == "online",
+                     90, "TM_2 online in the console and in the graph")  # fmt: skip
+        finally:
+            proc.send_signal(signal.SIGTERM)
+            assert proc.wait(30) == 0
+        gone = wait_for(lambda: (r := assets()["TM_2"])["status"] == "offline" and r, 15,
+                        "TM_2's leave in the console")  # fmt: skip
+        assert not gone["reachable"] and gone["reason"]
+
+
+def test_item7_browser_shows_a_unit_going_offline_and_back(floor, console_factory, page,
+                                                           tmp_path):  # fmt: skip
+    from playwright.sync_api import expect
+
+    console = console_factory("--cps", str(floor))
+    page.goto(console.url)
+    unit = page.locator("#asset-TU_B td.c-reachable")
+    expect(unit).to_have_class("c-reachable on", timeout=90_000)
+    expect(page.locator("#asset-TU_B td.c-live")).to_contain_text("BeltSpeedLeft=")
+
+    pid = json.loads(tt("cps", "status", "--workdir", str(floor), "--json").stdout)
+    pid = next(a["pid"] for a in pid["assets"] if a["id"] == "TU_B")
+    assert pid == pid_of(floor, "TU_B")
+    os.kill(pid, signal.SIGKILL)
+    expect(unit).to_have_class("c-reachable off", timeout=15_000)
+    expect(unit).to_contain_text("offline")
+    expect(page.locator("#asset-TU_B td.c-live .stale")).to_contain_text("stale")
+    expect(page.locator("#asset-TU_B td.c-status")).to_have_text("offline", timeout=15_000)
+    save_screenshot(page, tmp_path, "web-console-floor-offline")
+
+    restart(floor, "TU_B")
+    expect(unit).to_have_class("c-reachable on", timeout=90_000)
+    expect(unit).to_have_text("online")
+    expect(page.locator("#asset-TU_B td.c-status")).to_have_text("online", timeout=15_000)
+    expect(page.locator("#asset-TU_B td.c-live .stale")).to_have_count(0)
+    assert pid_of(floor, "TU_B") != pid
+    save_screenshot(page, tmp_path, "web-console-floor-back")

@@ -462,8 +462,12 @@ class CpsGateway(OrderDesk):
         self._order_tasks.add(task)
         task.add_done_callback(self._order_tasks.discard)
 
+    def _module_sources(self) -> list[str]:
+        # a process floor's TMS takes an order onward from a module holding the object
+        return self.ids_of("transport_module") if self.processes else []
+
     async def _where(self, obj: str) -> str:
-        units = self.ids_of("transfer_unit")
+        units = self.ids_of("transfer_unit") + self._module_sources()
         if self.processes:
             ledger = json.loads(await self._tms_call("Ledger"))
             if obj in ledger["unknown"]:

@@ -117,14 +117,19 @@ class OrderDesk:
         source = body.get("source") or None
         if source is None:
             source = await self._where(obj)
-        source = self._unit("source", source)
+        if source not in self._module_sources():
+            source = self._unit("source", source)
         if source == target:
             raise InputError(f"source and target are both {source}: nothing to transport")
         return obj, source, target
 
     async def _where(self, obj: str) -> str:
-        """The transfer unit an object lies on (the TMS's ledger, else the graph)."""
+        """Where an object lies (the TMS's ledger, else the graph)."""
         raise NotImplementedError
+
+    def _module_sources(self) -> list[str]:
+        """Transport modules an order may start from (an object left on a module)."""
+        return []
 
     async def submit(self, obj: str, source: str, target: str, client: str) -> Order:
         """Place a validated order with the TMS; it is followed in the background."""

@@ -162,6 +162,7 @@ def _cps_up(wd) -> subprocess.Popen:
 def test_item8_1_a_cps_restarted_in_the_same_folder_is_followed(tmp_path):
     """The console keeps no old ports: stopped, every asset says why; started again in the
     same folder (new ports), it reads the new cps.json and every asset is online again."""
+    from tests.integration.cps._cli import tt
     from tests.integration.web.conftest import _stop
 
     wd = tmp_path / "wd"
@@ -177,14 +178,25 @@ def test_item8_1_a_cps_restarted_in_the_same_folder_is_followed(tmp_path):
                 return a if all(x["reachable"] and x["status"] == "online"
                                 for x in a.values()) else None  # fmt: skip
 
+            def cli_order(obj: str, source: str, target: str) -> dict:
+                done = tt("cps", "order", "--workdir", str(wd), "--object", obj, "--from",
+                          source, "--to", target, timeout=200)  # fmt: skip
+                assert done.returncode == 0, done.stdout + done.stderr
+                op = done.stdout.strip().splitlines()[-1].split()[0]
+                rows = {r["operation"]: r for r in c.get("/api/orders").json()["orders"]}
+                return rows[op]
+
             before = wait_for(all_online, 120, "every asset online")
+            first = cli_order("o3", "TU_C", "TU_D")  # from the command line: in the Orders tab
+            assert first["placed_by"] == "cps" and first["operation"] == "op1"
+            assert first["object"] == "o3" and first["state"] == "finished"
             _stop(up)
-            down = wait_for(lambda: (a := assets()) and not any(x["reachable"] for x in
-                            a.values()) and a, 30, "every asset offline")  # fmt: skip
+            stopped = f"the CPS is not running (no cps.json in {wd}); start it with " \
+                      "'transfertwin cps up'"  # fmt: skip
+            down = wait_for(lambda: (a := assets()) and {x["reason"] for x in a.values()} == {
+                            stopped} and a, 30, "every asset offline")  # fmt: skip
+            assert not any(x["reachable"] for x in down.values())
             assert {x["status"] for x in down.values()} == {"unknown"}  # no old 'online'
-            assert {x["reason"] for x in down.values()} == {
-                f"the CPS is not running (no cps.json in {wd}); start it with "
-                "'transfertwin cps up'"}  # fmt: skip
             up = _cps_up(wd)
             after = wait_for(all_online, 120, "every asset online after the restart")
             info = json.loads((wd / "cps.json").read_text())
@@ -195,5 +207,10 @@ def test_item8_1_a_cps_restarted_in_the_same_folder_is_followed(tmp_path):
             event = json.loads(next(ln[6:] for ln in live.splitlines() if ln.startswith("data: ")))
             assert all(event["online"].values()) and not event["stale"]
             assert event["kg_error"] is None
+            # item 8.2: this run numbers from op1 again; its op1 has its own history only
+            again = cli_order("o2", "TU_B", "TU_A")
+            assert again["operation"] == "op1" and again["object"] == "o2"
+            assert not any("o3" in s["text"] for s in again["steps"]), again["steps"]
+            assert [r["operation"] for r in c.get("/api/orders").json()["orders"]] == ["op1"]
     finally:
         _stop(up)

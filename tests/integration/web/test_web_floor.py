@@ -89,7 +89,8 @@ def pid_of(wd: Path, aid: str) -> int:
 
 
 def test_item8_3_cli_orders_are_in_the_orders_tab_and_a_joining_module_appears(floor):
-    with TestClient(create_app(WebConfig(cps=floor)), base_url="http://127.0.0.1") as c:
+    cfg = WebConfig(cps=floor)
+    with TestClient(create_app(cfg), base_url="http://127.0.0.1") as c:
 
         def assets() -> dict:
             return {a["id"]: a for a in c.get("/api/assets").json()["assets"]}
@@ -118,6 +119,27 @@ def test_item8_3_cli_orders_are_in_the_orders_tab_and_a_joining_module_appears(f
         assert row["outcome"].startswith(("delivered", "failed"))
         assert row["steps"][0]["text"] == "queued" and len(row["steps"]) >= 3
         assert c.get(f"/api/orders/{op}").json()["operation"] == op
+
+        # one placed here: its console id, the TMS's own id (never the CLI's) and history
+        from transfertwin.cli._cps_floor import floor_status
+
+        at = floor_status(floor)["objects"]["o1"]["location"]  # TU_B, or TM_1/TU_A if failed
+        back = {"object": "o1", "target": "TU_B" if at == "TU_A" else "TU_A"}  # from where it is
+        placed = c.post("/api/orders", json=back,
+                        headers={"Authorization": f"Bearer {cfg.session_token}"})  # fmt: skip
+        assert placed.status_code == 201, placed.text
+        mine = placed.json()
+        assert mine["id"] == "w1" and mine["operation"] not in (None, op)
+
+        def finished() -> dict | None:
+            r = c.get("/api/orders/w1").json()
+            return r if r["state"] == "finished" else None
+
+        done = wait_for(finished, 60, "the console's order finished")
+        assert done["placed_by"] == "console" and done["operation"] == mine["operation"]
+        assert done["steps"][0]["text"] == "queued" and done["outcome"]
+        ops = [r["operation"] for r in c.get("/api/orders").json()["orders"]]
+        assert ops == [op, mine["operation"]]
 
         proc = restart(floor, "TM_2")  # the standby module joins at runtime
         try:

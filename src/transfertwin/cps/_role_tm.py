@@ -211,6 +211,8 @@ class ModuleRole(Role):
 
         skills = _ModuleTransport(self, self.aid, op["source"], op["target"], obj)
         self._op_id = op_id
+        self._lost_in_gap = False
+        self._attempt = 0
         try:
             legs = legs_of(op["source"], op["target"])
             if op["source"] == self.aid:  # on board already: the delivery leg only
@@ -229,6 +231,9 @@ class ModuleRole(Role):
             with self.env.lock:
                 self.env.undock()
             await self.set("State", "idle")
+        if self._lost_in_gap:  # the hand-over policy gave up with the object in the gap
+            result["location_unknown"] = True
+            self.state.data["possesses"] = [o for o in self.state.data["possesses"] if o != obj]
         result["docking"] = self.node.cfg.docking
         self.op = None
         self.state.data["current"] = None
@@ -272,8 +277,8 @@ class ModuleRole(Role):
         from transfertwin.cps._runtime import _docking_model
         from transfertwin.study.experiment import experiment_seeds
 
-        seed, _ = experiment_seeds(self.node.cfg.seed, f"{obj}:{source}:{target}:{self._op_id}",
-                                   leg, 0)  # fmt: skip
+        key = f"{obj}:{source}:{target}:{self._op_id}:{self._attempt}"
+        seed, _ = experiment_seeds(self.node.cfg.seed, key, leg, 0)
         return _docking_model().sample(seed)
 
     def _locked(self, fn, *args):
@@ -323,6 +328,36 @@ class ModuleRole(Role):
             await self.node.peers.drop(unit)
             raise
 
+    async def _take_back(self, unit: str) -> bool:
+        """Reverse both belt pairs (the unit's through its interface) until the object is
+        wholly on the module, clear of its tip, or `TAKE_BACK_S` of simulated time passed;
+        True when it lies on the module's side of the gap (`possessing_unit`), belts
+        stopped either way."""
+        from transfertwin.cps.opcua import OpcUaUnitHAL
+
+        session = await self.node.peers.session(unit)
+        loop = asyncio.get_running_loop()
+        system = self.env.system
+        hal = MirroredUnitHAL(OpcUaUnitHAL(session, loop, timeout_s=10), system.tu, loop)
+        speed = self.env.scene.layout.belt_speed_m_s
+
+        def reverse() -> bool:
+            with self.env.lock:
+                for belt in ("left", "right"):
+                    system.tm.set_belt_speed(belt, -speed)
+                    hal.set_belt_speed(belt, -speed)
+                for _ in range(round(TAKE_BACK_S / TAKE_BACK_STEP_S)):
+                    self.env.clock.wait(TAKE_BACK_STEP_S)
+                    state = system.observe()  # (a, x, y, z, s_x, s_y, s_z, θ), Eq. 5.4
+                    if state[1] + state[4] < -TAKE_BACK_CLEARANCE_M:  # s_x: half extent
+                        break  # wholly on the module's belts, clear of its tip
+                for belt in ("left", "right"):
+                    system.tm.set_belt_speed(belt, 0.0)
+                    hal.set_belt_speed(belt, 0.0)
+                return int(system.observe()[0]) == 0
+
+        return await asyncio.to_thread(reverse)
+
     async def _moved(self, obj: str, holder: str) -> None:
         own = set(self.state.data["possesses"])
         own.add(obj) if holder == self.aid else own.discard(obj)
@@ -339,18 +374,66 @@ def _warm_up() -> None:
     _docking_model()
 
 
+#: Hand-over policy of a delivery whose transfer failed: take the object back onto the
+#: module (belts reversed, at most `TAKE_BACK_S` of simulated time) and try again after
+#: docking anew, at most `DELIVERY_RETRIES` times, then take it back once more and fail
+#: the operation with the object on the module; an object that does not come back lies
+#: in the gap, and its place is unknown.
+DELIVERY_RETRIES = 1
+TAKE_BACK_S = 6.0
+TAKE_BACK_STEP_S = 0.1
+#: How far behind the module's tip (x = 0 of F_T) the object's near edge must be.
+TAKE_BACK_CLEARANCE_M = 0.03
+
+
 def _make_transport():
-    from transfertwin.cps.apps import VirtualTransport
+    from transfertwin.cps.apps import StepResult, VirtualTransport
 
     class ModuleTransport(VirtualTransport):
-        """The skills of `VirtualTransport`; a module that restarted with an object on
-        board puts it back on its belts in the simulation before docking to deliver it."""
+        """The skills of `VirtualTransport` with the hand-over policy above; a module that
+        restarted with an object on board puts it back on its belts in the simulation
+        before docking to deliver it."""
+
+        attempt = 0
+
+        def _seed(self, leg):
+            return super()._seed(leg) + 7919 * self.attempt
 
         async def dock(self, leg):
             env = self.cps.env
             if leg.name != "pick-up" and env.object_ref != self.obj:
                 await asyncio.to_thread(self.cps._locked, _load_on_module, env, self.obj)
             return await super().dock(leg)
+
+        async def transfer(self, leg):
+            result = await super().transfer(leg)
+            tries = []
+            while not result.ok and leg.name == "delivery" and result.info.get("valid"):
+                back = await self.cps._take_back(leg.unit)
+                tries.append({"attempt": self.attempt + 1, "taken_back": back,
+                              "reason": result.reason})  # fmt: skip
+                if not back:
+                    self.cps._lost_in_gap = True
+                    return StepResult(False, f"{result.reason}; the object did not come back "
+                                             "onto the module: it lies in the gap",
+                                      {**result.info, "retries": tries})  # fmt: skip
+                if self.attempt >= DELIVERY_RETRIES:
+                    return StepResult(False, f"{result.reason}; taken back onto the module "
+                                             f"after {self.attempt + 1} attempt(s)",
+                                      {**result.info, "retries": tries})  # fmt: skip
+                self.attempt += 1
+                self.cps._attempt = self.attempt
+                log.info("%s: took %s back; docking at %s again (attempt %d)", self.cps.aid,
+                         self.obj, leg.unit, self.attempt + 1)  # fmt: skip
+                await self.cps._undock(self.cps.aid)
+                for step in (self.dock, self.form_ots):
+                    pre = await step(leg)
+                    if not pre.ok:
+                        return StepResult(False, pre.reason, {**pre.info, "retries": tries})
+                result = await super().transfer(leg)
+            if tries:
+                return StepResult(result.ok, result.reason, {**result.info, "retries": tries})
+            return result
 
     return ModuleTransport
 

@@ -91,9 +91,15 @@ class TmsRole(Role):
                 f"(last seen at {unknown['last_seen']}); say where it is with "
                 f"'transfertwin cps locate'", status="BadInvalidState", argument="object")
         modules = await self._modules()
-        if modules is not None and not any(m["online"] for m in modules):
+        online = [m for m in modules or () if m["online"]]
+        if modules is not None and not online:
             raise OperationRefused("no transport module is online",
                                    status="BadResourceUnavailable")  # fmt: skip
+        if source in self.node.floor.units and online and all(m.get("possesses") for m in online):
+            held = "; ".join(f"{m['id']} carries {', '.join(m['possesses'])}" for m in online)
+            raise OperationRefused(f"every transport module carries an object ({held}): order "
+                                   "those onward first", status="BadResourceUnavailable",
+                                   argument="object")  # fmt: skip
         data = self.state.data
         op_id = f"op{data['next_op']}"
         self.ledger.reserve(op_id, source, target, obj)

@@ -133,12 +133,15 @@ def cmd_asset(args: argparse.Namespace) -> int:
         loop = asyncio.get_running_loop()
         for sig in (signal.SIGINT, signal.SIGTERM):
             loop.add_signal_handler(sig, stop.set)
-        async with AssetNode(cfg) as node:
-            cfg.state_dir.mkdir(parents=True, exist_ok=True)
-            pid_file.write_text(f"{os.getpid()}\n")
-            print(f"{cfg.asset_id} up at {node.server.endpoint} (pid {os.getpid()})", flush=True)
-            await stop.wait()
-        pid_file.unlink(missing_ok=True)
+        cfg.state_dir.mkdir(parents=True, exist_ok=True)
+        pid_file.write_text(f"{os.getpid()}\n")  # before it joins: 'cps down' finds it then
+        try:
+            async with AssetNode(cfg) as node:
+                print(f"{cfg.asset_id} up at {node.server.endpoint} (pid {os.getpid()})",
+                      flush=True)  # fmt: skip
+                await stop.wait()
+        finally:
+            pid_file.unlink(missing_ok=True)
         print(f"{cfg.asset_id} left", flush=True)
 
     asyncio.run(serve())

@@ -84,12 +84,17 @@ def asset(doc: dict, aid: str) -> dict:
     return next(a for a in doc["assets"] if a["id"] == aid)
 
 
+STARTED: list[subprocess.Popen] = []  # by the tests: stopped at the end whatever happened
+
+
 def start(wd: Path, aid: str) -> subprocess.Popen:
     log = (wd / "logs" / f"{aid}.log").open("ab")
-    return subprocess.Popen(
+    proc = subprocess.Popen(
         [sys.executable, "-m", "transfertwin", "cps", "asset", "--config",
          str(wd / "assets" / f"{aid}.toml")], stdout=log, stderr=subprocess.STDOUT,
         start_new_session=True)  # fmt: skip
+    STARTED.append(proc)
+    return proc
 
 
 def objects_consistent(doc: dict) -> None:
@@ -114,8 +119,13 @@ def floor(tmp_path_factory):
             "--time-scale", "1", "--lease", str(LEASE_S), "--start-timeout", "150", timeout=200)
     assert up.returncode == 0, up.stderr
     assert "7 asset processes" in up.stdout and "1 on standby" in up.stdout
-    yield wd
-    down = tt("cps", "down", "--workdir", str(wd))
+    try:
+        yield wd
+    finally:
+        down = tt("cps", "down", "--workdir", str(wd))
+        for proc in STARTED:
+            if proc.poll() is None:
+                proc.kill()
     assert down.returncode == 0, down.stdout + down.stderr
 
 

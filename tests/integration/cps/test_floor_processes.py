@@ -97,6 +97,25 @@ def start(wd: Path, aid: str) -> subprocess.Popen:
     return proc
 
 
+def module_at_work(wd: Path, obj: str, timeout_s: float = 60.0) -> dict:
+    """The module the TMS assigned the running operation for `obj`, once it has started
+    (from the TMS's ledger: the graph's view of a module's state lags by a heartbeat)."""
+    import asyncio
+
+    from transfertwin.cli._cps_floor import _call, _info
+
+    info, creds = _info(wd)
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout_s:
+        ledger = json.loads(asyncio.run(_call(info, creds, "TMS", "Ledger")))
+        for op in ledger["operations"]:
+            if (op["object"] == obj and op["state"] == "running"
+                    and op["phase"] in ("navigating", "docking", "scanning", "transferring")):
+                return asset(status(wd), op["module"])
+        time.sleep(0.1)
+    raise AssertionError(f"no operation for {obj} started within {timeout_s} s")
+
+
 def objects_consistent(doc: dict) -> None:
     """Every object is in the ledger once, at an asset of the floor or unknown with where it
     was last seen."""
@@ -190,12 +209,7 @@ def test_orders_flow_and_a_module_killed_mid_operation_loses_nothing(floor):
                              str(floor), "--to", target, "--object", obj],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
 
-    def working(d: dict) -> list[dict]:
-        return [a for a in d["assets"]
-                if a["class"] == "transport_module" and a["state"] not in ("idle", "offline")]
-
-    doc, _ = wait_for(floor, working, 60.0, "a module at work")
-    busy = working(doc)[0]
+    busy = module_at_work(floor, obj)
     os.kill(busy["pid"], signal.SIGKILL)
     out, err = proc.communicate(timeout=120)
     assert proc.returncode == 3, out + err  # failed, with the module and the step named

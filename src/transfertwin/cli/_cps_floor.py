@@ -11,6 +11,7 @@ import json
 import logging
 import os
 import signal
+import sys
 import time
 from pathlib import Path
 
@@ -145,7 +146,12 @@ def cmd_asset(args: argparse.Namespace) -> int:
         print(f"{cfg.asset_id} left", flush=True)
 
     asyncio.run(serve())
-    return 0
+    # Every change of state was written when it happened and the leave is announced: end
+    # here rather than wait for a simulation thread still stepping (the interpreter joins
+    # its worker threads at exit, a transfer in real time takes tens of seconds).
+    logging.shutdown()
+    sys.stdout.flush()
+    os._exit(0)
 
 
 def cmd_down(args: argparse.Namespace) -> int:
@@ -154,13 +160,15 @@ def cmd_down(args: argparse.Namespace) -> int:
 
     wd = Path(args.workdir)
     pids = stop_floor(wd)
-    deadline = time.monotonic() + 20
+    deadline = time.monotonic() + args.timeout
     while asset_pids(wd) and time.monotonic() < deadline:
         time.sleep(0.2)
     left = asset_pids(wd)
+    if left:  # what did not stop in time is killed (its state is on disk already)
+        stop_floor(wd, signal.SIGKILL)
     print(f"stopped {len(pids) - len(left)} asset processes"
-          f"{f'; still running: {sorted(left)}' if left else ''}")  # fmt: skip
-    return 0 if not left else 1
+          f"{f'; killed {sorted(left)} (no exit within {args.timeout:g} s)' if left else ''}")
+    return 0
 
 
 def _info(wd: Path) -> tuple[dict, object]:
@@ -260,6 +268,8 @@ def register(csub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_asset)
     p = csub.add_parser("down", help="stop every asset process of a floor")
     p.add_argument("--workdir", required=True)
+    p.add_argument("--timeout", type=float, default=20.0,
+                   help="seconds to wait for each to leave before killing it (default 20)")
     p.set_defaults(func=cmd_down)
     p = csub.add_parser("locate", help="say where an object whose location is unknown lies")
     p.add_argument("--workdir", required=True)

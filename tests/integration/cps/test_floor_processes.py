@@ -145,7 +145,7 @@ def floor(tmp_path_factory):
         for proc in STARTED:
             if proc.poll() is None:
                 proc.kill()
-    assert down.returncode == 0, down.stdout + down.stderr
+    assert down.returncode == 0 and "killed" not in down.stdout, down.stdout + down.stderr
 
 
 def test_every_asset_is_its_own_process_on_its_own_address(floor):
@@ -218,7 +218,7 @@ def test_orders_flow_and_a_module_killed_mid_operation_loses_nothing(floor):
     assert "finished: failed" in out and f"{busy['id']} went offline" in out, out
     doc = status(floor)
     objects_consistent(doc)
-    assert doc["objects"][obj]["moving"] is None
+    assert doc["objects"][obj].get("moving") is None
     if doc["objects"][obj]["unknown"]:  # lost mid-transfer: where it was last seen, by op2
         assert doc["objects"][obj]["operation"] == op2
     # the module comes back with its state; the floor takes orders again

@@ -14,10 +14,46 @@ from pathlib import Path
 
 import pytest
 
-__all__ = ["PLANT_SEED", "RunningCps", "run_main", "tt"]
+__all__ = ["PLANT_SEED", "RunningCps", "run_main", "tt", "two_module_floor"]
 
 #: Plant seed of the test run's shared CPS (conftest.py: `plant_cps`).
 PLANT_SEED = 913
+
+
+def two_module_floor(name: str, objects: dict[str, str]) -> str:
+    """A floor file: stations A and B (TU_A, TU_B), TM_1 running and TM_2 on standby, the
+    knowledge graph and the TMS, and `objects` (id -> the unit it lies on)."""
+    head = f"""
+name = "{name}"
+size_m = [12.0, 8.0]
+logical = ["KG", "TMS"]
+
+[[station]]
+name = "A"
+x_m = 2.6
+y_m = 6.6
+yaw_deg = 90.0
+mount = "left"
+
+[[station]]
+name = "B"
+x_m = 7.6
+y_m = 6.6
+yaw_deg = 90.0
+mount = "right"
+
+[[module]]
+id = "TM_1"
+x_m = 6.0
+y_m = 5.2
+
+[[module]]
+id = "TM_2"
+x_m = 6.0
+y_m = 3.0
+standby = true
+"""
+    return head + "".join(f'\n[[object]]\nid = "{o}"\nat = "{at}"\n' for o, at in objects.items())
 
 
 def tt(*args: str, timeout: float = 300, env: dict | None = None) -> subprocess.CompletedProcess:

@@ -15,46 +15,9 @@ from pathlib import Path
 
 import pytest
 
-from tests.integration.cps._cli import tt
+from tests.integration.cps._cli import tt, two_module_floor
 
-FLOOR = """
-name = "two-modules"
-size_m = [12.0, 8.0]
-logical = ["KG", "TMS"]
-
-[[station]]
-name = "A"
-x_m = 2.6
-y_m = 6.6
-yaw_deg = 90.0
-mount = "left"
-
-[[station]]
-name = "B"
-x_m = 7.6
-y_m = 6.6
-yaw_deg = 90.0
-mount = "right"
-
-[[module]]
-id = "TM_1"
-x_m = 6.0
-y_m = 5.2
-
-[[module]]
-id = "TM_2"
-x_m = 6.0
-y_m = 3.0
-standby = true
-
-[[object]]
-id = "o1"
-at = "TU_A"
-
-[[object]]
-id = "o2"
-at = "TU_B"
-"""
+FLOOR = two_module_floor("two-modules", {"o1": "TU_A", "o2": "TU_B"})
 
 LEASE_S = 2.0
 

@@ -17,46 +17,13 @@ from pathlib import Path
 import pytest
 from starlette.testclient import TestClient
 
-from tests.integration.cps._cli import tt
+from tests.integration.cps._cli import tt, two_module_floor
 from tests.integration.web.conftest import save_screenshot, wait_for
 from transfertwin.web import WebConfig, create_app
 
 pytestmark = pytest.mark.slow
 
-FLOOR = """
-name = "console-floor"
-size_m = [12.0, 8.0]
-logical = ["KG", "TMS"]
-
-[[station]]
-name = "A"
-x_m = 2.6
-y_m = 6.6
-yaw_deg = 90.0
-mount = "left"
-
-[[station]]
-name = "B"
-x_m = 7.6
-y_m = 6.6
-yaw_deg = 90.0
-mount = "right"
-
-[[module]]
-id = "TM_1"
-x_m = 6.0
-y_m = 5.2
-
-[[module]]
-id = "TM_2"
-x_m = 6.0
-y_m = 3.0
-standby = true
-
-[[object]]
-id = "o1"
-at = "TU_A"
-"""
+FLOOR = two_module_floor("console-floor", {"o1": "TU_A"})
 
 
 @pytest.fixture(scope="module")

@@ -92,8 +92,8 @@ def run_size(n: int, base: Path, lease: float, idle_s: float, per_process_mb: fl
     from transfertwin.cli._cps_floor import _wait_online
     from transfertwin.cps import asset_pids, launch, prepare_floor, stop_floor, write_floor_info
 
-    if per_process_mb is not None and n * per_process_mb * 1.3 > available_mb():
-        return {"n": n, "skipped": f"needs about {n * per_process_mb * 1.3 / 1024:.1f} GB, "
+    if per_process_mb is not None and n * per_process_mb * 1.5 > available_mb():
+        return {"n": n, "skipped": f"needs about {n * per_process_mb * 1.5 / 1024:.1f} GB, "
                                    f"{available_mb() / 1024:.1f} GB available"}  # fmt: skip
     floor = floor_of(n)
     wd = base / f"floor{n}"
@@ -152,7 +152,7 @@ def main() -> int:
         if "skipped" in row:
             print(f"{n:4d} assets: skipped ({row['skipped']})", flush=True)
             continue
-        per_process = row["rss_max_mb"]
+        per_process = row["pss_median_mb"]  # shared pages (libraries) count once
         print(f"{n:4d} assets: up in {row['startup_s']:.1f} s (certificates "
               f"{row['prepare_s']:.1f} s before), RSS median {row['rss_median_mb']:.0f} MB "
               f"(max {row['rss_max_mb']:.0f}), PSS median {row['pss_median_mb']:.0f} MB, "

@@ -64,11 +64,18 @@ def _endpoint(info: dict, asset_id: str) -> str:
 
 
 def cmd_up(args: argparse.Namespace) -> int:
-    """Start the demo CPS and serve until SIGINT/SIGTERM (`--floor`: one process per
-    asset, `_cps_floor.cmd_up_floor`)."""
-    if args.floor is not None:
+    """Start the demo CPS and serve until SIGINT/SIGTERM: one process per asset on the
+    built-in floor or `--floor` (`_cps_floor.cmd_up_floor`); all assets in this process with
+    `--single-process` (implied by `--plant-seed`)."""
+    single = args.single_process or args.plant_seed is not None
+    if args.floor is not None and single:
+        raise InputError("--floor runs one process per asset; --single-process and "
+                         "--plant-seed run all assets in one process: choose one")  # fmt: skip
+    if not single:
         from transfertwin.cli._cps_floor import cmd_up_floor
 
+        if args.floor is None:
+            args.floor = "demo"
         return cmd_up_floor(args)
     from transfertwin.cps import Cps, CpsConfig, check_plant_seed
     from transfertwin.study.experiment import load_profile
@@ -401,12 +408,14 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="also start an emulated plant drawn from seed N as the physical "
                         "transfer units TU_A_P..TU_D_P (its parameters stay hidden)")  # fmt: skip
     p.add_argument("--floor", metavar="FLOOR",
-                   help="one process per asset: a floor file (examples/floor-demo.toml) or "
-                        "'demo' for the built-in floor; each asset binds its own loopback "
-                        "address")  # fmt: skip
+                   help="a floor file (examples/floor-demo.toml), default 'demo', the built-in "
+                        "floor; one process per asset, each on its own loopback address")
+    p.add_argument("--single-process", action="store_true",
+                   help="all assets in this process (the console tests' and --plant-seed's "
+                        "CPS); stops with it")  # fmt: skip
     p.add_argument("--detach", action="store_true",
-                   help="with --floor: exit once the floor is up and leave it running "
-                        "(stop it with 'cps down')")  # fmt: skip
+                   help="exit once the floor is up and leave it running (stop it with "
+                        "'cps down')")  # fmt: skip
     p.add_argument("--lease", type=float, default=5.0,
                    help="with --floor: seconds without a heartbeat before an asset counts as "
                         "offline (default 5)")  # fmt: skip

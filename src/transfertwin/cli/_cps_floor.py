@@ -39,10 +39,17 @@ def cmd_up_floor(args: argparse.Namespace) -> int:
         write_floor_info,
     )
 
-    if args.plant_seed is not None:
-        raise InputError("--plant-seed runs with the single-process CPS only (drop --floor)")
-    if args.time_scale < 0:
+    for flag, value, default in (("--config", args.config, None), ("--host", args.host,
+                                                                     "127.0.0.1")):
+        if value != default:  # each asset has its own address; the physics are the defaults
+            raise InputError(f"{flag} is for the single-process CPS (add --single-process); "
+                             "a floor's assets bind their own addresses from the floor")
+    if not args.time_scale >= 0:
         raise InputError(f"--time-scale must be >= 0, got {args.time_scale}")
+    if args.docking not in ("sampled", "navigated"):
+        raise InputError(f"--docking must be sampled or navigated, got {args.docking!r}")
+    if not args.lease >= 0.5:
+        raise InputError(f"--lease must be at least 0.5 s, got {args.lease}")
     floor = _floor_spec(args.floor)
     wd = out_dir(args.workdir)
     check_workdir(wd)

@@ -330,9 +330,8 @@ class ModuleRole(Role):
 
     async def _take_back(self, unit: str) -> bool:
         """Reverse both belt pairs (the unit's through its interface) until the object is
-        wholly on the module, clear of its tip, or `TAKE_BACK_S` of simulated time passed;
-        True when it lies on the module's side of the gap (`possessing_unit`), belts
-        stopped either way."""
+        wholly on the module, clear of its tip (True), or `TAKE_BACK_S` of simulated time
+        passed (False: it is caught in the gap); belts stopped either way."""
         from transfertwin.cps.opcua import OpcUaUnitHAL
 
         session = await self.node.peers.session(unit)
@@ -346,15 +345,17 @@ class ModuleRole(Role):
                 for belt in ("left", "right"):
                     system.tm.set_belt_speed(belt, -speed)
                     hal.set_belt_speed(belt, -speed)
+                clear = False
                 for _ in range(round(TAKE_BACK_S / TAKE_BACK_STEP_S)):
                     self.env.clock.wait(TAKE_BACK_STEP_S)
                     state = system.observe()  # (a, x, y, z, s_x, s_y, s_z, θ), Eq. 5.4
                     if state[1] + state[4] < -TAKE_BACK_CLEARANCE_M:  # s_x: half extent
-                        break  # wholly on the module's belts, clear of its tip
+                        clear = True  # wholly on the module's belts, clear of its tip
+                        break
                 for belt in ("left", "right"):
                     system.tm.set_belt_speed(belt, 0.0)
                     hal.set_belt_speed(belt, 0.0)
-                return int(system.observe()[0]) == 0
+                return clear
 
         return await asyncio.to_thread(reverse)
 

@@ -185,7 +185,20 @@ class TmsRole(Role):
                 await asyncio.wait_for(self.node.peers.call(
                     module, "AssignOperation", op_id, op["source"], op["target"], op["object"]),
                     15)  # fmt: skip
-            except (OperationRefused, OSError, TimeoutError, ConnectionError) as exc:
+            except OperationRefused as exc:
+                if module == op["source"] and exc.status == "BadInvalidState" and (
+                        exc.argument == "object"):  # fmt: skip
+                    # the ledger says the module carries it, the module says it does not
+                    self._claimed.pop(module, None)
+                    self._finish(op_id, {"status": "failed at delivery", "failed_step": "assigned",
+                                         "reason": f"{exc.reason}: its place is not known",
+                                         "location_unknown": True})  # fmt: skip
+                    return
+                log.info("TMS: %s not assigned to %s: %s", op_id, module, exc)
+                self._claimed.pop(module, None)
+                await asyncio.sleep(0.5)
+                continue
+            except (OSError, TimeoutError, ConnectionError) as exc:
                 log.info("TMS: %s not assigned to %s: %s", op_id, module, exc)
                 self._claimed.pop(module, None)
                 await asyncio.sleep(0.5)
@@ -270,7 +283,15 @@ class TmsRole(Role):
             op["history"].append([event.get("t", time.time()), event["state"]])
         elif kind == "result":
             if op["state"] == "finished":
-                op["history"].append([time.time(), f"late result: {event['result']['status']}"])
+                late = event["result"]
+                op["history"].append([time.time(), f"late result: {late['status']}"])
+                obj = op["object"]
+                if (late.get("location_unknown") and obj not in self.ledger.moving()
+                        and obj not in self.state.data["unknown"]):  # fmt: skip
+                    # the module knows better than the lease did: the object may be in the gap
+                    self.state.data["unknown"][obj] = {"last_seen": self.ledger.location(obj),
+                                                       "operation": op_id}  # fmt: skip
+                    self._pending |= {self.ledger.location(obj), obj}
             else:
                 self._finish(op_id, event["result"])
                 return True

@@ -201,7 +201,7 @@ class ModuleRole(Role):
 
         async def on_state(state: str, leg) -> None:
             await self.set("State", state)
-            if self.op is not None:
+            if self.op is not None and state != "idle":  # 'idle' ends the flow, also on error
                 self.op["state"] = state
                 self.state.data["current"] = dict(self.op)
                 self.state.save()

@@ -195,7 +195,7 @@ def test_item8_1_a_cps_restarted_in_the_same_folder_is_followed(tmp_path):
             stopped = f"the CPS is not running (no cps.json in {wd}); start it with " \
                       "'transfertwin cps up'"  # fmt: skip
             down = wait_for(lambda: (a := assets()) and {x["reason"] for x in a.values()} == {
-                            stopped} and a, 30, "every asset offline")  # fmt: skip
+                            stopped} and a, 90, "every asset offline")  # fmt: skip
             assert not any(x["reachable"] for x in down.values())
             assert {x["status"] for x in down.values()} == {"unknown"}  # no old 'online'
             up = _cps_up(wd)

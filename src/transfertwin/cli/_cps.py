@@ -100,8 +100,13 @@ def cmd_up(args: argparse.Namespace) -> int:
     async def serve() -> None:
         stop = asyncio.Event()
         loop = asyncio.get_running_loop()
+
+        def on_signal(signum: int, frame: object) -> None:
+            _exit_after(SHUTDOWN_LIMIT_S, wd)
+            loop.call_soon_threadsafe(stop.set)
+
         for sig in (signal.SIGINT, signal.SIGTERM):
-            loop.add_signal_handler(sig, stop.set)
+            signal.signal(sig, on_signal)
         async with Cps(cfg) as cps:
             print(f"CPS up: {len(cps.assets)} assets; {wd / 'cps.json'}", flush=True)
             await stop.wait()
@@ -109,6 +114,31 @@ def cmd_up(args: argparse.Namespace) -> int:
 
     asyncio.run(serve())
     return 0
+
+
+#: Seconds a stopping single-process CPS may take before it ends without waiting further.
+SHUTDOWN_LIMIT_S = 30.0
+
+
+def _exit_after(seconds: float, wd: Path) -> None:
+    """Start (once) a watchdog that ends the process if stopping takes longer than
+    `seconds`: a stop that hangs (a session or a thread that never returns) must not keep
+    stale endpoints around. cps.json goes first, as on a clean stop."""
+    import os
+    import threading
+
+    if getattr(_exit_after, "armed", False):
+        return
+    _exit_after.armed = True
+
+    def force() -> None:
+        (wd / "cps.json").unlink(missing_ok=True)
+        print(f"CPS down (forced: stopping took over {seconds:g} s)", flush=True)
+        os._exit(0)
+
+    timer = threading.Timer(seconds, force)
+    timer.daemon = True
+    timer.start()
 
 
 def cmd_status(args: argparse.Namespace) -> int:

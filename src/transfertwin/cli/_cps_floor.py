@@ -12,6 +12,7 @@ import logging
 import os
 import signal
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -139,8 +140,17 @@ def cmd_asset(args: argparse.Namespace) -> int:
     async def serve() -> None:
         stop = asyncio.Event()
         loop = asyncio.get_running_loop()
+
+        def on_signal(signum: int, frame: object) -> None:
+            # a leave that hangs (a peer that never answers) must not keep the process
+            timer = threading.Timer(30.0, lambda: (pid_file.unlink(missing_ok=True),
+                                                   os._exit(0)))  # fmt: skip
+            timer.daemon = True
+            timer.start()
+            loop.call_soon_threadsafe(stop.set)
+
         for sig in (signal.SIGINT, signal.SIGTERM):
-            loop.add_signal_handler(sig, stop.set)
+            signal.signal(sig, on_signal)
         cfg.state_dir.mkdir(parents=True, exist_ok=True)
         pid_file.write_text(f"{os.getpid()}\n")  # before it joins: 'cps down' finds it then
         try:

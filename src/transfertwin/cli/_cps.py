@@ -365,6 +365,17 @@ def _experiment_unit(info: dict, unit: str, physical: bool) -> str:
     return unit
 
 
+def _as_transfer_json(record: dict, run: int) -> dict:
+    """An EM record in the form `transfer --json` prints: runs numbered 0..N-1, states as
+    lists (None when not observed), NaN as null."""
+    out = {k: (None if isinstance(v, float) and math.isnan(v) else v) for k, v in record.items()}
+    out["run"] = run
+    for key in ("state_pre", "state_end_1", "state_end_2"):
+        if isinstance(out.get(key), str):
+            out[key] = json.loads(out[key]) if out[key] else None
+    return out
+
+
 def cmd_experiment(args: argparse.Namespace) -> int:
     """Run experiments through the Experiment Manager: E^V against a virtual unit, E^P
     against a physical one (`--physical` or a ``_P`` id); one JSON record per line."""
@@ -393,7 +404,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
                                            args.conveyor, args.theta, args.seed + i)  # fmt: skip
                 except OperationRefused as exc:
                     raise InputError(f"the Experiment Manager refused: {exc.reason}") from None
-                print(record, flush=True)
+                print(json.dumps(_as_transfer_json(json.loads(record), i)), flush=True)
 
     _run_client(wd, run)
     return 0

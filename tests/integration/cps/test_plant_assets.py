@@ -66,10 +66,13 @@ def test_em_runs_e_p_over_opc_ua_in_the_e_v_record_shape(plant_cps, capfd):
                              "--seed", "4")  # fmt: skip
     assert list(virtual) == list(RESULT_COLUMNS)  # E^V, unchanged by the plant
     assert virtual["y1"] in (0, 1) and virtual["state_pre"]
+    # as `transfer --json` prints it: the state a list, the runs numbered 0..N-1
+    assert isinstance(virtual["state_pre"], list) and virtual["run"] == 0
+    assert [r["run"] for r in physical] == [0, 1, 0]
     for rec in physical:
         assert list(rec) == [*RESULT_COLUMNS, *PHYSICAL_RECORD_EXTRA]
         assert rec["kind"] == "physical" and rec["status"] == "ok"
-        assert rec["success"] in (0, 1) and rec["y1"] is None and rec["state_pre"] == ""
+        assert rec["success"] in (0, 1) and rec["y1"] is None and rec["state_pre"] is None
         assert math.isfinite(rec["dock_err_x_mm"]) and rec["t_end_s"] > 0
     assert [r["transfer_unit"] for r in physical] == ["TU_A", "TU_A", "TU_C"]
     ids = [r["experiment_id"] for r in physical]

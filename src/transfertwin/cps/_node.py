@@ -28,6 +28,7 @@ from typing import Any
 from asyncua import ua
 
 from transfertwin._atomic import write_atomic
+from transfertwin._errors import InputError
 from transfertwin.cps._asset_config import AssetConfig
 from transfertwin.cps._floor_file import FloorSpec, load_floor
 from transfertwin.cps.aas import AssetDescriptor, build_representation, externally_synced
@@ -158,7 +159,7 @@ class AssetNode:
         self.floor = load_floor(cfg.floor_file, check_cores=False) if floor is None else floor
         by_id = {d.asset_id: d for d in self.floor.descriptors()}
         if cfg.asset_id not in by_id:
-            raise_input(f"asset {cfg.asset_id!r} is not on floor {self.floor.name} "
+            raise InputError(f"asset {cfg.asset_id!r} is not on floor {self.floor.name} "
                         f"({cfg.floor_file})")  # fmt: skip
         self.desc = by_id[cfg.asset_id]
         self.descriptors = by_id
@@ -255,13 +256,6 @@ class AssetNode:
                 except Exception as exc:  # the graph is away: keep serving, keep trying
                     log.debug("%s: heartbeat not delivered: %s", self.desc.asset_id, exc)
             await asyncio.sleep(period)
-
-
-def raise_input(message: str) -> None:
-    """Raise the project's one-line input error."""
-    from transfertwin._errors import InputError
-
-    raise InputError(message)
 
 
 def _role_for(node: AssetNode):

@@ -313,14 +313,19 @@ class ModuleRole(Role):
     async def _undock_op(self) -> bool:
         return await self._undock(self.aid)
 
-    async def _transfer(self, tm: str, unit: str, direction):
+    async def _unit_hal(self, unit: str) -> MirroredUnitHAL:
+        """The docked unit's HAL: its OPC UA interface, mirrored into this simulation."""
         from transfertwin.cps.opcua import OpcUaUnitHAL
-        from transfertwin.study.experiment import scene_controller
 
         session = await self.node.peers.session(unit)
         loop = asyncio.get_running_loop()
+        return MirroredUnitHAL(OpcUaUnitHAL(session, loop, timeout_s=10), self.env.system.tu, loop)
+
+    async def _transfer(self, tm: str, unit: str, direction):
+        from transfertwin.study.experiment import scene_controller
+
+        hal = await self._unit_hal(unit)
         system = self.env.system
-        hal = MirroredUnitHAL(OpcUaUnitHAL(session, loop, timeout_s=10), system.tu, loop)
         ctl = scene_controller(self.env.scene, system.tm, hal, system, self.env.clock)
         try:
             return await asyncio.to_thread(ctl.transfer, direction, "front", None)
@@ -332,12 +337,8 @@ class ModuleRole(Role):
         """Reverse both belt pairs (the unit's through its interface) until the object is
         wholly on the module, clear of its tip (True), or `TAKE_BACK_S` of simulated time
         passed (False: it is caught in the gap); belts stopped either way."""
-        from transfertwin.cps.opcua import OpcUaUnitHAL
-
-        session = await self.node.peers.session(unit)
-        loop = asyncio.get_running_loop()
+        hal = await self._unit_hal(unit)
         system = self.env.system
-        hal = MirroredUnitHAL(OpcUaUnitHAL(session, loop, timeout_s=10), system.tu, loop)
         speed = self.env.scene.layout.belt_speed_m_s
 
         def reverse() -> bool:

@@ -6,6 +6,7 @@ table (`PLANT_COLUMNS`). The package sits above `transfertwin.study` in the laye
 calibration, study or validation code can import it; `transfertwin.rehearsal` drives both.
 """
 
+from transfertwin.plant._physics import PlantPhysics
 from transfertwin.plant._plant import PLANT_COLUMNS, EmulatedPlant, MassReading, PlantRequest
 
-__all__ = ["PLANT_COLUMNS", "EmulatedPlant", "MassReading", "PlantRequest"]
+__all__ = ["PLANT_COLUMNS", "EmulatedPlant", "MassReading", "PlantPhysics", "PlantRequest"]

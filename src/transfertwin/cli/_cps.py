@@ -77,6 +77,9 @@ def cmd_up(args: argparse.Namespace) -> int:
         if args.floor is None:
             args.floor = "demo"
         return cmd_up_floor(args)
+    if args.policy is not None or args.study is not None:
+        raise InputError("--policy and --study are for a floor (one process per asset); the "
+                         "single-process CPS takes the first idle module")  # fmt: skip
     from transfertwin.cps import Cps, CpsConfig, check_plant_seed
     from transfertwin.study.experiment import load_profile
 
@@ -460,6 +463,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--lease", type=float, default=5.0,
                    help="with --floor: seconds without a heartbeat before an asset counts as "
                         "offline (default 5)")  # fmt: skip
+    p.add_argument("--policy", choices=("nearest-idle", "predictive"),
+                   help="with --floor: how the TMS assigns orders and chooses pre-transfer "
+                        "states (default: the floor file's, else nearest-idle)")  # fmt: skip
+    p.add_argument("--study", metavar="STORE",
+                   help="with --floor: a study store whose per-state success shares the "
+                        "predictive policy uses (default: the floor file's)")  # fmt: skip
     p.add_argument("--start-timeout", type=float, default=120.0,
                    help="with --floor: seconds to wait for every asset to join (default 120)")
     p.set_defaults(func=cmd_up)

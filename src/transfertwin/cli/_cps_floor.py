@@ -51,7 +51,7 @@ def cmd_up_floor(args: argparse.Namespace) -> int:
         raise InputError(f"--docking must be sampled or navigated, got {args.docking!r}")
     if not args.lease >= 0.5:
         raise InputError(f"--lease must be at least 0.5 s, got {args.lease}")
-    floor = _floor_spec(args.floor)
+    floor = _with_operation(_floor_spec(args.floor), args.policy, args.study)
     wd = out_dir(args.workdir)
     check_workdir(wd)
     configs = prepare_floor(floor, wd, insecure=args.insecure, seed=args.seed,
@@ -84,6 +84,21 @@ def cmd_up_floor(args: argparse.Namespace) -> int:
                 p.wait(15)
     print("floor down", flush=True)
     return 0
+
+
+def _with_operation(floor, policy: str | None, study: str | None):
+    """The floor with `cps up --policy/--study` applied; the study store must exist."""
+    import dataclasses
+
+    op = floor.operation
+    if policy is not None:
+        op = dataclasses.replace(op, policy=policy)
+    if study is not None:
+        op = dataclasses.replace(op, study=str(Path(study).resolve()))
+    if op.study is not None and not Path(op.study).is_file():
+        raise InputError(f"study store {op.study}: no such file (run 'transfertwin study' or "
+                         "'./dev.sh run' to make one)")  # fmt: skip
+    return dataclasses.replace(floor, operation=op)
 
 
 def _stop_event() -> dict[str, bool]:

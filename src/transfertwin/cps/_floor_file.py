@@ -28,6 +28,14 @@ id = "o5"
 at = "TU_A"
 
 logical = ["TMS", "EM", "PropS", "KG"]    # optional; these four by default
+
+[operation]                               # optional: how the TMS schedules (docs: Operation)
+policy = "predictive"                     # or "nearest-idle" (the default)
+study = "out/quick.sqlite"                # a study store with the twin's per-state shares
+runs = 4                                  # runs per state of on-the-fly virtual experiments
+
+[operation.groups]                        # destinations with a choice of unit
+inspection = ["TU_C", "TU_D"]
 ```
 
 Parsing happens here, at the edge; the rest of the runtime sees the frozen `FloorSpec`.
@@ -38,7 +46,7 @@ from __future__ import annotations
 import json
 import math
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -58,6 +66,7 @@ __all__ = [
     "LOGICAL_ASSETS",
     "FloorSpec",
     "ModuleSpec",
+    "OperationSpec",
     "StationSpec",
     "default_floor_spec",
     "floor_toml",
@@ -72,6 +81,9 @@ LOGICAL_ASSETS = {
     "PropS": ("props", Capability.FUSE_POSES),
     "KG": ("knowledge_graph", Capability.KNOWLEDGE),
 }
+
+#: The TMS's scheduling policies (docs/architecture.md, "Operation").
+POLICIES = ("nearest-idle", "predictive")
 
 _TU_CAPS = (Capability.TRANSFER, Capability.SENSE)
 _TM_CAPS = (Capability.TRANSPORT, Capability.TRANSFER, Capability.SENSE)
@@ -110,6 +122,21 @@ class ModuleSpec:
 
 
 @dataclass(frozen=True)
+class OperationSpec:
+    """How the TMS runs orders: its policy, where the twin's predictions come from, and
+    the destinations that name a group of units (group -> units)."""
+
+    policy: str = "nearest-idle"
+    study: str | None = None
+    runs: int = 4
+    groups: tuple[tuple[str, tuple[str, ...]], ...] = ()
+
+    def group(self, name: str) -> tuple[str, ...] | None:
+        """The units of destination group `name` (None: no such group)."""
+        return dict(self.groups).get(name)
+
+
+@dataclass(frozen=True)
 class FloorSpec:
     """One shop floor: its size, stations, modules, objects (id -> unit) and logical assets."""
 
@@ -119,6 +146,7 @@ class FloorSpec:
     modules: tuple[ModuleSpec, ...]
     objects: tuple[tuple[str, str], ...]
     logical: tuple[str, ...] = tuple(LOGICAL_ASSETS)
+    operation: OperationSpec = OperationSpec()
 
     def __post_init__(self) -> None:
         _check(self)
@@ -221,6 +249,18 @@ def _check(floor: FloorSpec) -> None:
         raise InputError(f"{where}: no transport module")
     if len(floor.size_m) != 2 or min(floor.size_m) <= 0:
         raise InputError(f"{where}: size_m must be two positive lengths")
+    op = floor.operation
+    if op.policy not in POLICIES:
+        raise InputError(f"{where}: operation.policy must be one of {', '.join(POLICIES)}, "
+                         f"got {op.policy!r}")  # fmt: skip
+    if not 1 <= op.runs <= 1000:
+        raise InputError(f"{where}: operation.runs must be 1..1000, got {op.runs}")
+    for group, units in op.groups:
+        if group in floor.units or group in seen:
+            raise InputError(f"{where}: destination group {group!r} is also an asset id")
+        if not units or any(u not in floor.units for u in units):
+            raise InputError(f"{where}: destination group {group!r} must list transfer units "
+                             f"of the floor, got {list(units)}")  # fmt: skip
 
 
 def default_floor_spec() -> FloorSpec:
@@ -255,7 +295,7 @@ def _str(table: dict, key: str, where: str) -> str:
 
 def parse_floor(doc: dict, name: str) -> FloorSpec:
     """A `FloorSpec` from a parsed floor document (see the module docstring)."""
-    known = {"name", "size_m", "station", "module", "object", "logical"}
+    known = {"name", "size_m", "station", "module", "object", "logical", "operation"}
     if unknown := sorted(set(doc) - known):
         raise InputError(f"floor {name}: unknown key {unknown[0]!r}; known: "
                          f"{', '.join(sorted(known))}")  # fmt: skip
@@ -285,7 +325,28 @@ def parse_floor(doc: dict, name: str) -> FloorSpec:
     if not isinstance(logical, list) or not all(isinstance(a, str) for a in logical):
         raise InputError(f"floor {name}: logical must be a list of asset ids")
     return FloorSpec(name, size_m, tuple(stations), tuple(modules), tuple(objects),
-                     tuple(logical))  # fmt: skip
+                     tuple(logical), _operation(doc.get("operation", {}), name))  # fmt: skip
+
+
+def _operation(table: object, name: str) -> OperationSpec:
+    where = f"floor {name}: [operation]"
+    if not isinstance(table, dict):
+        raise InputError(f"{where} must be a table")
+    known = {"policy", "study", "runs", "groups"}
+    if unknown := sorted(set(table) - known):
+        raise InputError(f"{where}: unknown key {unknown[0]!r}; known: {', '.join(sorted(known))}")
+    study = table.get("study")
+    if study is not None and (not isinstance(study, str) or not study):
+        raise InputError(f"{where}: study must be the path of a study store")
+    runs = table.get("runs", 4)
+    if isinstance(runs, bool) or not isinstance(runs, int):
+        raise InputError(f"{where}: runs must be an integer, got {runs!r}")
+    groups = table.get("groups", {})
+    if not isinstance(groups, dict) or not all(
+            isinstance(v, list) and all(isinstance(u, str) for u in v) for v in groups.values()):
+        raise InputError(f"{where}: groups must map a name to a list of unit ids")  # fmt: skip
+    return OperationSpec(str(table.get("policy", "nearest-idle")), study, runs,
+                         tuple((g, tuple(u)) for g, u in groups.items()))  # fmt: skip
 
 
 def load_floor(path: Path | str, *, check_cores: bool = True) -> FloorSpec:
@@ -304,6 +365,10 @@ def load_floor(path: Path | str, *, check_cores: bool = True) -> FloorSpec:
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         raise InputError(f"{path}: not a readable TOML floor file ({exc})") from None
     spec = parse_floor(doc, path.stem)
+    study = spec.operation.study
+    if study is not None and not Path(study).is_absolute():  # relative to the floor file
+        op = replace(spec.operation, study=str((path.parent / study).resolve()))
+        spec = replace(spec, operation=op)
     if not check_cores:
         return spec
     from transfertwin.objects import builtin_ids
@@ -330,4 +395,12 @@ def floor_toml(floor: FloorSpec) -> str:
                   f"standby = {'true' if m.standby else 'false'}"]  # fmt: skip
     for obj, at in floor.objects:
         lines += ["", "[[object]]", f"id = {json.dumps(obj)}", f"at = {json.dumps(at)}"]
+    op = floor.operation
+    lines += ["", "[operation]", f"policy = {json.dumps(op.policy)}", f"runs = {op.runs}"]
+    if op.study is not None:
+        lines.append(f"study = {json.dumps(op.study)}")
+    if op.groups:
+        lines += ["", "[operation.groups]"]
+        lines += [f"{json.dumps(g)} = [{', '.join(json.dumps(u) for u in units)}]"
+                  for g, units in op.groups]  # fmt: skip
     return "\n".join(lines) + "\n"

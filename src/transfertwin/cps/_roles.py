@@ -1,6 +1,7 @@
-"""What each asset does in its own process (`AssetNode`): transfer units, objects, PropS,
-the Experiment Manager and the knowledge graph. The transport module and the TMS, which
-carry the transport operations, are in `_role_tm` and `_role_tms`.
+"""What each asset does in its own process (`AssetNode`): transfer units, objects and the
+knowledge graph. The transport module and the TMS, which carry the transport operations,
+are in `_role_tm` and `_role_tms`; PropS in `_role_props`, the Experiment Manager in
+`_role_em`.
 
 Every role offers `handlers()` (the OPC UA operations), `writable()` (properties others
 may write besides the externally synchronised ones), `live()` (its part of the heartbeat),
@@ -125,63 +126,6 @@ class ObjectRole(Role):
 
     async def live(self) -> dict[str, Any]:
         return {"state": "idle", "location": self.state.data["possessed_by"] or None}
-
-
-class PropsRole(Role):
-    """PropS: fuses reported poses in its pose graph."""
-
-    def __init__(self, node: AssetNode) -> None:
-        super().__init__(node)
-        from transfertwin.cps.apps import PoseGraph
-
-        self.poses = PoseGraph()
-
-    def handlers(self) -> dict[str, Any]:
-        return {"ReportPose": self._report, "FusedPose": self._fused}
-
-    async def _report(self, source, subject, x, y, theta, sigma_xy, sigma_theta) -> bool:
-        from transfertwin.cps.apps import PoseObservation
-
-        self.poses.add(PoseObservation(source, subject, x, y, theta, sigma_xy, sigma_theta))
-        await self.set("FusedPoses", len(self.poses.solve()))
-        return True
-
-    async def _fused(self, subject: str) -> str:
-        try:
-            pose = self.poses.fused(subject)
-        except InputError as exc:
-            raise ValueError(str(exc)) from None
-        return json.dumps({"x": pose.x, "y": pose.y, "theta": pose.theta})
-
-
-class ExperimentRole(Role):
-    """The Experiment Manager: runs E^V against a unit through that unit's OPC UA interface;
-    the virtual unit's physics runs here and mirrors its belt commands (`MirroredUnitHAL`)."""
-
-    def handlers(self) -> dict[str, Any]:
-        return {"RunExperiment": self._run}
-
-    async def _run(self, unit: str, obj: str, face: str, conveyor: str, theta_deg: int,
-                   seed: int) -> str:  # fmt: skip
-        from transfertwin.cps._role_tm import MirroredUnitHAL, load_scene
-        from transfertwin.cps.opcua import OpcUaUnitHAL
-        from transfertwin.study.experiment import ExperimentSpec, run_experiment, system_for
-
-        if unit not in self.node.floor.units:
-            raise ValueError(f"no transfer unit {unit!r}")
-        scene = load_scene()
-        spec = ExperimentSpec(obj, face, conveyor, int(theta_deg), scene=scene, seed=int(seed))
-        await self.set("State", "running")
-        try:
-            session = await self.node.peers.session(unit)
-            loop = asyncio.get_running_loop()
-            system = system_for(obj, "m", scene)
-            hal = MirroredUnitHAL(OpcUaUnitHAL(session, loop, timeout_s=30), system.tu, loop)
-            result = await asyncio.to_thread(run_experiment, spec, tu_hal=hal)
-        finally:
-            await self.set("State", "idle")
-        await self.set("ExperimentsDone", int(await self.get("ExperimentsDone")) + 1)
-        return json.dumps(result.row())
 
 
 class GraphRole(Role):
@@ -318,6 +262,13 @@ def role_for(node: AssetNode) -> Role:
         from transfertwin.cps._role_tms import TmsRole
 
         return TmsRole(node)
-    roles = {"transfer_unit": UnitRole, "object": ObjectRole, "props": PropsRole,
-             "experiment_manager": ExperimentRole, "knowledge_graph": GraphRole}  # fmt: skip
+    if cls == "props":
+        from transfertwin.cps._role_props import PropsRole
+
+        return PropsRole(node)
+    if cls == "experiment_manager":
+        from transfertwin.cps._role_em import ExperimentRole
+
+        return ExperimentRole(node)
+    roles = {"transfer_unit": UnitRole, "object": ObjectRole, "knowledge_graph": GraphRole}
     return roles.get(cls, Role)(node)

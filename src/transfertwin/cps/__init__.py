@@ -39,7 +39,12 @@ from transfertwin.cps.opcua import (
 )
 
 if TYPE_CHECKING:
-    from transfertwin.cps._asset_config import AssetConfig, load_asset_config, write_asset_config
+    from transfertwin.cps._asset_config import (
+        AssetConfig,
+        HalConfig,
+        load_asset_config,
+        write_asset_config,
+    )
     from transfertwin.cps._floor_file import (
         FloorSpec,
         ModuleSpec,
@@ -48,6 +53,7 @@ if TYPE_CHECKING:
         floor_toml,
         load_floor,
     )
+    from transfertwin.cps._hal import GatewayHAL
     from transfertwin.cps._launcher import (
         asset_pids,
         check_workdir,
@@ -72,6 +78,8 @@ if TYPE_CHECKING:
 
 _LAZY = {
     "AssetConfig": "_asset_config",
+    "HalConfig": "_asset_config",
+    "GatewayHAL": "_hal",
     "load_asset_config": "_asset_config",
     "write_asset_config": "_asset_config",
     "FloorSpec": "_floor_file",
@@ -136,6 +144,8 @@ __all__ = [
     "CpsConfig",
     "Credentials",
     "FloorSpec",
+    "GatewayHAL",
+    "HalConfig",
     "KnowledgeGraph",
     "Layer",
     "ModuleSpec",

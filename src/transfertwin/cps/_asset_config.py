@@ -23,6 +23,20 @@ state_dir = "state"          # what survives a crash, written atomically
 seed = 0
 time_scale = 1.0
 docking = "sampled"
+
+[hal]                        # what the asset's belts and light barriers are
+kind = "virtual"             # virtual | plant | remote
+# plant: the emulated plant's hidden physics (a transport module simulates its docked pair
+# with it); the seed is in a file of its own, never in this one
+plant_seed_file = "../../plant.secret"
+# remote: real hardware behind a HAL gateway (OPC UA): belt speeds written, barriers read
+endpoint = "opc.tcp://192.168.10.21:4840"
+insecure = false             # NoSecurity at the gateway: loopback only
+poll_s = 0.05                # how often the barriers are read
+belt_left = "ns=2;s=TU_A.BeltSpeedLeft"      # the gateway's nodes (these are the defaults)
+belt_right = "ns=2;s=TU_A.BeltSpeedRight"
+barrier_near = "ns=2;s=TU_A.BarrierNear"
+barrier_far = "ns=2;s=TU_A.BarrierFar"
 ```
 
 Relative paths are resolved against the file's folder.
@@ -40,7 +54,58 @@ from pathlib import Path
 from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
 
-__all__ = ["AssetConfig", "load_asset_config", "write_asset_config"]
+__all__ = ["HAL_KINDS", "AssetConfig", "HalConfig", "load_asset_config", "write_asset_config"]
+
+#: What an asset's hardware abstraction layer may be.
+HAL_KINDS = ("virtual", "plant", "remote")
+
+#: The HAL gateway's nodes a remote asset uses, and their default NodeIds ({id}: asset id).
+GATEWAY_NODES = {"belt_left": "ns=2;s={id}.BeltSpeedLeft",
+                 "belt_right": "ns=2;s={id}.BeltSpeedRight",
+                 "barrier_near": "ns=2;s={id}.BarrierNear",
+                 "barrier_far": "ns=2;s={id}.BarrierFar"}  # fmt: skip
+
+
+@dataclass(frozen=True)
+class HalConfig:
+    """An asset's HAL: ``virtual`` (simulated by the twin), ``plant`` (the emulated plant's
+    hidden physics, seed in `plant_seed_file`) or ``remote`` (a HAL gateway at `endpoint`;
+    `nodes`: its belt and barrier NodeIds, `GATEWAY_NODES` filled in where left out)."""
+
+    kind: str = "virtual"
+    plant_seed_file: Path | None = None
+    endpoint: str | None = None
+    insecure: bool = False
+    poll_s: float = 0.05
+    nodes: tuple[tuple[str, str], ...] = ()
+
+    def check(self, where: str) -> None:
+        """InputError naming `where` for a HAL that cannot work."""
+        if self.kind not in HAL_KINDS:
+            raise InputError(f"{where}: [hal] kind must be one of {', '.join(HAL_KINDS)}, "
+                             f"got {self.kind!r}")  # fmt: skip
+        if self.kind == "plant" and self.plant_seed_file is None:
+            raise InputError(f"{where}: [hal] kind = \"plant\" needs plant_seed_file")
+        if self.kind != "remote":
+            return
+        if not isinstance(self.endpoint, str) or not self.endpoint.startswith("opc.tcp://"):
+            raise InputError(f"{where}: [hal] kind = \"remote\" needs endpoint = "
+                             f"\"opc.tcp://HOST:PORT\", got {self.endpoint!r}")  # fmt: skip
+        host = self.endpoint.removeprefix("opc.tcp://").split("/")[0].rsplit(":", 1)[0]
+        if self.insecure and host.strip("[]") not in ("localhost", "127.0.0.1", "::1") and \
+                not host.startswith("127."):
+            raise InputError(f"{where}: [hal] insecure (NoSecurity at the gateway) is for "
+                             f"loopback only; {host} needs security")  # fmt: skip
+        if not (math.isfinite(self.poll_s) and 0.005 <= self.poll_s <= 5.0):
+            raise InputError(f"{where}: [hal] poll_s must be 0.005..5 s, got {self.poll_s}")
+        unknown = sorted(set(dict(self.nodes)) - set(GATEWAY_NODES))
+        if unknown:
+            raise InputError(f"{where}: [hal] unknown key {unknown[0]!r}")
+
+    def node_ids(self, asset_id: str) -> dict[str, str]:
+        """The gateway's NodeIds of belt_left, belt_right, barrier_near, barrier_far."""
+        given = dict(self.nodes)
+        return {k: given.get(k, v.format(id=asset_id)) for k, v in GATEWAY_NODES.items()}
 
 
 @dataclass(frozen=True)
@@ -62,6 +127,7 @@ class AssetConfig:
     seed: int = 0
     time_scale: float = 1.0
     docking: str = "sampled"
+    hal: HalConfig = HalConfig()
 
     def __post_init__(self) -> None:
         where = f"asset {self.asset_id}"
@@ -83,6 +149,7 @@ class AssetConfig:
             raise InputError(f"{where}: lease_s must be at least 0.5 s, got {self.lease_s}")
         if self.docking not in ("sampled", "navigated"):
             raise InputError(f"{where}: docking must be sampled or navigated")
+        self.hal.check(where)
 
     @property
     def endpoint(self) -> str:
@@ -109,6 +176,7 @@ def load_asset_config(path: Path | str) -> AssetConfig:
     base = path.parent
     asset, net = _table(doc, "asset"), _table(doc, "network")
     sec, run = _table(doc, "security"), _table(doc, "runtime")
+    hal = _table(doc, "hal")
 
     def rel(value: object, key: str) -> Path:
         if not isinstance(value, str) or not value:
@@ -137,10 +205,26 @@ def load_asset_config(path: Path | str) -> AssetConfig:
             insecure=insecure, allow_remote=bool(net.get("allow_remote", False)),
             lease_s=float(net.get("lease_s", 5.0)), seed=int(run.get("seed", 0)),
             time_scale=float(run.get("time_scale", 1.0)),
-            docking=str(run.get("docking", "sampled")),
+            docking=str(run.get("docking", "sampled")), hal=_hal(hal, rel, path),
         )  # fmt: skip
     except (TypeError, ValueError) as exc:
         raise InputError(f"{path}: {exc}") from None
+
+
+def _hal(table: dict, rel, path: Path) -> HalConfig:
+    known = {"kind", "plant_seed_file", "endpoint", "insecure", "poll_s", *GATEWAY_NODES}
+    if unknown := sorted(set(table) - known):
+        raise InputError(f"{path}: [hal] unknown key {unknown[0]!r}; known: "
+                         f"{', '.join(sorted(known))}")  # fmt: skip
+    seed_file = table.get("plant_seed_file")
+    endpoint = table.get("endpoint")
+    return HalConfig(
+        kind=str(table.get("kind", "virtual")),
+        plant_seed_file=None if seed_file is None else rel(seed_file, "[hal] plant_seed_file"),
+        endpoint=None if endpoint is None else str(endpoint),
+        insecure=bool(table.get("insecure", False)), poll_s=float(table.get("poll_s", 0.05)),
+        nodes=tuple((k, str(table[k])) for k in GATEWAY_NODES if k in table),
+    )  # fmt: skip
 
 
 def _toml(value: object) -> str:
@@ -166,6 +250,13 @@ def write_asset_config(path: Path, cfg: AssetConfig) -> Path:
     }
     if cfg.credentials_file is not None:
         tables["security"]["credentials"] = str(cfg.credentials_file)
+    hal = cfg.hal
+    tables["hal"] = {"kind": hal.kind}
+    if hal.plant_seed_file is not None:
+        tables["hal"]["plant_seed_file"] = str(hal.plant_seed_file)
+    if hal.kind == "remote":
+        tables["hal"] |= {"endpoint": hal.endpoint, "insecure": hal.insecure,
+                          "poll_s": hal.poll_s, **dict(hal.nodes)}  # fmt: skip
     lines = [f"# transfertwin asset process: transfertwin cps asset --config {path.name}"]
     for name, table in tables.items():
         lines += ["", f"[{name}]", *(f"{k} = {_toml(v)}" for k, v in table.items())]

@@ -8,6 +8,8 @@ can start one process per asset and any asset can be restarted by hand from its 
 ```toml
 name = "demo"
 size_m = [12.0, 8.0]                      # optional; walls around it
+hal = "virtual"                           # optional: every unit's and module's HAL
+                                          # (virtual | plant: needs cps up --plant-seed)
 
 [[station]]                               # a station with its transfer unit TU_<name>
 name = "A"
@@ -15,6 +17,8 @@ x_m = 2.6                                 # centre of the station's front face, 
 y_m = 6.6
 yaw_deg = 90                              # inward normal of the face (docked heading)
 mount = "left"                            # mounting side of the unit (Fig. 5.16)
+hal = "remote"                            # optional: this unit's HAL (virtual|plant|remote)
+gateway = "opc.tcp://192.168.10.21:4840"  # remote: its HAL gateway (OPC UA)
 
 [[module]]                                # a transport module and its start pose
 id = "TM_1"
@@ -22,6 +26,7 @@ x_m = 6.0
 y_m = 5.2
 theta_deg = 0
 standby = false                           # true: prepared, started later by hand
+hal = "plant"                             # optional: virtual | plant (not remote)
 
 [[object]]                                # a built-in core id, and the unit it lies on
 id = "o5"
@@ -98,6 +103,8 @@ class StationSpec:
     y_m: float
     yaw_deg: float
     mount: str
+    hal: str = "virtual"
+    gateway: str | None = None
 
     @property
     def unit(self) -> str:
@@ -114,6 +121,7 @@ class ModuleSpec:
     y_m: float
     theta_deg: float = 0.0
     standby: bool = False
+    hal: str = "virtual"
 
     @property
     def home(self) -> tuple[float, float, float]:
@@ -185,6 +193,29 @@ class FloorSpec:
         )
         return (*units, *modules, *objects, *logical)
 
+    def hal_of(self, asset_id: str) -> tuple[str, str | None]:
+        """(HAL kind, gateway endpoint or None) of a unit or module; virtual otherwise."""
+        for s in self.stations:
+            if s.unit == asset_id:
+                return s.hal, s.gateway
+        for m in self.modules:
+            if m.asset_id == asset_id:
+                return m.hal, None
+        return "virtual", None
+
+    def with_hal(self, kind: str) -> FloorSpec:
+        """This floor with every virtual unit and module on HAL `kind` (remote units keep
+        theirs)."""
+
+        stations = tuple(s if s.hal == "remote" else replace(s, hal=kind) for s in self.stations)
+        modules = tuple(replace(m, hal=kind) for m in self.modules)
+        return replace(self, stations=stations, modules=modules)
+
+    def uses_plant(self) -> bool:
+        """Whether any asset runs on the emulated plant."""
+        return any(s.hal == "plant" for s in self.stations) or any(
+            m.hal == "plant" for m in self.modules)
+
     def standby(self) -> frozenset[str]:
         """Ids of the assets prepared but not started by the launcher."""
         return frozenset(m.asset_id for m in self.modules if m.standby)
@@ -234,6 +265,19 @@ def _check(floor: FloorSpec) -> None:
         if s.mount not in ("left", "right"):
             raise InputError(f"{where}: station {s.name}: mount must be left or right, "
                              f"got {s.mount!r}")  # fmt: skip
+    for s in floor.stations:
+        if s.hal not in ("virtual", "plant", "remote"):
+            raise InputError(f"{where}: station {s.name}: hal must be virtual, plant or remote, "
+                             f"got {s.hal!r}")  # fmt: skip
+        if (s.hal == "remote") != (s.gateway is not None):
+            raise InputError(f"{where}: station {s.name}: a remote HAL needs gateway = "
+                             "\"opc.tcp://HOST:PORT\" (and only a remote one has it)")  # fmt: skip
+        if s.gateway is not None and not s.gateway.startswith("opc.tcp://"):
+            raise InputError(f"{where}: station {s.name}: gateway must be an opc.tcp:// URL")
+    for m in floor.modules:
+        if m.hal not in ("virtual", "plant"):
+            raise InputError(f"{where}: module {m.asset_id}: hal must be virtual or plant, "
+                             f"got {m.hal!r} (a remote module is not supported yet)")  # fmt: skip
     for obj, at in floor.objects:
         if at not in floor.units:
             raise InputError(f"{where}: object {obj} lies on {at!r}, which is no transfer unit "
@@ -295,7 +339,7 @@ def _str(table: dict, key: str, where: str) -> str:
 
 def parse_floor(doc: dict, name: str) -> FloorSpec:
     """A `FloorSpec` from a parsed floor document (see the module docstring)."""
-    known = {"name", "size_m", "station", "module", "object", "logical", "operation"}
+    known = {"name", "size_m", "station", "module", "object", "logical", "operation", "hal"}
     if unknown := sorted(set(doc) - known):
         raise InputError(f"floor {name}: unknown key {unknown[0]!r}; known: "
                          f"{', '.join(sorted(known))}")  # fmt: skip
@@ -305,18 +349,25 @@ def parse_floor(doc: dict, name: str) -> FloorSpec:
         raise InputError(f"floor {name}: size_m must be [width, height] in metres")
     size_m = (_float({"w": size[0]}, "w", f"floor {name}: size_m"),
               _float({"h": size[1]}, "h", f"floor {name}: size_m"))  # fmt: skip
+    hal = doc.get("hal", "virtual")
+    if hal not in ("virtual", "plant"):
+        raise InputError(f"floor {name}: hal must be virtual or plant, got {hal!r} (a remote "
+                         "HAL is set per station, with its gateway)")  # fmt: skip
     stations = []
     for i, t in enumerate(doc.get("station", [])):
         where = f"floor {name}: station {i + 1}"
+        gateway = t.get("gateway")
         stations.append(StationSpec(_str(t, "name", where), _float(t, "x_m", where),
                                     _float(t, "y_m", where), _float(t, "yaw_deg", where),
-                                    _str(t, "mount", where)))  # fmt: skip
+                                    _str(t, "mount", where), str(t.get("hal", hal)),
+                                    None if gateway is None else str(gateway)))  # fmt: skip
     modules = []
     for i, t in enumerate(doc.get("module", [])):
         where = f"floor {name}: module {i + 1}"
         modules.append(ModuleSpec(_str(t, "id", where), _float(t, "x_m", where),
                                   _float(t, "y_m", where), float(t.get("theta_deg", 0.0)),
-                                  bool(t.get("standby", False))))  # fmt: skip
+                                  bool(t.get("standby", False)),
+                                  str(t.get("hal", hal))))  # fmt: skip
     objects = []
     for i, t in enumerate(doc.get("object", [])):
         where = f"floor {name}: object {i + 1}"
@@ -389,10 +440,16 @@ def floor_toml(floor: FloorSpec) -> str:
         lines += ["", "[[station]]", f"name = {json.dumps(s.name)}", f"x_m = {s.x_m!r}",
                   f"y_m = {s.y_m!r}", f"yaw_deg = {s.yaw_deg!r}",
                   f"mount = {json.dumps(s.mount)}"]  # fmt: skip
+        if s.hal != "virtual":
+            lines.append(f"hal = {json.dumps(s.hal)}")
+        if s.gateway is not None:
+            lines.append(f"gateway = {json.dumps(s.gateway)}")
     for m in floor.modules:
         lines += ["", "[[module]]", f"id = {json.dumps(m.asset_id)}", f"x_m = {m.x_m!r}",
                   f"y_m = {m.y_m!r}", f"theta_deg = {m.theta_deg!r}",
                   f"standby = {'true' if m.standby else 'false'}"]  # fmt: skip
+        if m.hal != "virtual":
+            lines.append(f"hal = {json.dumps(m.hal)}")
     for obj, at in floor.objects:
         lines += ["", "[[object]]", f"id = {json.dumps(obj)}", f"at = {json.dumps(at)}"]
     op = floor.operation

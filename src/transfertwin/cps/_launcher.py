@@ -24,8 +24,14 @@ from pathlib import Path
 
 from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
-from transfertwin.cps._asset_config import AssetConfig, load_asset_config, write_asset_config
+from transfertwin.cps._asset_config import (
+    AssetConfig,
+    HalConfig,
+    load_asset_config,
+    write_asset_config,
+)
 from transfertwin.cps._floor_file import FloorSpec, floor_toml
+from transfertwin.cps._hal import PLANT_SEED_FILE, write_plant_seed
 from transfertwin.cps.opcua import (
     ROLES,
     ensure_certificate,
@@ -56,13 +62,23 @@ def prepare_floor(
     docking: str = "sampled",
     lease_s: float = 5.0,
     base_host: str = "127.0.0.2",
+    plant_seed: int | None = None,
 ) -> dict[str, AssetConfig]:
     """Write the floor's work folder; returns asset id -> its configuration.
 
     A work folder used before keeps its credentials, certificates and every asset's state
     (the ledger, operation ids, possessions): a floor started again goes on where it was.
+    A floor with assets on the emulated plant (``hal = "plant"``) needs `plant_seed`; it is
+    written to ``W/plant.secret`` (owner-only), which their asset files name, and nowhere
+    else.
     """
+    if floor.uses_plant() and plant_seed is None:
+        raise InputError(f"floor {floor.name} runs assets on the emulated plant (hal = "
+                         "\"plant\"): give the plant seed (cps up --plant-seed N)")  # fmt: skip
     workdir.mkdir(parents=True, exist_ok=True)
+    seed_file = None
+    if floor.uses_plant():
+        seed_file = write_plant_seed(workdir / PLANT_SEED_FILE, plant_seed).resolve()
     floor_file = workdir / "floor.toml"
     write_atomic(floor_file, floor_toml(floor))
     creds_file = workdir / "credentials.json"
@@ -77,13 +93,16 @@ def prepare_floor(
     for d in descs:
         aid = d.asset_id
         home = workdir / "assets" / aid
+        kind, gateway = floor.hal_of(aid)
+        hal = HalConfig(kind, plant_seed_file=seed_file if kind == "plant" else None,
+                        endpoint=gateway, insecure=insecure)  # fmt: skip
         configs[aid] = AssetConfig(
             asset_id=aid, floor_file=floor_file.resolve(), host=hosts[aid], port=ports[aid],
             seeds=seeds, cert_dir=(home / "certs").resolve(),
             trust_dir=(home / "trusted").resolve(),
             credentials_file=None if insecure else creds_file.resolve(),
             state_dir=(home / "state").resolve(), insecure=insecure, lease_s=lease_s,
-            seed=seed, time_scale=time_scale, docking=docking,
+            seed=seed, time_scale=time_scale, docking=docking, hal=hal,
         )  # fmt: skip
         write_asset_config(workdir / "assets" / f"{aid}.toml", configs[aid])
     if not insecure:

@@ -45,6 +45,12 @@ __all__ = ["AssetNode", "NodeState", "Peers", "heartbeat_payload"]
 
 log = logging.getLogger("transfertwin.cps")
 
+#: What an asset's AAS says its data come from, by HAL (the plant's seed and parameters are
+#: not named; a remote asset's gateway is in its asset file, not in its AAS).
+PROVENANCE = {"virtual": "transfertwin virtual model (MuJoCo)",
+              "plant": "emulated plant (transfertwin.plant)",
+              "remote": "physical asset behind a HAL gateway (OPC UA)"}  # fmt: skip
+
 
 class NodeState:
     """A node's persisted state: one JSON document, rewritten atomically on every change.
@@ -176,7 +182,7 @@ class AssetNode:
     async def __aenter__(self) -> AssetNode:
         cfg = self.cfg
         rep = build_representation(self.desc, endpoint=cfg.endpoint,
-                                   provenance="transfertwin virtual model (MuJoCo)")  # fmt: skip
+                                   provenance=PROVENANCE[cfg.hal.kind])  # fmt: skip
         writable = {("OperationalData", p) for p in externally_synced(rep)}
         writable |= {("OperationalData", p) for p in self.role.writable()}
         scfg = ServerConfig(host=cfg.host, port=cfg.port, insecure=cfg.insecure,
@@ -248,7 +254,8 @@ class AssetNode:
                 try:
                     payload = heartbeat_payload(self.desc, self.server.endpoint,
                                                 self.server.security_policy,
-                                                await self.role.live())  # fmt: skip
+                                                {"hal": self.cfg.hal.kind,
+                                                 **await self.role.live()})  # fmt: skip
                     known = await asyncio.wait_for(self.peers.call("KG", "Heartbeat", payload),
                                                    max(period, 2.0))  # fmt: skip
                     for aid, url in json.loads(known).items():

@@ -95,3 +95,91 @@ def test_a_missing_key_in_an_asset_file_is_named(tmp_path):
     path.write_text('[asset]\nid = "TU_A"\n[network]\nhost = "127.0.0.2"\nport = 1\n')
     with pytest.raises(InputError, match="missing 'floor'"):
         load_asset_config(path)
+
+
+def test_hal_kinds_round_trip_through_the_floor_and_asset_files(tmp_path):
+    from transfertwin.cps import HalConfig
+
+    text = floor_toml(default_floor_spec()).replace(
+        'mount = "right"', 'mount = "right"\nhal = "remote"\n'
+        'gateway = "opc.tcp://127.0.0.1:4840"', 1)  # fmt: skip
+    (tmp_path / "f.toml").write_text(text)
+    spec = load_floor(tmp_path / "f.toml")
+    assert spec.hal_of("TU_B") == ("remote", "opc.tcp://127.0.0.1:4840")
+    assert spec.hal_of("TU_A") == ("virtual", None) and not spec.uses_plant()
+    plant = spec.with_hal("plant")  # what cps up --plant-seed does; a remote unit keeps its HAL
+    assert plant.uses_plant() and plant.hal_of("TM_1") == ("plant", None)
+    assert plant.hal_of("TU_B")[0] == "remote" and plant.hal_of("TU_A")[0] == "plant"
+    (tmp_path / "p.toml").write_text(floor_toml(plant))
+    assert load_floor(tmp_path / "p.toml") == plant
+    (tmp_path / "g.toml").write_text('hal = "plant"\n' + floor_toml(default_floor_spec()))
+    assert load_floor(tmp_path / "g.toml").hal_of("TU_C") == ("plant", None)
+    hal = HalConfig("remote", endpoint="opc.tcp://127.0.0.1:4840", insecure=True, poll_s=0.02,
+                    nodes=(("barrier_far", "ns=3;i=7"),))  # fmt: skip
+    cfg = _config(tmp_path, hal=hal)
+    path = write_asset_config(tmp_path / "assets" / "TU_B.toml", cfg)
+    assert load_asset_config(path) == cfg
+    assert hal.node_ids("TU_B") == {"belt_left": "ns=2;s=TU_B.BeltSpeedLeft",
+                                    "belt_right": "ns=2;s=TU_B.BeltSpeedRight",
+                                    "barrier_near": "ns=2;s=TU_B.BarrierNear",
+                                    "barrier_far": "ns=3;i=7"}  # fmt: skip
+    seeded = _config(tmp_path, hal=HalConfig("plant", plant_seed_file=tmp_path / "plant.secret"))
+    path = write_asset_config(tmp_path / "assets" / "TM_1.toml", seeded)
+    assert load_asset_config(path) == seeded
+
+
+@pytest.mark.parametrize(("edit", "message"), [
+    (lambda t: t.replace('mount = "right"', 'mount = "right"\nhal = "remote"', 1),
+     "remote HAL needs gateway"),
+    (lambda t: t.replace('standby = false', 'standby = false\nhal = "remote"', 1),
+     "module TM_1: hal must be virtual or plant"),
+    (lambda t: 'hal = "remote"\n' + t, "hal must be virtual or plant"),
+    (lambda t: t.replace('mount = "right"', 'mount = "right"\nhal = "real"', 1),
+     "hal must be virtual, plant or remote"),
+])  # fmt: skip
+def test_a_bad_hal_in_a_floor_file_is_one_clear_error(tmp_path, edit, message):
+    path = tmp_path / "bad.toml"
+    path.write_text(edit(floor_toml(default_floor_spec())))
+    with pytest.raises(InputError, match=message):
+        load_floor(path)
+
+
+@pytest.mark.parametrize(("hal", "message"), [
+    ({"kind": "real"}, "kind must be one of virtual, plant, remote"),
+    ({"kind": "plant"}, "needs plant_seed_file"),
+    ({"kind": "remote"}, "needs endpoint"),
+    ({"kind": "remote", "endpoint": "opc.tcp://192.0.2.4:4840", "insecure": True},
+     "insecure .* loopback only"),
+    ({"kind": "remote", "endpoint": "opc.tcp://127.0.0.1:4840", "poll_s": 0.0},
+     "poll_s must be"),
+])  # fmt: skip
+def test_a_bad_hal_in_an_asset_config_is_one_clear_error(tmp_path, hal, message):
+    from transfertwin.cps import HalConfig
+
+    with pytest.raises(InputError, match=message):
+        _config(tmp_path, hal=HalConfig(**hal))
+
+
+def test_an_unknown_hal_key_in_an_asset_file_is_named(tmp_path):
+    path = write_asset_config(tmp_path / "a.toml", _config(tmp_path))
+    path.write_text(path.read_text() + 'gatway = "opc.tcp://127.0.0.1:1"\n')
+    with pytest.raises(InputError, match="\\[hal\\] unknown key 'gatway'"):
+        load_asset_config(path)
+
+
+def test_a_plant_floor_needs_its_seed_and_keeps_it_out_of_the_asset_files(tmp_path):
+    import stat
+
+    from transfertwin.cps import prepare_floor
+
+    plant = default_floor_spec().with_hal("plant")
+    with pytest.raises(InputError, match="--plant-seed"):
+        prepare_floor(plant, tmp_path / "w", insecure=True)
+    configs = prepare_floor(plant, tmp_path / "w", insecure=True, plant_seed=918273)
+    secret = tmp_path / "w" / "plant.secret"
+    assert secret.read_text().strip() == "918273"
+    assert stat.S_IMODE(secret.stat().st_mode) == 0o600
+    assert configs["TM_1"].hal.kind == "plant" and configs["TU_A"].hal.kind == "plant"
+    assert configs["o1"].hal.kind == "virtual" and configs["KG"].hal.plant_seed_file is None
+    for f in (tmp_path / "w").rglob("*.toml"):
+        assert "918273" not in f.read_text(), f

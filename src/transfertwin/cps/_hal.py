@@ -1,0 +1,174 @@
+"""An asset process's hardware: virtual, the emulated plant, or real hardware behind a HAL
+gateway (docs/architecture.md, "Deployment"; the ``[hal]`` table of ``ASSET.toml``).
+
+- ``virtual``: the twin's own models; a transport module simulates itself and its docked
+  unit with the virtual scene (`Environment`).
+- ``plant``: the emulated plant (`transfertwin.plant.PlantPhysics`): a transport module
+  simulates its docked pair in the plant's hidden scene with the plant's hidden objects.
+  The plant seed is read from a file of its own (``plant_seed_file``), so neither the asset
+  file, nor a status, nor a log holds it or anything drawn from it.
+- ``remote``: real hardware. The asset writes belt speeds to and reads its light barriers
+  from a HAL gateway, an OPC UA server next to the machine (a PLC's, or a small bridge),
+  at ``endpoint`` (`GatewayHAL`).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import os
+import stat
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from transfertwin._errors import InputError
+
+if TYPE_CHECKING:
+    from transfertwin.cps._asset_config import AssetConfig
+    from transfertwin.sim import SceneConfig
+
+__all__ = ["GatewayHAL", "environment_for", "read_plant_seed", "write_plant_seed"]
+
+log = logging.getLogger("transfertwin.cps")
+
+#: What the plant seed file is called in a floor's work folder.
+PLANT_SEED_FILE = "plant.secret"
+
+
+def write_plant_seed(path: Path, seed: int) -> Path:
+    """Write the plant seed to `path`, readable by its owner only."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    with os.fdopen(fd, "w") as fh:
+        fh.write(f"{int(seed)}\n")
+    os.chmod(path, stat.S_IRUSR | stat.S_IWUSR)
+    return path
+
+
+def read_plant_seed(path: Path) -> int:
+    """The plant seed in `path` (InputError: missing or not a non-negative integer)."""
+    try:
+        text = Path(path).read_text().strip()
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read the plant seed file ({exc.strerror})") from None
+    if not text.isdigit():
+        raise InputError(f"{path}: the plant seed file must hold a non-negative integer")
+    return int(text)
+
+
+def environment_for(cfg: AssetConfig, scene: SceneConfig):
+    """The simulated world of a transport module's process: the virtual scene's, or, with
+    ``[hal] kind = "plant"``, the plant's hidden physics. Its `scene` stays the twin's
+    (what the module's controller knows: belt speed, thresholds, timing); only the systems
+    it steps are the plant's."""
+    from transfertwin.cps.apps import Environment
+
+    if cfg.hal.kind == "virtual":
+        return Environment(scene, cfg.time_scale)
+    if cfg.hal.kind == "remote":
+        raise InputError(f"asset {cfg.asset_id}: a transport module's HAL is virtual or plant "
+                         "(a remote module needs an object sensor at the gateway, not "
+                         "supported yet)")  # fmt: skip
+    from transfertwin.plant import PlantPhysics
+
+    physics = PlantPhysics(read_plant_seed(cfg.hal.plant_seed_file))
+
+    class PlantEnvironment(Environment):
+        """`Environment` whose systems are the plant's (hidden scene, hidden objects)."""
+
+        def use(self, object_ref: str):
+            system = physics.system(object_ref)
+            if self.after_step not in system.step_listeners:
+                system.step_listeners.append(self.after_step)
+            self._system = system
+            self.object_ref = object_ref
+            return system
+
+    return PlantEnvironment(scene, cfg.time_scale)
+
+
+class GatewayHAL:
+    """A remote asset's belts and light barriers at its HAL gateway (an OPC UA server).
+
+    Belt speeds (m/s, Double) are written to the gateway's belt nodes; the barriers
+    (Boolean, True: interrupted) are read from its barrier nodes. The session is opened on
+    first use and again after a failure; a secure gateway sees the asset's own application
+    certificate (Basic256Sha256, SignAndEncrypt) and must trust it.
+
+    Args:
+        cfg: The asset's configuration (its ``[hal]`` table says where and which nodes).
+    """
+
+    def __init__(self, cfg: AssetConfig) -> None:
+        self.cfg = cfg
+        self.endpoint = cfg.hal.endpoint
+        self.nodes = cfg.hal.node_ids(cfg.asset_id)
+        self._client = None
+        self._lock = asyncio.Lock()
+
+    async def _session(self):
+        if self._client is not None:
+            return self._client
+        from asyncua import Client
+
+        client = Client(self.endpoint, timeout=5)
+        if not self.cfg.hal.insecure:
+            from asyncua import ua
+            from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
+
+            from transfertwin.cps.opcua import ensure_certificate
+
+            cert, key = await ensure_certificate(self.cfg.cert_dir, "client-operator")
+            await client.set_security(SecurityPolicyBasic256Sha256, str(cert), str(key),
+                                      mode=ua.MessageSecurityMode.SignAndEncrypt)  # fmt: skip
+        try:
+            await asyncio.wait_for(client.connect(), 10.0)
+        except BaseException:
+            with contextlib.suppress(Exception):
+                await client.disconnect()
+            raise
+        self._client = client
+        log.info("%s: HAL gateway %s connected", self.cfg.asset_id, self.endpoint)
+        return client
+
+    async def _drop(self) -> None:
+        client, self._client = self._client, None
+        if client is not None:
+            with contextlib.suppress(Exception):
+                await asyncio.wait_for(client.disconnect(), 2.0)
+
+    async def set_belt(self, belt: str, speed_m_s: float) -> None:
+        """Command `belt` ('left' or 'right') at the gateway."""
+        from asyncua import ua
+
+        if belt not in ("left", "right"):
+            raise ValueError(f"unknown belt {belt!r}")
+        async with self._lock:
+            try:
+                node = (await self._session()).get_node(self.nodes[f"belt_{belt}"])
+                await node.write_value(ua.DataValue(ua.Variant(float(speed_m_s),
+                                                               ua.VariantType.Double)))
+            except Exception as exc:
+                await self._drop()
+                raise ConnectionError(f"HAL gateway {self.endpoint}: belt {belt} not "
+                                      f"written ({type(exc).__name__}: {exc})") from None
+
+    async def barriers(self) -> dict[str, bool]:
+        """The light barriers as the gateway reads them."""
+        async with self._lock:
+            try:
+                client = await self._session()
+                near, far = await client.read_values(
+                    [client.get_node(self.nodes["barrier_near"]),
+                     client.get_node(self.nodes["barrier_far"])])  # fmt: skip
+            except Exception as exc:
+                await self._drop()
+                raise ConnectionError(f"HAL gateway {self.endpoint}: barriers not read "
+                                      f"({type(exc).__name__}: {exc})") from None
+        return {"near": bool(near), "far": bool(far)}
+
+    async def close(self) -> None:
+        """Close the gateway session."""
+        async with self._lock:
+            await self._drop()

@@ -131,3 +131,19 @@ def test_specs_skip_done_keys_without_changing_the_others():
     assert set(rest) == set(keys) - done
     full = dict(plan.specs(ids))
     assert all(rest[k] == full[k] for k in rest)
+
+
+def test_a_plan_of_chosen_states_runs_those_only_and_keeps_other_hashes():
+    plain = _plan()
+    assert "states" not in plain.describe()  # hashes of plans without a choice unchanged
+    only = (("back", "right", 180), ("front", "left", 0))
+    plan = _plan(only_states=only)
+    assert [(s.face, s.conveyor, s.theta_deg) for s in plan.states()] == list(only)
+    assert plan.n_experiments == 2 * 2 * 3
+    assert plan.plan_hash != plain.plan_hash
+    again = StudyPlan.from_json(plan.to_json())
+    assert again.plan_hash == plan.plan_hash and again.states() == plan.states()
+    with pytest.raises(InputError, match="twice"):
+        _plan(only_states=(only[0], only[0]))
+    with pytest.raises(InputError):
+        _plan(only_states=(("side", "left", 0),))

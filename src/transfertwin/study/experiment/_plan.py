@@ -91,6 +91,10 @@ class StudyPlan:
     runs a state gets; ``sampling_options`` holds the adaptive settings as sorted
     ``(name, value)`` pairs). An exhaustive plan's description has no ``sampling`` entry, so
     its hash is the one it had before adaptive sampling existed.
+
+    ``only_states`` (face, conveyor, θ) triples, when given, are the states run instead of
+    every θ-step state (a small study, e.g. one the Experiment Manager runs on request); a
+    plan without them has no ``states`` entry in its description, so its hash is unchanged.
     """
 
     objects: tuple[str, ...]
@@ -103,6 +107,7 @@ class StudyPlan:
     units: str = "m"
     sampling: str = "exhaustive"
     sampling_options: tuple[tuple[str, object], ...] = ()
+    only_states: tuple[tuple[str, str, int], ...] = ()
 
     def __post_init__(self) -> None:
         if self.sampling not in SAMPLING_MODES:
@@ -119,9 +124,19 @@ class StudyPlan:
             raise InputError(f"--seed must be >= 0, got {self.seed}")
         if not self.objects:
             raise InputError("a study needs at least one object")
+        only = tuple((str(f), str(c), int(t)) for f, c, t in self.only_states)
+        for face, conveyor, theta in only:
+            state_index(face, conveyor, theta)  # an experiment state (Eq. 6.7)
+        if len(set(only)) != len(only):
+            raise InputError("a study plan lists a pre-transfer state twice")
+        object.__setattr__(self, "only_states", only)
 
     def states(self) -> tuple[PreTransferState, ...]:
-        """The pre-transfer states run for every object."""
+        """The pre-transfer states run for every object (`only_states` in their order when
+        given, else every state on the θ step)."""
+        if self.only_states:
+            by_key = {(s.face, s.conveyor, s.theta_deg): s for s in experiment_states()}
+            return tuple(by_key[key] for key in self.only_states)
         return filter_theta_step(experiment_states(), self.theta_step)
 
     @property
@@ -145,7 +160,10 @@ class StudyPlan:
             {"sampling": {"mode": self.sampling, **dict(self.sampling_options)}}
             if self.sampling != "exhaustive"
             else {}
-        )
+        ) | self._describe_states()
+
+    def _describe_states(self) -> dict[str, object]:
+        return {"states": [list(k) for k in self.only_states]} if self.only_states else {}
 
     def to_json(self) -> str:
         """Canonical JSON of `describe()`."""
@@ -175,6 +193,7 @@ class StudyPlan:
             units=str(d.get("units", "m")),
             sampling=mode,
             sampling_options=tuple(sampling.items()),
+            only_states=tuple(tuple(k) for k in d.get("states", ())),
         )
 
     def keys(self, object_ids: dict[str, str]) -> Iterator[tuple[str, str, str, int, int]]:

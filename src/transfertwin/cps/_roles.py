@@ -65,8 +65,21 @@ class Role:
 
 
 class UnitRole(Role):
-    """A virtual transfer unit (type D/E): belt drives, possession kept by others, its light
-    barriers written by the environment that simulates it (the docked module's process)."""
+    """A transfer unit (type D/E): belt drives, possession kept by others.
+
+    With a virtual or plant HAL its light barriers are written by the environment that
+    simulates it (the docked module's process). With a remote HAL (`GatewayHAL`) its belt
+    commands go to the hardware's gateway and its barriers are read from there every
+    ``poll_s`` and published; nobody else may write them.
+    """
+
+    def __init__(self, node: AssetNode) -> None:
+        super().__init__(node)
+        self.gateway = None
+        if node.cfg.hal.kind == "remote":
+            from transfertwin.cps._hal import GatewayHAL
+
+            self.gateway = GatewayHAL(node.cfg)
 
     def initial(self) -> dict[str, Any]:
         return {"possessed": [], "docked": ""}
@@ -75,12 +88,42 @@ class UnitRole(Role):
         return {"SetBeltSpeed": self._set_belt, "SetPossessedObjects": self._set_possessed}
 
     def writable(self) -> set[str]:
+        if self.gateway is not None:
+            return set()  # the hardware's barriers: read from its gateway only
         return {"BarrierNearInterrupted", "BarrierFarInterrupted"}
 
     async def start(self) -> None:
         await self.set("PossessedObjects", ",".join(self.state.data["possessed"]))
         await self.set("DockedTransportModule", self.state.data["docked"])
         self.node.server.on_client_write(self._written)
+        if self.gateway is not None:
+            self.node.spawn(self._poll_barriers())
+
+    async def stop(self) -> None:
+        if self.gateway is not None:
+            await self.gateway.close()
+
+    async def _poll_barriers(self) -> None:
+        """Publish the gateway's barriers as they change (a gateway away: said once, kept
+        trying; the last values stay)."""
+        shown: dict[str, bool] | None = None
+        away = False
+        while True:
+            try:
+                now = await self.gateway.barriers()
+            except ConnectionError as exc:
+                if not away:
+                    log.warning("%s: %s", self.aid, exc)
+                away = True
+            else:
+                if away:
+                    log.info("%s: HAL gateway answering again", self.aid)
+                away = False
+                if now != shown:
+                    await self.set("BarrierNearInterrupted", now["near"])
+                    await self.set("BarrierFarInterrupted", now["far"])
+                    shown = now
+            await asyncio.sleep(self.node.cfg.hal.poll_s)
 
     def _written(self, submodel: str, prop: str, value: object) -> None:
         if prop == "PossessedObjects":
@@ -93,6 +136,8 @@ class UnitRole(Role):
     async def _set_belt(self, belt: str, speed: float) -> bool:
         if belt not in ("left", "right"):
             raise ValueError(f"unknown belt {belt!r}")
+        if self.gateway is not None:  # the drive first: publish what the hardware was told
+            await self.gateway.set_belt(belt, float(speed))
         await self.set(f"BeltSpeed{belt.capitalize()}", float(speed))
         return True
 

@@ -25,6 +25,7 @@ from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from asyncua import ua
 
 from transfertwin.cps._roles import Role
 
@@ -88,7 +89,12 @@ class MirroredUnitHAL:
             await client.write("OperationalData", "BarrierNearInterrupted", barriers["near"])
             await client.write("OperationalData", "BarrierFarInterrupted", barriers["far"])
 
-        asyncio.run_coroutine_threadsafe(write(), self._loop).result(10)
+        try:
+            asyncio.run_coroutine_threadsafe(write(), self._loop).result(10)
+        except ua.UaStatusCodeError as exc:  # a unit on real hardware reads its own barriers
+            if exc.code not in (ua.StatusCodes.BadUserAccessDenied, ua.StatusCodes.BadNotWritable):
+                raise
+            self._remote_write = lambda barriers: None  # type: ignore[method-assign]
 
 
 class ModuleRole(Role):
@@ -96,14 +102,15 @@ class ModuleRole(Role):
 
     def __init__(self, node: AssetNode) -> None:
         super().__init__(node)
-        from transfertwin.cps.apps import HOME_POSE, Environment, FloorRobot
+        from transfertwin.cps._hal import environment_for
+        from transfertwin.cps.apps import HOME_POSE, FloorRobot
 
         spec = node.floor.module(self.aid)
         self.robot = FloorRobot(node.floor.shop_floor(), home=spec.home or HOME_POSE)
         if self.state.data.get("pose"):  # where it was (a docked pose touches the station)
             self.robot.pose = np.array(self.state.data["pose"], dtype=float)
             self.robot.docked_at = self.state.data.get("station")
-        self.env = Environment(load_scene(), node.cfg.time_scale)
+        self.env = environment_for(node.cfg, load_scene())  # virtual or the plant's physics
         self.op: dict[str, Any] | None = None
         self._outbox_kick = asyncio.Event()
         # what `VirtualTransport` reads of the runtime it serves

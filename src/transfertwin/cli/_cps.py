@@ -66,11 +66,11 @@ def _endpoint(info: dict, asset_id: str) -> str:
 def cmd_up(args: argparse.Namespace) -> int:
     """Start the demo CPS and serve until SIGINT/SIGTERM: one process per asset on the
     built-in floor or `--floor` (`_cps_floor.cmd_up_floor`); all assets in this process with
-    `--single-process` (implied by `--plant-seed`)."""
-    single = args.single_process or args.plant_seed is not None
-    if args.floor is not None and single:
-        raise InputError("--floor runs one process per asset; --single-process and "
-                         "--plant-seed run all assets in one process: choose one")  # fmt: skip
+    `--single-process` (implied by `--plant-seed` without `--floor`)."""
+    single = args.single_process or (args.plant_seed is not None and args.floor is None)
+    if args.floor is not None and args.single_process:
+        raise InputError("--floor runs one process per asset; --single-process runs all "
+                         "assets in one process: choose one")  # fmt: skip
     if not single:
         from transfertwin.cli._cps_floor import cmd_up_floor
 
@@ -449,8 +449,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "the transport module drives the shop floor, docks by laser and "
                         "scans with its depth camera (default sampled)")  # fmt: skip
     p.add_argument("--plant-seed", type=int, metavar="N",
-                   help="also start an emulated plant drawn from seed N as the physical "
-                        "transfer units TU_A_P..TU_D_P (its parameters stay hidden)")  # fmt: skip
+                   help="an emulated plant drawn from seed N (its parameters stay hidden): "
+                        "with --floor, every unit and module runs on it (hal = plant); "
+                        "without, the single-process CPS also starts the physical units "
+                        "TU_A_P..TU_D_P")  # fmt: skip
     p.add_argument("--floor", metavar="FLOOR",
                    help="a floor file (examples/floor-demo.toml), default 'demo', the built-in "
                         "floor; one process per asset, each on its own loopback address")

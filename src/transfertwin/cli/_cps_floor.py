@@ -52,11 +52,19 @@ def cmd_up_floor(args: argparse.Namespace) -> int:
     if not args.lease >= 0.5:
         raise InputError(f"--lease must be at least 0.5 s, got {args.lease}")
     floor = _with_operation(_floor_spec(args.floor), args.policy, args.study)
+    if args.plant_seed is not None:  # every unit and module on the emulated plant
+        from transfertwin.cps import check_plant_seed
+
+        check_plant_seed(args.plant_seed)
+        if args.insecure:
+            raise InputError("--plant-seed with --insecure: a plant floor is served only "
+                             "with security (drop --insecure)")  # fmt: skip
+        floor = floor.with_hal("plant")
     wd = out_dir(args.workdir)
     check_workdir(wd)
     configs = prepare_floor(floor, wd, insecure=args.insecure, seed=args.seed,
                             time_scale=args.time_scale, docking=args.docking,
-                            lease_s=args.lease)  # fmt: skip
+                            lease_s=args.lease, plant_seed=args.plant_seed)  # fmt: skip
     write_floor_info(wd, configs, floor)
     t0 = time.monotonic()
     standby = floor.standby()

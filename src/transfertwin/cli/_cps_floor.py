@@ -244,6 +244,16 @@ def floor_status(wd: Path, *, with_objects: bool = True) -> dict:
         except (OSError, TimeoutError, ConnectionError) as exc:
             raise InputError(f"{wd}: the knowledge graph is not answering "
                              f"({type(exc).__name__})") from None  # fmt: skip
+        heard = {a["id"] for a in doc["assets"]}
+        for a in info["assets"]:  # prepared but never heard of: on standby, or not joined yet
+            if a["id"] not in heard:
+                why = "standby" if a.get("standby") else "not joined"
+                doc["assets"].append({
+                    "id": a["id"], "kind": a["kind"], "class": a["class"],
+                    "address": a["endpoint"], "pid": None, "online": False, "state": why,
+                    "offline": {"reason": why, "detail": "no heartbeat since the graph "
+                                "started", "since": None, "since_s": None}})  # fmt: skip
+        doc["assets"].sort(key=lambda a: a["id"])
         if with_objects:
             try:
                 ledger = json.loads(await _call(info, creds, "TMS", "Ledger", timeout_s=5))
@@ -269,9 +279,10 @@ def print_floor_status(doc: dict) -> None:
     from transfertwin.cli._cps import _table
 
     rows = [{**a, "online": "online" if a["online"] else "OFFLINE",
-             "pid": a.get("pid") or ""} for a in doc["assets"]]  # fmt: skip
+             "pid": a.get("pid") or "", "why offline": _why(a.get("offline"))}
+            for a in doc["assets"]]  # fmt: skip
     print("assets (knowledge graph)")
-    print(_table(rows, ("id", "class", "online", "state", "pid", "address")))
+    print(_table(rows, ("id", "class", "online", "state", "pid", "address", "why offline")))
     objects = doc.get("objects")
     if objects is None:
         print(f"objects: {doc.get('objects_error', 'not known')}")
@@ -283,6 +294,17 @@ def print_floor_status(doc: dict) -> None:
                                                          if v.get("moving") else ""))}
              for o, v in objects.items()]  # fmt: skip
     print(_table(lines, ("object", "location")))
+
+
+def _why(offline: dict | None) -> str:
+    """An offline asset's reason in words: 'left 12 s ago', 'lapsed 3 s ago (no heartbeat
+    for 5 s (lease expired))', 'standby'."""
+    if not offline:
+        return ""
+    ago = offline.get("since_s")
+    when = f" {ago:.0f} s ago" if isinstance(ago, int | float) else ""
+    detail = f" ({offline['detail']})" if offline.get("reason") == "lapsed" else ""
+    return f"{offline['reason']}{when}{detail}"
 
 
 def cmd_locate(args: argparse.Namespace) -> int:

@@ -154,6 +154,7 @@ def start_asset(config: Path, log_file: Path) -> subprocess.Popen:
 def write_floor_info(workdir: Path, configs: dict[str, AssetConfig], floor: FloorSpec) -> Path:
     """``W/cps.json``: the endpoints and security of the floor, for its clients."""
     by_id = {d.asset_id: d for d in floor.descriptors()}
+    standby = floor.standby()
     first = next(iter(configs.values()))
     info = {
         "mode": "processes",
@@ -162,7 +163,8 @@ def write_floor_info(workdir: Path, configs: dict[str, AssetConfig], floor: Floo
                     "type": by_id[aid].physical_type.value if by_id[aid].physical_type else None,
                     "endpoint": cfg.endpoint,
                     "security_policy": "None" if cfg.insecure else "Basic256Sha256",
-                    "config": str((workdir / "assets" / f"{aid}.toml").resolve())}
+                    "config": str((workdir / "assets" / f"{aid}.toml").resolve()),
+                    "standby": aid in standby}
                    for aid, cfg in sorted(configs.items())],
         "credentials_file": None if first.insecure else str(first.credentials_file),
         "cert_dir": str((workdir / "certs").resolve()),

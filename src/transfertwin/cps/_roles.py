@@ -185,6 +185,7 @@ class GraphRole(Role):
         self.kg = None
         self.leases: dict[str, float] = {}  # asset id -> monotonic deadline
         self.info: dict[str, dict[str, Any]] = {}  # last heartbeat per asset
+        self.gone: dict[str, dict[str, Any]] = {}  # offline asset -> why and since when
         self._lock = asyncio.Lock()
 
     def handlers(self) -> dict[str, Any]:
@@ -223,6 +224,7 @@ class GraphRole(Role):
         aid = d["id"]
         fresh = aid not in self.leases or self.info.get(aid, {}).get("pid") != d.get("pid")
         self.leases[aid] = time.monotonic() + self.node.cfg.lease_s
+        self.gone.pop(aid, None)
         d["seen"] = time.time()
         self.info[aid] = d
         if fresh:
@@ -261,6 +263,8 @@ class GraphRole(Role):
         if aid in self.leases:
             del self.leases[aid]
             self.kg.leave(aid)
+            self.gone[aid] = {"reason": "left", "at": time.time(),
+                              "detail": "announced its leave"}  # fmt: skip
             log.info("KG: %s left", aid)
         return True
 
@@ -272,6 +276,9 @@ class GraphRole(Role):
                 del self.leases[aid]
                 with contextlib.suppress(InputError):
                     self.kg.leave(aid)
+                self.gone[aid] = {"reason": "lapsed", "at": time.time(),
+                                  "detail": f"no heartbeat for {self.node.cfg.lease_s:g} s "
+                                            "(lease expired)"}  # fmt: skip
                 log.info("KG: %s offline (lease of %.1f s expired)", aid, self.node.cfg.lease_s)
             await self._counts()
 
@@ -284,8 +291,21 @@ class GraphRole(Role):
                          "state": d.get("state") if online else "offline",
                          "docked": d.get("docked"), "location": d.get("location"),
                          "pose": d.get("pose"), "possesses": d.get("possesses"),
-                         "last_seen_s": round(time.time() - d["seen"], 2)})  # fmt: skip
+                         "hal": d.get("hal"),
+                         "last_seen_s": round(time.time() - d["seen"], 2),
+                         "offline": None if online else _offline(self.gone.get(aid))})  # fmt: skip
         return json.dumps({"assets": rows})
+
+
+def _offline(gone: dict[str, Any] | None) -> dict[str, Any]:
+    """Why and since when an asset is offline: ``left`` (it announced its leave) or
+    ``lapsed`` (its lease expired: a crash, a cut cable, a host gone)."""
+    if gone is None:  # pragma: no cover - every offline asset went through leave/expire
+        return {"reason": "unknown", "detail": "", "since": None, "since_s": None}
+    at = gone["at"]
+    return {"reason": gone["reason"], "detail": gone["detail"],
+            "since": time.strftime("%Y-%m-%dT%H:%M:%S%z", time.localtime(at)),
+            "since_s": round(time.time() - at, 2)}  # fmt: skip
 
 
 def _state_word(state: object) -> str | None:

@@ -114,14 +114,21 @@ def asset_condition(
     session_error: str | None,
     kg_row: dict[str, Any] | None,
     floor_error: str | None = None,
+    standby: bool = False,
 ) -> tuple[bool, str | None]:
     """Whether an asset is online, and why not (pure).
+
+    On a process floor the graph's lease decides: an asset whose heartbeats arrive is
+    online even while the console's own session to it is still being (re)opened; one the
+    graph lists offline says whether it left (announced) or its lease lapsed, and since
+    when; one prepared on standby and never started says so.
 
     Args:
         session_up: The console's viewer session reads the asset's values now.
         session_error: Why the last session attempt failed (e.g. 'ConnectionRefusedError').
         kg_row: The asset's row of the graph's ``Status`` (process floors), or None.
         floor_error: Why the floor itself is not there (no cps.json), or None.
+        standby: cps.json marks the asset as prepared on standby (not started).
 
     Returns:
         (online, reason): the reason is None when online, else one line in words.
@@ -130,13 +137,29 @@ def asset_condition(
         return False, floor_error
     if session_up:
         return True, None
-    if kg_row is not None and not kg_row.get("online"):
-        seen = kg_row.get("last_seen_s")
-        ago = f"last heartbeat {seen:.0f} s ago" if isinstance(seen, int | float) else "no lease"
-        return False, f"left the floor ({ago})"  # a leave announced or a lease expired
+    if kg_row is not None and kg_row.get("online"):
+        return True, None  # up (its lease is held); the console's session follows
+    if kg_row is not None:
+        return False, _offline_reason(kg_row)
+    if standby:
+        return False, "on standby (prepared, not started)"
     if session_error:
         return False, f"not answering ({session_error})"
     return False, "connecting"
+
+
+def _offline_reason(kg_row: dict[str, Any]) -> str:
+    """An offline asset's reason from the graph's row: left or lapsed, and since when."""
+    off = kg_row.get("offline") or {}
+    ago = off.get("since_s")
+    when = f" {ago:.0f} s ago" if isinstance(ago, int | float) else ""
+    if off.get("reason") == "left":
+        return f"left the floor{when} (announced)"
+    if off.get("reason") == "lapsed":
+        return f"lease lapsed{when} ({off.get('detail') or 'no heartbeat'})"
+    seen = kg_row.get("last_seen_s")
+    ago = f"last heartbeat {seen:.0f} s ago" if isinstance(seen, int | float) else "no lease"
+    return f"left the floor ({ago})"
 
 
 def _stamped(line: str) -> tuple[datetime | None, str]:

@@ -322,8 +322,9 @@ class CpsGateway(OrderDesk):
     def condition(self, aid: str) -> tuple[bool, str | None]:
         """(online, reason offline) of an asset (see `asset_condition`)."""
         kg_row = (self.kg_status or {}).get(aid)
+        standby = bool(self._assets.get(aid, {}).get("standby"))
         return asset_condition(self.online.get(aid, False), self.errors.get(aid), kg_row,
-                               self.floor_error)  # fmt: skip
+                               self.floor_error, standby)  # fmt: skip
 
     def _kg_status_word(self, aid: str, row: dict[str, Any]) -> str:
         if self.floor_error or self.kg_error:

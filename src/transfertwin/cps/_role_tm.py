@@ -112,6 +112,7 @@ class ModuleRole(Role):
             self.robot.docked_at = self.state.data.get("station")
         self.env = environment_for(node.cfg, load_scene())  # virtual or the plant's physics
         self.op: dict[str, Any] | None = None
+        self._face = "front"  # the face the carried object lies on (its load plan's)
         self._outbox_kick = asyncio.Event()
         # what `VirtualTransport` reads of the runtime it serves
         self.floor_robots = {self.aid: self.robot}
@@ -126,7 +127,7 @@ class ModuleRole(Role):
     def handlers(self) -> dict[str, Any]:
         return {"SetBeltSpeed": self._set_belt, "SetPossessedObjects": self._set_possessed,
                 "AssignOperation": self._assign, "Dock": self._dock_op,
-                "Undock": self._undock_op}  # fmt: skip
+                "Undock": self._undock_op, "Bid": self._bid}  # fmt: skip
 
     async def start(self) -> None:
         data = self.state.data
@@ -178,7 +179,29 @@ class ModuleRole(Role):
         return True
 
     # -- operations -----------------------------------------------------------------------
-    async def _assign(self, op_id: str, source: str, target: str, obj: str) -> bool:
+    async def _bid(self, order: str) -> str:
+        """This module's bid for an order (`_dispatch`): expected seconds per candidate
+        target from where it stands, by its own planner."""
+        from transfertwin.cps._dispatch import estimate
+
+        doc = json.loads(order)
+        units = self.node.floor.units
+        targets = [t for t in doc["targets"] if t in units]
+        source = doc["source"]
+        if not targets or source not in (*units, self.aid):
+            raise ValueError(f"no such units in {order}")
+        if self.op is not None:
+            raise ValueError(f"{self.aid} is busy with {self.op['operation']}")
+        stations = self._stations()
+        eta = await asyncio.to_thread(estimate, self.robot, stations,
+                                      None if source == self.aid else source, targets)
+        return json.dumps({"module": self.aid, "eta_s": eta})
+
+    def _stations(self) -> dict[str, str]:
+        return {s.unit: s.name for s in self.node.floor.stations}
+
+    async def _assign(self, op_id: str, source: str, target: str, obj: str,
+                      plan: str = "{}") -> bool:  # fmt: skip
         from transfertwin.cps.opcua import OperationRefused
 
         if self.op is not None:
@@ -193,8 +216,14 @@ class ModuleRole(Role):
         if source == self.aid and obj not in self.state.data["possesses"]:
             raise OperationRefused(f"{obj} is not on {self.aid}", status="BadInvalidState",
                                    argument="object")  # fmt: skip
+        try:
+            load = json.loads(plan or "{}").get("state")
+        except (ValueError, AttributeError):
+            raise OperationRefused(f"plan is not a JSON object: {plan!r}",
+                                   argument="plan") from None  # fmt: skip
         self.op = {"operation": op_id, "source": source, "target": target, "object": obj,
-                   "state": "assigned"}  # fmt: skip
+                   "state": "assigned", "load": load,
+                   "start_pose": [float(v) for v in self.robot.pose]}  # fmt: skip
         self.state.data["current"] = dict(self.op)
         self.state.save()
         self.node.spawn(self._run(dict(self.op)))
@@ -217,6 +246,8 @@ class ModuleRole(Role):
                                  "unit": None if leg is None else leg.unit})  # fmt: skip
 
         skills = _ModuleTransport(self, self.aid, op["source"], op["target"], obj)
+        skills.load_state = op.get("load")
+        self._face = (op.get("load") or {}).get("face", "front")
         self._op_id = op_id
         self._lost_in_gap = False
         self._attempt = 0
@@ -242,6 +273,13 @@ class ModuleRole(Role):
             result["location_unknown"] = True
             self.state.data["possesses"] = [o for o in self.state.data["possesses"] if o != obj]
         result["docking"] = self.node.cfg.docking
+        result["loaded_state"] = op.get("load")
+        with contextlib.suppress(Exception):  # modelled floor time, for the KPIs
+            from transfertwin.cps._dispatch import floor_seconds
+
+            result["floor_s"] = await asyncio.to_thread(
+                floor_seconds, result, self.robot, op.get("start_pose") or self.robot.pose,
+                self._stations())  # fmt: skip
         self.op = None
         self.state.data["current"] = None
         self._report(op_id, {"event": "result", "result": result})
@@ -335,7 +373,7 @@ class ModuleRole(Role):
         system = self.env.system
         ctl = scene_controller(self.env.scene, system.tm, hal, system, self.env.clock)
         try:
-            return await asyncio.to_thread(ctl.transfer, direction, "front", None)
+            return await asyncio.to_thread(ctl.transfer, direction, self._face, None)
         except Exception:
             await self.node.peers.drop(unit)
             raise

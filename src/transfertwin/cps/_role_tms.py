@@ -29,7 +29,7 @@ from transfertwin.cps._roles import Role
 if TYPE_CHECKING:
     from transfertwin.cps._node import AssetNode
 
-__all__ = ["TmsRole"]
+__all__ = ["TmsRole", "order_view"]
 
 log = logging.getLogger("transfertwin.cps")
 
@@ -48,16 +48,18 @@ class TmsRole(Role):
         for op in self.ops.values():
             if op["state"] != "finished":
                 self.ledger.hold(op["operation"], op["object"])
+        self.policy = node.floor.operation.policy
         self._claimed: dict[str, str] = {}  # module -> operation
         self._done: dict[str, asyncio.Event] = {}
         self._pending: set[str] = set()  # holders/objects whose published location is stale
 
     def initial(self) -> dict[str, Any]:
         return {"next_op": 1, "locations": self.node.floor.placement(), "unknown": {},
-                "operations": {}}  # fmt: skip
+                "operations": {}, "predictions": {}}  # fmt: skip
 
     def handlers(self) -> dict[str, Any]:
-        return {"SubmitTransportOperation": self._submit, "OperationStatus": self._status,
+        return {"SubmitTransportOperation": self._submit, "OrderTo": self._order_to,
+                "Orders": self._orders, "Kpis": self._kpis, "OperationStatus": self._status,
                 "ReportProgress": self._progress, "Ledger": self._ledger,
                 "Locate": self._locate}  # fmt: skip
 
@@ -69,6 +71,7 @@ class TmsRole(Role):
                 if op.get("module"):
                     self._claimed[op["module"]] = op_id
                 self.node.spawn(self._execute(op_id))
+        await self.set("Policy", self.policy)
         await self._counters()
         self.node.spawn(self._publisher())
 
@@ -82,37 +85,111 @@ class TmsRole(Role):
 
     # -- orders ---------------------------------------------------------------------------
     async def _submit(self, source: str, target: str, obj: str) -> str:
+        """An order naming its source and target unit."""
+        return await self._accept(obj, target, source)
+
+    async def _order_to(self, obj: str, destination: str) -> str:
+        """An order by destination (a unit or a group of the floor file): the source is
+        where the object is once its earlier orders have ended."""
+        return await self._accept(obj, destination, None)
+
+    def _targets(self, destination: str) -> tuple[str, ...]:
         from transfertwin.cps.opcua import OperationRefused
 
+        if destination in self.node.floor.units:
+            return (destination,)
+        group = self.node.floor.operation.group(destination)
+        if group is None:
+            groups = [g for g, _ in self.node.floor.operation.groups]
+            raise OperationRefused(
+                f"no transfer unit or destination group {destination!r}; units: "
+                f"{', '.join(self.node.floor.units)}"
+                + (f"; groups: {', '.join(groups)}" if groups else ""), argument="target")
+        return group
+
+    def _tail(self, obj: str) -> str | None:
+        """The last unfinished operation of `obj` (the one a new order chains after)."""
+        mine = [o for o in self.ops.values() if o["object"] == obj and o["state"] != "finished"]
+        return max(mine, key=lambda o: int(o["operation"][2:]))["operation"] if mine else None
+
+    async def _accept(self, obj: str, destination: str, source: str | None) -> str:
+        """Check an order, refuse what cannot start (with the reason), else queue it: at
+        once, or after the object's unfinished order (orders for one object chain)."""
+        from transfertwin.cps.opcua import OperationRefused
+
+        if obj not in self.ledger.locations():
+            raise OperationRefused(f"{obj!r} is not an object of this floor; objects: "
+                                   f"{', '.join(self.ledger.locations())}",
+                                   argument="object")  # fmt: skip
         unknown = self.state.data["unknown"].get(obj)
         if unknown is not None:
             raise OperationRefused(
                 f"where {obj} is is unknown since {unknown['operation']} "
                 f"(last seen at {unknown['last_seen']}); say where it is with "
                 f"'transfertwin cps locate'", status="BadInvalidState", argument="object")
+        targets = self._targets(destination)
+        after = self._tail(obj)
+        if after is not None and source is not None:
+            raise OperationRefused(f"{obj} is being moved by {after}; order it by destination "
+                                   "to chain after it", status="BadInvalidState",
+                                   argument="object")  # fmt: skip
+        where = source or self.ledger.location(obj)
         modules = await self._modules()
         online = [m for m in modules or () if m["online"]]
         if modules is not None and not online:
             raise OperationRefused("no transport module is online",
                                    status="BadResourceUnavailable")  # fmt: skip
-        if source in self.node.floor.units and online and all(m.get("possesses") for m in online):
+        if after is None and where in self.node.floor.units and online and all(
+                m.get("possesses") for m in online):  # fmt: skip
             held = "; ".join(f"{m['id']} carries {', '.join(m['possesses'])}" for m in online)
             raise OperationRefused(f"every transport module carries an object ({held}): order "
                                    "those onward first", status="BadResourceUnavailable",
                                    argument="object")  # fmt: skip
+        free = [t for t in targets if t == where or not self._occupied(t)]
+        if not free:
+            held = "; ".join(f"{t} holds {', '.join(self.ledger.objects_at(t))}" for t in targets)
+            raise OperationRefused(f"the destination is occupied ({held}): order that away "
+                                   "first", status="BadResourceUnavailable",
+                                   argument="target")  # fmt: skip
         data = self.state.data
         op_id = f"op{data['next_op']}"
-        self.ledger.reserve(op_id, source, target, obj)
+        if after is None:
+            first = next((t for t in targets if t != where), targets[0])
+            self.ledger.reserve(op_id, where, first, obj)
         data["next_op"] += 1
-        self.ops[op_id] = {"operation": op_id, "object": obj, "source": source,
-                           "target": target, "state": "queued", "phase": "queued",
-                           "module": None, "submitted": time.time(),
-                           "history": [[time.time(), "queued"]]}  # fmt: skip
+        single = len(targets) == 1
+        self.ops[op_id] = {"operation": op_id, "object": obj,
+                           "source": where if after is None else None,
+                           "target": targets[0] if single else None,
+                           "destination": destination, "targets": list(targets),
+                           "after": after, "state": "queued", "phase": "queued",
+                           "module": None, "submitted": time.time(), "steps": [],
+                           "history": [[time.time(), "queued" if after is None else
+                                        f"queued after {after}"]]}  # fmt: skip
         self._save()
-        log.info("TMS: %s %s -> %s (%s) accepted", op_id, source, target, obj)
+        log.info("TMS: %s %s -> %s (%s) accepted%s", op_id, where, destination, obj,
+                 f", after {after}" if after else "")  # fmt: skip
         await self._counters()
         self.node.spawn(self._execute(op_id))
         return op_id
+
+    def _occupied(self, unit: str) -> bool:
+        """`unit`'s belts hold an object that no unfinished order takes away."""
+        leaving = {o["object"] for o in self.ops.values() if o["state"] != "finished"}
+        return any(o not in leaving for o in self.ledger.objects_at(unit))
+
+    async def _orders(self) -> str:
+        return json.dumps([order_view(op) for op in self.ops.values()])
+
+    async def _kpis(self) -> str:
+        return json.dumps(self._kpi_doc())
+
+    def _kpi_doc(self) -> dict[str, Any]:
+        from transfertwin.cps._kpis import kpis
+
+        doc = kpis(self.ops.values(), [m.asset_id for m in self.node.floor.modules],
+                   self.node.floor.units, time.time())  # fmt: skip
+        return {"policy": self.policy, **doc}
 
     async def _status(self, op_id: str) -> str:
         from transfertwin.cps.opcua import OperationRefused
@@ -157,34 +234,149 @@ class TmsRole(Role):
                 self.node.learn(a["id"], a["address"])
         return [a for a in status["assets"] if a.get("class") == "transport_module"]
 
-    async def _allocate(self, op_id: str) -> str:
-        """Wait for an online, idle transport module that holds no operation; claim it
-        (the module the object lies on, for an order from a module onward). A module that
-        carries an object takes no other order: objects travel one at a time."""
-        source = self.ops[op_id]["source"]
-        carrier = source if source not in self.node.floor.units else None
+    async def _eligible(self, op: dict[str, Any]) -> list[str]:
+        """Online, idle, unclaimed modules that may take `op`: the carrier alone for an
+        object on a module; else those that carry nothing (objects travel one at a time)."""
+        carrier = op["source"] if op["source"] not in self.node.floor.units else None
+        out = []
+        for m in await self._modules() or []:
+            if carrier is not None and m["id"] != carrier:
+                continue
+            if carrier is None and m.get("possesses"):
+                continue
+            if m["online"] and m["state"] == "idle" and m["id"] not in self._claimed:
+                out.append(m["id"])
+        return out
+
+    async def _allocate(self, op_id: str) -> tuple[str, str, dict[str, Any]]:
+        """Run the auction for `op_id` (`_dispatch`) until a module wins; claim it.
+        Returns (module, target unit, the bids' record)."""
+        from transfertwin.cps._dispatch import Bid, choose
+
+        op = self.ops[op_id]
+        targets = [t for t in op["targets"] if t != op["source"]]
+        if self.policy != "predictive":
+            targets = targets[:1]
+        p = (op.get("plan") or {}).get("prediction") or {}
+        order = json.dumps({"operation": op_id, "object": op["object"], "source": op["source"],
+                            "targets": targets})  # fmt: skip
         while True:
-            for m in await self._modules() or []:
-                if carrier is not None and m["id"] != carrier:
-                    continue
-                if carrier is None and m.get("possesses"):
-                    continue
-                if m["online"] and m["state"] == "idle" and m["id"] not in self._claimed:
-                    self._claimed[m["id"]] = op_id
-                    return m["id"]
+            eligible = await self._eligible(op)
+
+            async def ask(m: str) -> Bid | None:
+                try:
+                    doc = json.loads(await asyncio.wait_for(
+                        self.node.peers.call(m, "Bid", order), 10))  # fmt: skip
+                except Exception as exc:
+                    log.debug("TMS: no bid from %s for %s: %s", m, op_id, exc)
+                    return None
+                return Bid(doc["module"], doc["eta_s"])
+
+            bids = [b for b in await asyncio.gather(*(ask(m) for m in eligible)) if b]
+            bids = [b for b in bids if b.module not in self._claimed]
+            if bids:
+                module, target, cost = choose(bids, self.policy, p.get("share"))
+                self._claimed[module] = op_id
+                record = {"bids": {b.module: dict(b.eta_s) for b in bids},
+                          "winner": module, "target": target, "cost_s": round(cost, 3)}
+                return module, target, record
             await asyncio.sleep(0.5)
+
+    async def _after(self, op_id: str) -> bool:
+        """Wait for the order `op_id` chains after; then take the object from where it is.
+        False when the order ended here (the object lost, or already at the destination)."""
+        op = self.ops[op_id]
+        if op.get("after") is None or op["source"] is not None:
+            return True
+        prev = op["after"]
+        await self._done.setdefault(prev, asyncio.Event()).wait() if self.ops[prev][
+            "state"] != "finished" else None  # fmt: skip
+        obj = op["object"]
+        if obj in self.state.data["unknown"]:
+            self._finish(op_id, {"status": "failed before start", "failed_step": "queued",
+                                 "reason": f"{obj} was lost by {prev}: its place is unknown"})
+            return False
+        where = self.ledger.location(obj)
+        if where in op["targets"]:
+            self._finish(op_id, {"status": "delivered", "reason": f"{obj} is at {where} "
+                                 f"already (after {prev})"})  # fmt: skip
+            return False
+        op["source"] = where
+        self.ledger.hold(op_id, obj)
+        op["history"].append([time.time(), f"{prev} ended: {obj} is at {where}"])
+        self._save()
+        return True
+
+    async def _plan(self, op: dict[str, Any]) -> dict[str, Any]:
+        """The state to load the object in: the twin's best for it (predictive; not for
+        an object already on a module), else the default."""
+        if self.policy != "predictive":
+            return {"policy": self.policy, "state": None}
+        if op["source"] not in self.node.floor.units:
+            return {"policy": self.policy, "state": None,
+                    "note": "loaded already: the state it lies in is kept"}  # fmt: skip
+        preds = await self._predictions(op["object"], op["operation"])
+        if not preds:
+            return {"policy": self.policy, "state": None,
+                    "note": "no prediction for this object: default state"}  # fmt: skip
+        best = preds[0]
+        return {"policy": self.policy, "state": {k: best[k] for k in
+                                                 ("face", "conveyor", "theta_deg")},
+                "prediction": best, "next_best": preds[1] if len(preds) > 1 else None}
+
+    async def _predictions(self, obj: str, op_id: str) -> list[dict[str, Any]]:
+        """The twin's ranked states for `obj`: cached; else the study store; else the
+        Experiment Manager's on-the-fly experiments (not cached when it cannot answer)."""
+        from transfertwin.cps._predict import study_predictions
+
+        cache = self.state.data.setdefault("predictions", {})
+        if obj in cache:
+            return cache[obj]
+        spec = self.node.floor.operation
+        preds = []
+        if spec.study is not None:
+            try:
+                found = await asyncio.to_thread(study_predictions, spec.study, obj)
+                preds = [p.as_dict() for p in found]
+            except Exception as exc:
+                log.warning("TMS: study store %s not readable: %s", spec.study, exc)
+        if not preds:
+            self.ops[op_id]["history"].append(
+                [time.time(), f"asking the Experiment Manager to predict {obj}"])
+            try:
+                preds = json.loads(await asyncio.wait_for(self.node.peers.call(
+                    "EM", "Predict", obj, spec.runs, self.node.cfg.seed), 900))  # fmt: skip
+            except Exception as exc:
+                log.info("TMS: no prediction for %s from the EM: %s", obj, exc)
+                self.ops[op_id]["history"].append(
+                    [time.time(), f"no prediction ({type(exc).__name__}): default state"])
+                return []
+        cache[obj] = preds
+        self._save()
+        return preds
 
     async def _execute(self, op_id: str) -> None:
         from transfertwin.cps.opcua import OperationRefused
 
         op = self.ops[op_id]
         done = self._done.setdefault(op_id, asyncio.Event())
+        if op["module"] is None:
+            if not await self._after(op_id):
+                return
+            if "plan" not in op:
+                op["plan"] = await self._plan(op)
+                if op["plan"].get("state"):
+                    st, pr = op["plan"]["state"], op["plan"]["prediction"]
+                    op["history"].append([time.time(), (
+                        f"load {st['face']}/{st['conveyor']}/{st['theta_deg']} deg: twin "
+                        f"{pr['k']}/{pr['n']} ({pr['source']})")])  # fmt: skip
+                self._save()
         while op["module"] is None:
-            module = await self._allocate(op_id)
+            module, target, record = await self._allocate(op_id)
             try:
                 await asyncio.wait_for(self.node.peers.call(
-                    module, "AssignOperation", op_id, op["source"], op["target"], op["object"]),
-                    15)  # fmt: skip
+                    module, "AssignOperation", op_id, op["source"], target, op["object"],
+                    json.dumps(op["plan"])), 15)  # fmt: skip
             except OperationRefused as exc:
                 if module == op["source"] and exc.status == "BadInvalidState" and (
                         exc.argument == "object"):  # fmt: skip
@@ -203,8 +395,10 @@ class TmsRole(Role):
                 self._claimed.pop(module, None)
                 await asyncio.sleep(0.5)
                 continue
-            op.update(module=module, state="running", phase="assigned")
-            op["history"].append([time.time(), f"assigned to {module}"])
+            op.update(module=module, target=target, state="running", phase="assigned",
+                      assigned=time.time(), auction=record)  # fmt: skip
+            op["history"].append([time.time(), f"assigned to {module} for {target} "
+                                               f"(expected {record['cost_s']:.0f} s)"])
             self._save()
             log.info("TMS: %s allocated to %s", op_id, module)
         await self._watch(op_id, done)
@@ -281,6 +475,8 @@ class TmsRole(Role):
         elif kind == "step" and op["state"] != "finished":
             op["phase"] = event["state"] if event["state"] != "idle" else op["phase"]
             op["history"].append([event.get("t", time.time()), event["state"]])
+            op.setdefault("steps", []).append(
+                [event.get("t", time.time()), event["state"], event.get("unit")])
         elif kind == "result":
             if op["state"] == "finished":
                 late = event["result"]
@@ -303,6 +499,13 @@ class TmsRole(Role):
         running = sum(op["state"] != "finished" for op in self.ops.values())
         await self.set("QueuedOperations", running)
         await self.set("CompletedOperations", len(self.ops) - running)
+        k = self._kpi_doc()
+        low, high = k["success_share_ci95"]
+        for prop, value in (("OperationsPerHour", k["operations_per_hour"]),
+                            ("SuccessShare", k["success_share"]), ("SuccessShareLow", low),
+                            ("SuccessShareHigh", high), ("MeanLeadTime", k["mean_lead_time_s"])):
+            await self.set(prop, float(value) if value is not None else float("nan"))
+        await self.set("KpisJson", json.dumps(k))
 
     async def _publisher(self) -> None:
         """Bring the units' possessions and the objects' PossessedBy in line with the
@@ -324,3 +527,23 @@ class TmsRole(Role):
                 except Exception as exc:
                     log.debug("TMS: %s not updated yet: %s", aid, exc)
             await asyncio.sleep(0.5)
+
+
+#: Order states of `cps orders` by the operation's phase (the module's steps, Fig. 5.9a).
+_ORDER_STATE = {"queued": "queued", "assigned": "assigned", "navigating": "driving",
+                "docking": "docking", "scanning": "docking", "transferring": "transferring",
+                "done": "done", "failed": "failed"}  # fmt: skip
+
+
+def order_view(op: dict[str, Any]) -> dict[str, Any]:
+    """One row of the order queue: id, object, from, to, state, module, reason."""
+    result = op.get("result") or {}
+    reason = result.get("reason") or None
+    if op["phase"] == "queued" and op.get("after") and op["source"] is None:
+        reason = f"waiting for {op['after']}"
+    return {"operation": op["operation"], "object": op["object"], "source": op["source"],
+            "destination": op.get("destination", op["target"]), "target": op["target"],
+            "state": _ORDER_STATE.get(op["phase"], op["phase"]), "module": op.get("module"),
+            "submitted": op["submitted"], "finished": op.get("finished"),
+            "reason": reason, "location": op.get("location"),
+            "loaded_state": (op.get("plan") or {}).get("state")}  # fmt: skip

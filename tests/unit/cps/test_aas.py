@@ -53,7 +53,7 @@ EXPECTED_ELEMENTS = {
         ],
         "ControlInterface": [
             "SetBeltSpeed", "Dock", "Undock", "QueueTransportTask", "StartTransfer",
-            "AssignOperation",
+            "AssignOperation", "Bid",
         ],
     },
     "o5": {
@@ -66,9 +66,12 @@ EXPECTED_ELEMENTS = {
     "TMS": {
         "Identification": ["AssetId", "AssetClass", "AssetKind", "Provenance"],
         "Capabilities": ["Allocate"],
-        "OperationalData": ["State", "QueuedOperations", "CompletedOperations"],
+        "OperationalData": ["State", "QueuedOperations", "CompletedOperations", "Policy",
+                            "OperationsPerHour", "SuccessShare", "SuccessShareLow",
+                            "SuccessShareHigh", "MeanLeadTime", "KpisJson"],
         "ControlInterface": [
-            "SubmitTransportOperation", "OperationStatus", "ReportProgress", "Ledger", "Locate",
+            "SubmitTransportOperation", "OrderTo", "Orders", "Kpis", "OperationStatus",
+            "ReportProgress", "Ledger", "Locate",
         ],
     },
     "EM": {
@@ -116,7 +119,13 @@ EXPECTED_OPERATIONS = [
     ("KG", "Query", [("sparql", _S)], [("result_json", _S)]),
     # one process per asset (docs/architecture.md, "Deployment")
     ("TM_1", "AssignOperation",
-     [("operation_id", _S), ("source", _S), ("target", _S), ("object", _S)], [("ok", _B)]),
+     [("operation_id", _S), ("source", _S), ("target", _S), ("object", _S),
+      ("plan_json", _S)], [("ok", _B)]),
+    ("TM_1", "Bid", [("order_json", _S)], [("bid_json", _S)]),
+    # operations that use the twin (docs/architecture.md, "Operation")
+    ("TMS", "OrderTo", [("object", _S), ("destination", _S)], [("operation_id", _S)]),
+    ("TMS", "Orders", [], [("orders_json", _S)]),
+    ("TMS", "Kpis", [], [("kpis_json", _S)]),
     ("TMS", "ReportProgress", [("operation_id", _S), ("event_json", _S)], [("ok", _B)]),
     ("TMS", "Ledger", [], [("ledger_json", _S)]),
     ("TMS", "Locate", [("object", _S), ("holder", _S)], [("ok", _B)]),

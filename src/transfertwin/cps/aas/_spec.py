@@ -143,6 +143,20 @@ OPERATIONAL_DATA: Mapping[str, tuple[PropertySpec, ...]] = MappingProxyType(
             _state(),
             _count("QueuedOperations", "queued transport operations"),
             _count("CompletedOperations", "completed transport operations"),
+            PropertySpec("Policy", _S, "nearest-idle",
+                         description="Scheduling policy: nearest-idle|predictive."),
+            PropertySpec("OperationsPerHour", _D, 0.0, "1/h",
+                         description="Delivered operations per hour since the first order."),
+            PropertySpec("SuccessShare", _D, 0.0,
+                         description="Delivered among finished operations."),
+            PropertySpec("SuccessShareLow", _D, 0.0,
+                         description="Clopper-Pearson 95 % lower bound of SuccessShare."),
+            PropertySpec("SuccessShareHigh", _D, 1.0,
+                         description="Clopper-Pearson 95 % upper bound of SuccessShare."),
+            PropertySpec("MeanLeadTime", _D, 0.0, "s",
+                         description="Mean time from order to end of finished operations."),
+            PropertySpec("KpisJson", _S, "{}",
+                         description="Every KPI as JSON (utilisation, failures by reason)."),
         ),
         "experiment_manager": (_state(), _count("ExperimentsDone", "finished experiments")),
         "props": (_state(), _count("FusedPoses", "fused poses")),
@@ -192,10 +206,16 @@ CONTROL_INTERFACE: Mapping[str, tuple[OperationSpec, ...]] = MappingProxyType(
             ),
             OperationSpec(
                 "AssignOperation",
-                (Arg("operation_id", _S), *_TRANSFER_ARGS),
+                (Arg("operation_id", _S), *_TRANSFER_ARGS, Arg("plan_json", _S)),
                 _OK,
-                "Take a transport operation from the TMS; progress and result are reported "
-                "back to it (ReportProgress).",
+                "Take a transport operation from the TMS, with the state to load the object "
+                "in; progress and result are reported back to it (ReportProgress).",
+            ),
+            OperationSpec(
+                "Bid",
+                (Arg("order_json", _S),),
+                (Arg("bid_json", _S),),
+                "Expected seconds to carry an order's object to each candidate unit.",
             ),
         ),
         "object": (),
@@ -206,6 +226,27 @@ CONTROL_INTERFACE: Mapping[str, tuple[OperationSpec, ...]] = MappingProxyType(
                 (Arg("operation_id", _S),),
                 "Place a transport operation for allocation; refused with the reason if "
                 "impossible.",
+            ),
+            OperationSpec(
+                "OrderTo",
+                (Arg("object", _S), Arg("destination", _S)),
+                (Arg("operation_id", _S),),
+                "Order an object to a unit or a destination group; its source is where the "
+                "ledger says it is (after the object's earlier orders: they chain).",
+            ),
+            OperationSpec(
+                "Orders",
+                (),
+                (Arg("orders_json", _S),),
+                "The order queue: every order with its state (queued, assigned, driving, "
+                "docking, transferring, done, failed) and reason.",
+            ),
+            OperationSpec(
+                "Kpis",
+                (),
+                (Arg("kpis_json", _S),),
+                "Operations per hour, success share with its interval, lead time, "
+                "utilisation, failures by reason.",
             ),
             OperationSpec(
                 "OperationStatus",

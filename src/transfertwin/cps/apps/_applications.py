@@ -330,6 +330,18 @@ class AssetApplications:
 SCAN_SIZE = (160, 120)
 
 
+def _load_args(state: dict[str, object] | None) -> tuple[str, float, float]:
+    """(face, θ deg, lateral offset m) that put an object on a unit's belts so that it
+    crosses onto the module in `state`: the conveyor's lateral position of the study's
+    states (Eq. 6.3), the unit's belts being in line with the module's."""
+    from transfertwin.ots import POSITIONS
+
+    if not state:
+        return "front", 0.0, 0.0
+    return (str(state["face"]), float(state["theta_deg"]),
+            float(POSITIONS[str(state["conveyor"])][1]))  # fmt: skip
+
+
 class VirtualTransport:
     """The virtual transport module's skills (`TransportSkills`) in the demo CPS.
 
@@ -338,6 +350,10 @@ class VirtualTransport:
     depth camera's workspace scan; with 'sampled' it is put at the station with an error
     drawn from the fitted generator and forms the OTS from the simulation's true box.
     """
+
+    #: The pre-transfer state the object is loaded in at the source ({face, conveyor,
+    #: theta_deg}; None: front face, θ = 0, centred, as the demo always did).
+    load_state: dict[str, object] | None = None
 
     def __init__(self, cps: AssetApplications, tm: str, source: str, target: str, obj: str):
         self.cps, self.tm, self.obj = cps, tm, obj
@@ -380,7 +396,8 @@ class VirtualTransport:
             return StepResult(False, f"docking at {leg.unit}: {res.reason}", info)
         err, env = res.docking_error(), cps.env
         if leg.name == "pick-up":  # the object lies on the source unit's belts
-            await asyncio.to_thread(cps._locked, env.load_object_at_unit, self.obj, leg.unit, err)
+            await asyncio.to_thread(cps._locked, env.load_object_at_unit, self.obj, leg.unit, err,
+                                    *_load_args(self.load_state))  # fmt: skip
         else:
             await asyncio.to_thread(cps._locked, env.dock, leg.unit, err)
         await cps._dock(self.tm, leg.unit)

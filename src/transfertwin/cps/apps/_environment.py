@@ -95,13 +95,14 @@ class Environment:
 
     def load_object_at_unit(
         self, object_ref: str, unit: str, error: DockingError, face: str = "front",
-        theta_deg: float = 0.0,
+        theta_deg: float = 0.0, y_offset_m: float = 0.0,
     ) -> None:  # fmt: skip
-        """Dock the TM at `unit` with `error` and put the object on that unit's belts."""
+        """Dock the TM at `unit` with `error` and put the object on that unit's belts (on
+        `face`, yaw `theta_deg`, `y_offset_m` off the unit's centre line)."""
         self.use(object_ref)
         self._system.reset(error)
         tx, ty, _ = self._system.tu_pose
-        self._system.place(face, math.radians(theta_deg), tx + 0.25, ty)
+        self._system.place(face, math.radians(theta_deg), tx + 0.25, ty + y_offset_m)
         self.docked_unit = unit
         self._system.clock.wait(self.scene.placement.settle_time_s)
 

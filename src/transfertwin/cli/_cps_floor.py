@@ -338,6 +338,9 @@ def register(csub: argparse._SubParsersAction) -> None:
     p.add_argument("--object", required=True)
     p.add_argument("--at", required=True, help="transfer unit or transport module")
     p.set_defaults(func=cmd_locate)
+    from transfertwin.cli._cps_ops import register as register_ops
+
+    register_ops(csub)
 
 
 #: Exit code of `cps order` on a process floor when the operation failed (the object is
@@ -356,21 +359,19 @@ def floor_order(wd: Path, info: dict, creds, args: argparse.Namespace) -> int:
         objects = sorted(a for a, c in by_id.items() if c == "object")
         raise InputError(f"--object {args.object}: not an object of this floor; objects: "
                          f"{', '.join(objects)}")  # fmt: skip
-    if by_id.get(args.target) != "transfer_unit":
+    groups = [g for g, _ in info.get("groups", [])]
+    if by_id.get(args.target) != "transfer_unit" and args.target not in groups:
         units = sorted(a for a, c in by_id.items() if c == "transfer_unit")
-        raise InputError(f"--to {args.target}: no such transfer unit; units: {', '.join(units)}")
+        raise InputError(f"--to {args.target}: no such transfer unit; units: {', '.join(units)}"
+                         + (f"; destination groups: {', '.join(groups)}" if groups else ""))
 
     async def submit() -> tuple[str, str]:
         source = args.source
-        if source is None:
-            ledger = json.loads(await _call(info, creds, "TMS", "Ledger"))
-            if args.object in ledger["unknown"]:
-                u = ledger["unknown"][args.object]
-                raise InputError(f"where {args.object} is is unknown since {u['operation']} "
-                                 f"(last seen at {u['last_seen']}); say where it is with "
-                                 "'transfertwin cps locate'")  # fmt: skip
-            source = ledger["locations"][args.object]
         try:
+            if source is None:  # by destination: the TMS finds the source (orders chain)
+                op = await _call(info, creds, "TMS", "OrderTo", args.object, args.target)
+                status = json.loads(await _call(info, creds, "TMS", "OperationStatus", op))
+                return op, status["source"] or f"where {args.object} is after {status['after']}"
             op = await _call(info, creds, "TMS", "SubmitTransportOperation", source,
                              args.target, args.object)  # fmt: skip
         except OperationRefused as exc:

@@ -170,6 +170,8 @@ def write_floor_info(workdir: Path, configs: dict[str, AssetConfig], floor: Floo
         "cert_dir": str((workdir / "certs").resolve()),
         "trust_dir": str((workdir / "certs" / "trusted").resolve()),
         "insecure": first.insecure,
+        "policy": floor.operation.policy,
+        "groups": [[g, list(units)] for g, units in floor.operation.groups],
     }
     return write_atomic(workdir / "cps.json", json.dumps(info, indent=2) + "\n")
 

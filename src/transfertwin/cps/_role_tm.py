@@ -247,7 +247,11 @@ class ModuleRole(Role):
 
         skills = _ModuleTransport(self, self.aid, op["source"], op["target"], obj)
         skills.load_state = op.get("load")
-        self._face = (op.get("load") or {}).get("face", "front")
+        faces = self.state.data.setdefault("faces", {})  # of the objects on board
+        if op["source"] == self.aid:  # on board already: it lies as it was loaded
+            self._face = faces.get(obj, "front")
+        else:
+            self._face = faces[obj] = (op.get("load") or {}).get("face", "front")
         self._op_id = op_id
         self._lost_in_gap = False
         self._attempt = 0

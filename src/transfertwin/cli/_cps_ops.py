@@ -1,0 +1,82 @@
+"""`transfertwin cps orders|kpis`: a process floor's order queue and its KPIs, as the TMS
+keeps them (docs/architecture.md, "Operation")."""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import json
+import time
+from pathlib import Path
+
+from transfertwin._errors import InputError
+
+__all__ = ["cmd_kpis", "cmd_orders", "register"]
+
+
+def _ask(wd: Path, op: str) -> object:
+    from transfertwin.cli._cps_floor import _call, _info
+
+    info, creds = _info(wd)
+    if info.get("mode") != "processes":
+        raise InputError(f"{wd}: 'cps {op.lower()}' needs a floor of asset processes "
+                         "('cps up' without --single-process)")  # fmt: skip
+    try:
+        return json.loads(asyncio.run(_call(info, creds, "TMS", op, timeout_s=10)))
+    except (OSError, TimeoutError, ConnectionError) as exc:
+        raise InputError(f"{wd}: the TMS is not answering ({type(exc).__name__})") from None
+
+
+def cmd_orders(args: argparse.Namespace) -> int:
+    """List the order queue: every order with its state and, when it failed, the reason."""
+    from transfertwin.cli._cps import _table
+
+    orders = _ask(Path(args.workdir), "Orders")
+    if args.json:
+        print(json.dumps(orders, indent=2))
+        return 0
+    rows = [{**o, "submitted": time.strftime("%H:%M:%S", time.localtime(o["submitted"])),
+             "source": o["source"] or "", "module": o["module"] or "",
+             "to": o["destination"] + (f" ({o['target']})" if o["target"] not in
+                                       (None, o["destination"]) else ""),
+             "state": o["state"] + (f": {o['reason']}" if o.get("reason") else ""),
+             "loaded": "/".join(str(v) for v in (o.get("loaded_state") or {}).values())}
+            for o in orders]  # fmt: skip
+    print(_table(rows, ("operation", "object", "source", "to", "module", "loaded", "submitted",
+                        "state")) if rows else "no orders yet")  # fmt: skip
+    return 0
+
+
+def cmd_kpis(args: argparse.Namespace) -> int:
+    """Print the floor's KPIs (operations per hour, success share and its interval, lead
+    time, utilisation, failures by reason)."""
+    k = _ask(Path(args.workdir), "Kpis")
+    if args.json:
+        print(json.dumps(k, indent=2))
+        return 0
+    low, high = k["success_share_ci95"]
+    share = ("n/a" if k["success_share"] is None else
+             f"{k['success_share']:.3f} [{low:.3f}, {high:.3f}] (Clopper-Pearson 95 %)")
+    lead = k["mean_lead_time_s"]
+    print(f"policy {k['policy']}: {k['orders']} orders, {k['delivered']} delivered, "
+          f"{k['failed']} failed, {k['in_progress']} in progress")
+    print(f"operations per hour {k['operations_per_hour']:.1f} (wall clock); per floor hour "
+          f"{k['operations_per_floor_hour'] or 0:.1f} (modelled)")
+    print(f"success share {share}; mean lead time {'n/a' if lead is None else f'{lead:.1f} s'}")
+    for kind in ("modules", "units"):
+        util = ", ".join(f"{a} {u:.0%}" for a, u in k["utilisation"][kind].items())
+        print(f"utilisation of the {kind}: {util}")
+    reasons = ", ".join(f"{r}: {n}" for r, n in k["failed_by_reason"].items()) or "none"
+    print(f"failed by reason: {reasons}")
+    return 0
+
+
+def register(csub: argparse._SubParsersAction) -> None:
+    """Add `cps orders` and `cps kpis`."""
+    for name, func, text in (("orders", cmd_orders, "the order queue with each order's state"),
+                             ("kpis", cmd_kpis, "operations per hour, success share, lead "
+                                                "time, utilisation, failures by reason")):
+        p = csub.add_parser(name, help=text)
+        p.add_argument("--workdir", required=True)
+        p.add_argument("--json", action="store_true", help="one JSON document")
+        p.set_defaults(func=func)

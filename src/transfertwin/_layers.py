@@ -41,6 +41,7 @@ LAYERS: tuple[str, ...] = (
     "cps.apps",
     "cps",
     "report",
+    "replay",
     "web",
     "cli",
 )

@@ -21,6 +21,7 @@ from transfertwin.cli import (
     _docking,
     _perceive,
     _rehearse,
+    _replay,
     _study,
     _transfer,
     _validate,
@@ -40,7 +41,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="-v: progress messages (INFO), -vv: debug logging")  # fmt: skip
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
     groups = (_transfer, _study, _calibrate, _cps, _docking, _dock, _perceive, _validate)
-    for group in (*groups, _rehearse, _data, _web):
+    for group in (*groups, _rehearse, _data, _web, _replay):
         group.register(sub)
     return parser
 

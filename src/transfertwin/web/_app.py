@@ -6,7 +6,8 @@ package), ``/api/config``, ``/api/assets``, ``/api/assets/{id}/aas``, ``/api/liv
 ``/api/studies/{name}/map``, ``/api/studies/{name}/analysis?object=ID``,
 ``/api/studies/{name}/results.{csv|parquet}``, ``/api/transfer`` (GET; POST starts a
 simulated transfer), ``/api/transfer/live`` (SSE), ``/api/calibrations``,
-``/api/calibrations/{name}``.
+``/api/calibrations/{name}``, ``/replay`` (the 3-D replay page) and ``/api/replay``
+(its JSON document, `transfertwin.web._replay`).
 
 Every error is a JSON ``{"error": message}`` with a 4xx status (5xx only for a fault of the
 console itself, without a traceback). Write actions need the token (header
@@ -49,6 +50,7 @@ from transfertwin.web._calibration import calibration_view
 from transfertwin.web._config import WebConfig
 from transfertwin.web._gateway import CpsGateway
 from transfertwin.web._live import LiveTransfer, TransferBusyError, TransferRequest
+from transfertwin.web._replay import ReplayService
 from transfertwin.web._studies import StudyView
 
 __all__ = ["MAX_BODY_BYTES", "create_app", "plotly_js"]
@@ -131,9 +133,11 @@ class _SecurityHeaders:
         await self.app(scope, receive, send_with_headers)
 
 
-def create_app(config: WebConfig) -> Starlette:
-    """The console app for `config` (its CPS sessions open with the app's lifespan)."""
+def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = None) -> Starlette:
+    """The console app for `config` (its CPS sessions open with the app's lifespan);
+    `replays` are replay documents served under ``/replay?key=K``."""
     studies = {p.name: StudyView(p) for p in config.dbs}
+    replay_service = ReplayService({p.name: p for p in config.dbs}, replays)
     calibrations = {p.name: p for p in config.calibrations}
     live = LiveTransfer()
     state: dict[str, CpsGateway | None] = {"cps": None}
@@ -217,6 +221,20 @@ def create_app(config: WebConfig) -> Starlette:
         if matches(given) and config.reads_need_token:
             response.set_cookie(_COOKIE, token, httponly=True, samesite="strict")
         return response
+
+    async def replay_page(request: Request) -> Response:
+        given = request.query_params.get("token")
+        if config.reads_need_token and not (
+            matches(given) or matches(request.cookies.get(_COOKIE))
+        ):
+            return HTMLResponse("<h1>401</h1><p>Open the replay with ?token=...</p>", 401)
+        return HTMLResponse((_static_dir() / "replay.html").read_text())
+
+    @_api
+    async def api_replay(request: Request) -> Response:
+        check_read(request)
+        params = dict(request.query_params)
+        return JSONResponse(await run_in_threadpool(replay_service.payload, params))
 
     async def plotly(request: Request) -> Response:
         return FileResponse(plotly_js(), media_type="text/javascript")
@@ -395,6 +413,8 @@ def create_app(config: WebConfig) -> Starlette:
         Route("/api/transfer/live", api_transfer_live),
         Route("/api/calibrations", api_calibrations),
         Route("/api/calibrations/{name}", api_calibration),
+        Route("/replay", replay_page),
+        Route("/api/replay", api_replay),
         Route("/{path:path}", not_found),
     ]
     hosts = ["*"] if config.reads_need_token else sorted(

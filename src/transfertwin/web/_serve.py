@@ -5,6 +5,7 @@ from __future__ import annotations
 import signal
 import socket
 from collections.abc import Callable
+from typing import Any
 
 from transfertwin._errors import InputError
 from transfertwin.web._app import create_app
@@ -32,18 +33,23 @@ def _bind(config: WebConfig) -> socket.socket:
     return sock
 
 
-def serve(config: WebConfig, on_ready: Callable[[str], None] | None = None) -> None:
+def serve(
+    config: WebConfig,
+    on_ready: Callable[[str], None] | None = None,
+    replays: dict[str, dict[str, Any]] | None = None,
+) -> None:
     """Serve the console until SIGINT/SIGTERM.
 
     Args:
         config: What to serve.
         on_ready: Called with the console's URL (token included) once it listens.
+        replays: Replay documents served under ``/replay?key=K`` (`create_app`).
     """
     import uvicorn
 
     sock = _bind(config)
     port = sock.getsockname()[1]
-    app = create_app(config)
+    app = create_app(config, replays)
     server = uvicorn.Server(uvicorn.Config(app, log_level="warning", access_log=False,
                                            timeout_graceful_shutdown=2))  # fmt: skip
 

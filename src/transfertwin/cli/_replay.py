@@ -1,0 +1,147 @@
+"""`transfertwin replay`: re-simulate one experiment and watch it in 3-D, or export it."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import webbrowser
+from pathlib import Path
+
+from transfertwin._errors import InputError
+from transfertwin.cli._paths import out_file
+
+__all__ = ["register"]
+
+_TRANSFER_ONLY = ("seed", "dock_error", "profile", "mu", "gap_mm")
+
+
+def _spec(args: argparse.Namespace):  # -> (ExperimentSpec, StudyRow | None)
+    from transfertwin.replay import study_spec, transfer_spec
+
+    if args.db is not None:
+        given = [f"--{k.replace('_', '-')}" for k in _TRANSFER_ONLY if getattr(args, k) is not None]
+        if given:
+            raise InputError(f"{', '.join(given)}: a study row's experiment comes from its "
+                             "plan (leave out --db for a transfer's arguments)")  # fmt: skip
+        if args.run is None:
+            raise InputError("--db needs --run (the repetition index r of the row)")
+        found = study_spec(args.db, args.object, args.face, args.conveyor, args.theta, args.run)
+        return found.spec, found
+    if args.run is not None:
+        raise InputError("--run needs --db (a row of a study store)")
+    spec = transfer_spec(
+        args.object, args.face, args.conveyor, args.theta,
+        seed=0 if args.seed is None else args.seed, dock_error=args.dock_error or "0,0,0",
+        units=args.units, profile=args.profile, gap_mm=args.gap_mm, mu=args.mu,
+    )  # fmt: skip
+    return spec, None
+
+
+def cmd_replay(args: argparse.Namespace) -> int:
+    """Record the experiment, write the files asked for, then serve the 3-D view."""
+    from transfertwin.cli._transfer import hull_notice
+    from transfertwin.replay import compare_with_row, record_experiment, replay_payload
+
+    outputs = {
+        "json": out_file(args.json, (".json",)) if args.json else None,
+        "glb": out_file(args.glb, (".glb",)) if args.glb else None,
+        "gif": out_file(args.gif, (".gif",)) if args.gif else None,
+    }
+    if args.port is not None and not 0 <= args.port <= 65535:
+        raise InputError(f"--port must be in 0..65535, got {args.port}")
+    spec, found = _spec(args)
+    notice = hull_notice(spec.object_ref, spec.units)
+    if notice:
+        print(notice, file=sys.stderr, flush=True)
+    print(f"re-simulating {spec.object_ref} {spec.face}/{spec.conveyor}/{spec.theta_deg}° "
+          f"seed {spec.seed} …", file=sys.stderr, flush=True)  # fmt: skip
+    replay = record_experiment(spec)
+    source: dict[str, object] = {"kind": "transfer"}
+    if found is not None:
+        check = compare_with_row(replay.result, found.row) if found.row else None
+        source = {"kind": "study", "study": found.store, "stored": found.row is not None,
+                  "check": check}  # fmt: skip
+        if check is None:
+            print(f"note: {found.store} has no row for this experiment yet", file=sys.stderr)
+        elif not check["same"]:
+            print("warning: the replay differs from the stored row: "
+                  + "; ".join(check["differences"]), file=sys.stderr)  # fmt: skip
+    r = replay.result
+    print(f"{r.object_id} {r.face}/{r.conveyor}/{r.theta_deg}° run {r.run} seed {r.seed}: "
+          f"status {r.status}, y1 {r.y1}, y2 {r.y2}, t_end {r.t_end_s:.3f} s; "
+          f"{len(replay.t_s)} samples over {replay.duration_s:.2f} s"
+          + ("; same bits as the stored row" if source.get("check", {}) and
+             source["check"]["same"] else ""), flush=True)  # fmt: skip
+    doc = replay_payload(replay, source=source)
+    if outputs["json"] is not None:
+        from transfertwin._atomic import write_atomic
+
+        write_atomic(outputs["json"], json.dumps(doc, separators=(",", ":")))
+        print(outputs["json"])
+    if outputs["glb"] is not None:
+        from transfertwin.replay import write_glb
+
+        write_glb(replay, outputs["glb"])
+        print(outputs["glb"])
+    if outputs["gif"] is not None:
+        from transfertwin.replay import write_gif
+
+        write_gif(replay, outputs["gif"], fps=args.fps, speed=args.speed)
+        print(outputs["gif"])
+    if any(outputs.values()) and not args.serve:
+        return 0
+    return _serve(args, doc)
+
+
+def _serve(args: argparse.Namespace, doc: dict[str, object]) -> int:
+    from urllib.parse import urlsplit
+
+    from transfertwin.web import WebConfig, serve
+
+    config = WebConfig(dbs=(Path(args.db),) if args.db else (), host=args.host,
+                       port=8765 if args.port is None else args.port)  # fmt: skip
+
+    def ready(url: str) -> None:
+        base = urlsplit(url)
+        page = f"{base.scheme}://{base.netloc}/replay?key=cli&{base.query}"
+        print(f"replay: {page}", flush=True)
+        if not args.no_browser:
+            webbrowser.open(page)
+
+    serve(config, on_ready=ready, replays={"cli": doc})
+    print("replay server down", flush=True)
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add `replay`."""
+    p = sub.add_parser(
+        "replay", help="re-simulate one experiment and show it in 3-D in the browser",
+        description="Re-simulate one experiment deterministically (a study store's row with "
+        "--db/--run, or a transfer's arguments) and show it in 3-D in the browser (three.js, "
+        "served locally), or write it as JSON, glTF (.glb, animated) or GIF.",
+    )  # fmt: skip
+    p.add_argument("--db", help="study store (SQLite): replay its row (object, state, --run)")
+    p.add_argument("--run", type=int, help="with --db: the row's repetition index r")
+    p.add_argument("--object", required=True, help="object id (o1..o37) or a mesh path")
+    p.add_argument("--units", default="m", help="length unit of a mesh file: m, cm, mm, in")
+    p.add_argument("--face", required=True, help="front or back")
+    p.add_argument("--conveyor", required=True, help="left, right or both")
+    p.add_argument("--theta", required=True, type=int, help="yaw in integer degrees, -179..180")
+    p.add_argument("--dock-error", help="without --db: X_MM,Y_MM,THETA_DEG (default 0,0,0)")
+    p.add_argument("--seed", type=int, help="without --db: the experiment's seed (default 0)")
+    p.add_argument("--profile", help="without --db: physics profile TOML or built-in name")
+    p.add_argument("--mu", type=float, help="without --db: dynamic friction")
+    p.add_argument("--gap-mm", type=float, help="without --db: nominal gap (mm)")
+    p.add_argument("--json", help="write the replay document (what the page draws) here")
+    p.add_argument("--glb", help="write an animated glTF binary (.glb) here")
+    p.add_argument("--gif", help="write an animated GIF (MuJoCo's offscreen renderer) here")
+    p.add_argument("--fps", type=int, default=10, help="GIF frames per second (default 10)")
+    p.add_argument("--speed", type=float, default=2.0,
+                   help="GIF playback speed, simulated s per second (default 2)")  # fmt: skip
+    p.add_argument("--serve", action="store_true", help="serve the 3-D view after writing files")
+    p.add_argument("--no-browser", action="store_true", help="print the URL, open no browser")
+    p.add_argument("--host", default="127.0.0.1", help="interface to serve on (loopback)")
+    p.add_argument("--port", type=int, help="TCP port (default 8765; 0: any free port)")
+    p.set_defaults(func=cmd_replay)

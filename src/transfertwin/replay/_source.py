@@ -1,0 +1,170 @@
+"""Where a replay comes from: a study store's row, or a `transfer`'s arguments.
+
+A study row's experiment is rebuilt from the store's plan (`StudyPlan.specs`, which derives
+every seed and docking error from the master seed, the object, the state and the run), so
+the replay is the experiment the study ran; `compare_with_row` says whether its result has
+the stored row's bits (y1, y2, success, t_end and the pre-transfer state).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from collections.abc import Mapping
+from pathlib import Path
+
+from transfertwin._errors import InputError
+from transfertwin.objects import is_builtin_id, load_object
+from transfertwin.ots import check_theta_deg, parse_conveyor, parse_face
+from transfertwin.sim import DockingError, SceneConfig
+from transfertwin.store import SQLITE_SUFFIXES, SQLiteResultStore
+from transfertwin.study.experiment import (
+    ExperimentResult,
+    ExperimentSpec,
+    StudyPlan,
+    load_profile,
+)
+
+__all__ = [
+    "COMPARED_COLUMNS",
+    "StudyRow",
+    "compare_with_row",
+    "parse_dock_error",
+    "study_spec",
+    "transfer_spec",
+]
+
+#: The result columns a replay must reproduce bit for bit.
+COMPARED_COLUMNS = ("status", "y1", "y2", "success", "t_end_s", "t_end_1_s", "t_end_2_s",
+                    "state_pre", "state_end_1", "state_end_2")  # fmt: skip
+
+
+@dataclasses.dataclass(frozen=True)
+class StudyRow:
+    """One experiment of a study: its spec as the plan makes it and its stored row (None
+    when the study has not run it yet)."""
+
+    spec: ExperimentSpec
+    row: dict[str, object] | None
+    store: str
+
+
+class _AllBut:
+    """A `skip` container holding every key but one (`StudyPlan.specs` then builds one spec)."""
+
+    def __init__(self, key: tuple) -> None:
+        self._key = key
+
+    def __contains__(self, key: object) -> bool:
+        return key != self._key
+
+
+def _object_ref(plan: StudyPlan, object_id: str) -> str:
+    """The plan's object reference whose id is `object_id`."""
+    for ref in plan.objects:
+        if ref == object_id and is_builtin_id(ref):
+            return ref
+    for ref in plan.objects:
+        if not is_builtin_id(ref) and load_object(ref, units=plan.units).object_id == object_id:
+            return ref
+    raise InputError(f"object {object_id!r} is not in the study; its objects: "
+                     f"{', '.join(plan.objects)}")  # fmt: skip
+
+
+def _key(row: Mapping[str, object]) -> tuple:
+    return tuple(row[k] for k in ("object_id", "face", "conveyor", "theta_deg", "run"))
+
+
+def study_spec(
+    db: str | Path, object_id: str, face: str, conveyor: str, theta_deg: int, run: int
+) -> StudyRow:
+    """The experiment (object, state, run) of the study in store `db`."""
+    path = Path(db)
+    if path.suffix.lower() not in SQLITE_SUFFIXES:
+        raise InputError(f"--db {db}: a study store ({', '.join(SQLITE_SUFFIXES)})")
+    if not path.is_file():
+        raise InputError(f"--db {db}: no such file")
+    face, conveyor = parse_face(face), parse_conveyor(conveyor)
+    theta_deg = check_theta_deg(theta_deg)
+    try:
+        store = SQLiteResultStore(path, create=False)
+    except InputError:
+        raise
+    except Exception as exc:
+        raise InputError(f"--db {db}: not a result store ({exc})") from None
+    with store:
+        stored = store.plan()
+        if stored is None:
+            raise InputError(f"--db {db}: the store has no study plan")
+        plan = StudyPlan.from_json(stored.plan_json)
+        ref = _object_ref(plan, object_id)
+        if not any((s.face, s.conveyor, s.theta_deg) == (face, conveyor, theta_deg)
+                   for s in plan.states()):  # fmt: skip
+            raise InputError(f"state {face}/{conveyor}/{theta_deg}° is not in the study "
+                             f"(θ step {plan.theta_step})")  # fmt: skip
+        if isinstance(run, bool) or not 0 <= run < plan.runs:
+            raise InputError(f"--run must be in 0..{plan.runs - 1}, got {run}")
+        key = (object_id, face, conveyor, theta_deg, run)
+        specs = list(plan.specs({ref: object_id}, skip=_AllBut(key)))
+        row = next((r for r in store.rows() if _key(r) == key), None)
+    if len(specs) != 1:
+        raise InputError(f"the study plans no experiment {key}")
+    return StudyRow(specs[0][1], row, path.name)
+
+
+def _same(a: object, b: object) -> bool:
+    if isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b):
+        return True
+    if a is None and isinstance(b, float) and math.isnan(b):
+        return True
+    if b is None and isinstance(a, float) and math.isnan(a):
+        return True
+    if isinstance(a, str) and isinstance(b, str) and a.startswith("["):
+        return json.loads(a) == json.loads(b)
+    return a == b or (a in ("", None) and b in ("", None))
+
+
+def compare_with_row(result: ExperimentResult, row: Mapping[str, object]) -> dict[str, object]:
+    """Whether `result` reproduces a stored row: {"same": bool, "differences": [...]}."""
+    mine = result.row()
+    diffs = [f"{k}: stored {row.get(k)!r}, replay {mine[k]!r}"
+             for k in COMPARED_COLUMNS if k in row and not _same(row.get(k), mine[k])]  # fmt: skip
+    return {"same": not diffs, "differences": diffs}
+
+
+def parse_dock_error(text: str) -> DockingError:
+    """``X_MM,Y_MM,THETA_DEG`` → a docking error ξ (Eq. 6.11), as `transfer` reads it."""
+    parts = text.split(",")
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        values = []
+    if len(values) != 3:
+        raise InputError(f"--dock-error expects X_MM,Y_MM,THETA_DEG, got {text[:60]!r}")
+    return DockingError.from_mm_deg(*values)
+
+
+def transfer_spec(
+    object_ref: str,
+    face: str,
+    conveyor: str,
+    theta_deg: int,
+    *,
+    seed: int = 0,
+    dock_error: str = "0,0,0",
+    units: str = "m",
+    profile: str | None = None,
+    gap_mm: float | None = None,
+    mu: float | None = None,
+) -> ExperimentSpec:
+    """The experiment `transfertwin transfer` runs for these arguments (same defaults)."""
+    scene = load_profile(profile)[1] if profile else SceneConfig()
+    if mu is not None:
+        scene = scene.with_overrides(mu=mu)
+    if gap_mm is not None:
+        scene = scene.with_overrides(gap_m=gap_mm / 1000.0)
+    return ExperimentSpec(
+        object_ref=object_ref, face=face, conveyor=conveyor, theta_deg=theta_deg,
+        docking_error=parse_dock_error(dock_error), scene=scene, seed=seed, units=units,
+    )  # fmt: skip

@@ -1,19 +1,24 @@
 """Fidelity of the twin against the 191 real experiments, beside the baselines.
 
-Prints, in one run: the gap-area geometry against the measured `gap_area_cm2` (R², bias),
-then the twin with calibrated proxy objects (per core and face) against the always-success
-predictor and a logistic regression, in-sample and in repeated stratified 5-fold
-cross-validation (every choice made on training folds only), and each core's simulated
-success share against the real Clopper–Pearson 95 % interval. Targets (issue: fidelity):
-twin in-sample F0.5 >= 0.84 with recall <= 0.95; twin CV F0.5 above the logistic baseline;
-with `--study STORE` (e.g. `out/quick.sqlite` of `./dev.sh run`: o1, o18, o23, o32 × the
-30°-step grid on the default profile and the shipped cores), at least 3 of 4 cores with both
-outcomes and an overall success share between 0.4 and 0.9.
+Prints, in one run: the gap-area geometry against the measured `gap_area_cm2` (R², bias);
+then the headline (issue 29): nested cross-validation over `--cv-seeds` stratified 5-fold
+partitions in which every choice — which candidate folder (scene variant: pulley shape and
+radius, R, contact settings), the depth penalty, the proxy per core and face, the shrinkage,
+each threshold, the logistic model's L2 strength — is made on the training rows alone; F0.5
+and Brier of the twin, the (object, face) rate table, the (object, face, conveyor) rate
+table with shrinkage, the logistic model and always-success, each with a row-bootstrap 95 %
+interval; the paired twin-minus-table differences; the noise ceiling from near-repeats;
+leave-one-cell-out figures; each core's raw simulated share against the real
+Clopper–Pearson interval; and which choices remain made on all rows. After it, the single
+folder's 5 × 5 figures of before (penalty fixed), which are not the headline.
 
-    python benchmarks/fidelity.py [--objects DIR] [--runs 2] [--workers 2] [--study STORE]
+    python benchmarks/fidelity.py [--objects DIR[,DIR...]] [--cv-seeds 20] [--study STORE]
 
-`--objects DIR` reuses `transfertwin calibrate object` outputs; missing cores are fitted
-into DIR first (about 2 minutes per core on 2 workers).
+The default `--objects` are the four candidate folders shipped under `docs/fidelity/`
+(nothing is simulated; about 4 minutes on one core). A folder that lacks a core's
+candidates is fitted first (`calibrate object`, about 2 minutes per core on 2 workers).
+With `--study STORE` (e.g. `out/quick.sqlite` of `./dev.sh run`) it also checks the grid
+targets: at least 3 of 4 cores with both outcomes and an overall share between 0.4 and 0.9.
 """
 
 from __future__ import annotations
@@ -28,15 +33,20 @@ from transfertwin.objects import write_proxy
 from transfertwin.sim import GapAreaLayout, LayoutConfig, SceneConfig, gap_areas_cm2
 from transfertwin.store import DOCKING_ERROR_COLUMNS, read_results
 from transfertwin.study.calibration import (
+    Variant,
     candidates_path,
     evaluate_predictions,
+    fidelity_report,
     fit_proxy,
     fitted_candidates,
+    report_lines,
     save_candidates,
 )
-from transfertwin.study.fullstate import clopper_pearson
 
 DEPTHS_M = [d / 1000 for d in (6, 10, 14, 18, 20, 22, 24, 26, 28)]
+SHIPPED = ",".join(f"docs/fidelity/{f}" for f in (
+    "calibrated-r25", "runs/prism-r12.5-R4", "runs/prism-r12.5-R6",
+    "runs/prism-r12.5-R6-mccd-auto"))  # fmt: skip
 
 
 def _gap_fit(rows) -> None:
@@ -64,9 +74,24 @@ def _study_grid(path: str) -> None:
           f"overall share {share:.2f} (0.4..0.9): {'met' if met else 'not met'}")  # fmt: skip
 
 
+def _fit_missing(folder: Path, rows, args, shifts) -> None:
+    for obj in sorted({str(r["object_id"]) for r in rows}, key=lambda o: int(o[1:])):
+        if not candidates_path(folder, obj).is_file():
+            fit = fit_proxy(rows, obj, depths_m=DEPTHS_M, work_dir=folder / "candidates",
+                            scene=SceneConfig(), runs=args.runs, workers=args.workers,
+                            penalty=args.penalty, shifts_m=shifts,
+                            shift_penalty=args.mass_penalty)  # fmt: skip
+            write_proxy(fit.spec, folder / f"{obj}.proxy.json")
+            save_candidates(fit, candidates_path(folder, obj))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--objects", default="out/fidelity-objects")
+    parser.add_argument("--objects", default=SHIPPED,
+                        help="candidate folders, comma-separated (default: the shipped four)")
+    parser.add_argument("--cv-seeds", type=int, default=20)
+    parser.add_argument("--resamples", type=int, default=2000)
+    parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--runs", type=int, default=2)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--penalty", type=float, default=0.02)
@@ -79,52 +104,30 @@ def main() -> None:
         _study_grid(args.study)
     rows = read_results(calibration_csv_path())
     _gap_fit(rows)
-    folder = Path(args.objects)
     shifts = [float(v) / 1000 for v in args.com_shifts_mm.split(",") if v.strip()]
-    for obj in sorted({str(r["object_id"]) for r in rows}, key=lambda o: int(o[1:])):
-        if not candidates_path(folder, obj).is_file():
-            fit = fit_proxy(rows, obj, depths_m=DEPTHS_M, work_dir=folder / "candidates",
-                            scene=SceneConfig(), runs=args.runs, workers=args.workers,
-                            penalty=args.penalty, shifts_m=shifts,
-                            shift_penalty=args.mass_penalty)  # fmt: skip
-            write_proxy(fit.spec, folder / f"{obj}.proxy.json")
-            save_candidates(fit, candidates_path(folder, obj))
-    candidates, groups = fitted_candidates(folder, rows)
-    ev = evaluate_predictions(rows, candidates, folds=5, repeats=5, seed=0,
-                              penalty=args.penalty, groups=groups,
+    variants = []
+    for name in args.objects.split(","):
+        folder = Path(name)
+        _fit_missing(folder, rows, args, shifts)
+        candidates, groups = fitted_candidates(folder, rows)
+        variants.append(Variant(folder.name, candidates, groups))
+    report = fidelity_report(rows, variants, seeds=args.cv_seeds, seed=args.seed,
+                             shift_penalty=args.mass_penalty,
+                             n_resamples=args.resamples)  # fmt: skip
+    print("\n".join(report_lines(report)))
+    scores = report["scores"]
+    print(f"baseline: (object, face) rate table F0.5 {scores['table_object_face']['f05']:.3f}; "
+          f"twin/table F0.5 ratio {scores['twin']['f05'] / scores['table_object_face']['f05']:.3f}"
+          f", Brier ratio {scores['twin']['brier'] / scores['table_object_face']['brier']:.3f}")
+    first = variants[0]
+    ev = evaluate_predictions(rows, first.candidates, folds=5, repeats=5, seed=args.seed,
+                              penalty=args.penalty, groups=first.groups,
                               shift_penalty=args.mass_penalty)  # fmt: skip
-    print(f"{'predictor':20s} {'F0.5':>6s} {'prec':>6s} {'recall':>6s} {'brier':>6s}")
-    keys = ("base_rate", "logistic_in_sample", "logistic_cv", "twin_in_sample", "twin_cv",
-            "hybrid_in_sample", "hybrid_cv")  # fmt: skip
-    for key in keys:
+    print(f"single folder {first.label}, 5 x 5 CV with its penalty fixed (not the headline):")
+    for key in ("base_rate", "logistic_cv", "twin_in_sample", "twin_cv", "hybrid_cv"):
         f = ev.figures[key]
-        print(f"{key:20s} {f['f05']:6.3f} {f['precision']:6.3f} {f['recall']:6.3f} "
-              f"{f['brier']:6.3f}")  # fmt: skip
-    hcv = ev.figures["hybrid_cv"]
-    print(f"hybrid CV (beside the twin, not instead): F0.5 {hcv['f05']:.3f} "
-          f"± {hcv['f05_std']:.3f} vs twin {ev.figures['twin_cv']['f05']:.3f} "
-          f"± {ev.figures['twin_cv']['f05_std']:.3f}")  # fmt: skip
-    tin, tcv, lcv = ev.figures["twin_in_sample"], ev.figures["twin_cv"], ev.figures["logistic_cv"]
-    print(
-        f"target in-sample F0.5 >= 0.84 and recall <= 0.95: "
-        f"{'met' if tin['f05'] >= 0.84 and tin['recall'] <= 0.95 else 'not met'}"
-    )
-    print(
-        f"target CV F0.5 above logistic CV: {tcv['f05']:.3f} vs {lcv['f05']:.3f} "
-        f"({'met' if tcv['f05'] > lcv['f05'] else 'not met'})"
-    )
-    print(f"chosen proxies (in-sample): {ev.chosen}")
-    y = np.array([int(r["success"]) for r in rows])
-    objects = np.array([str(r["object_id"]) for r in rows])
-    for obj in sorted(set(objects), key=lambda o: int(o[1:])):
-        m = objects == obj
-        ci = clopper_pearson(int(y[m].sum()), int(m.sum()))
-        sim = float(ev.twin_p[m].mean())
-        inside = ci.low <= sim <= ci.high
-        print(
-            f"{obj}: real {y[m].mean():.2f} [{ci.low:.2f}, {ci.high:.2f}]  twin {sim:.2f}  "
-            f"{'inside' if inside else 'outside'}"
-        )
+        print(f"  {key:18s} F0.5 {f['f05']:6.3f}  precision {f['precision']:6.3f}  "
+              f"recall {f['recall']:6.3f}  Brier {f['brier']:6.3f}")  # fmt: skip
 
 
 if __name__ == "__main__":

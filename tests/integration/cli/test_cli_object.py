@@ -35,7 +35,8 @@ def test_calibrate_object_fits_shape_and_mass_and_evaluate_reports_the_hybrid(
         assert list(data["shifts_m"]) == [0.0, 0.02] and data["front_p"].shape == (2, 2, 4)
     ev = tmp_path / "ev"
     assert main(["calibrate", "evaluate", "--real", str(real), "--objects", str(out),
-                 "--folds", "2", "--repeats", "1", "--out", str(ev)]) == 0  # fmt: skip
+                 "--folds", "2", "--repeats", "1", "--cv-seeds", "2", "--resamples", "100",
+                 "--out", str(ev)]) == 0  # fmt: skip
     assert "hybrid_cv" in capsys.readouterr().out
     figures = json.loads((ev / "evaluation.json").read_text())
     assert {"twin_cv", "hybrid_cv", "hybrid_in_sample"} <= set(figures)
@@ -63,7 +64,8 @@ def test_calibrate_object_searches_the_protrusion_position_on_request(tmp_path, 
                                                  data["front_positions"][k])  # fmt: skip
     ev = tmp_path / "ev"
     assert main(["calibrate", "evaluate", "--real", str(real), "--objects", str(out),
-                 "--folds", "2", "--repeats", "1", "--position-penalty", "0",
+                 "--folds", "2", "--repeats", "1", "--position-penalty", "0", "--cv-seeds", "2",
+                 "--resamples", "100",
                  "--out", str(ev)]) == 0  # fmt: skip
     figures = json.loads((ev / "evaluation.json").read_text())
     assert set(figures["chosen"]["o1"]) == {"shift", "front", "back"}

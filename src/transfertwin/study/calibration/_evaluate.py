@@ -90,11 +90,23 @@ def best_threshold(p: np.ndarray, y: np.ndarray) -> float:
     the lowest threshold, so a constant predictor says 'success' (the base-rate choice).
     """
     p, y = np.asarray(p, dtype=float), np.asarray(y, dtype=int)
+    ts = np.unique(np.clip(p, _EPS, 1.0))
+    if len(ts) == 0:
+        return 1.0
+    # counts of 'p >= t' for every candidate t at once (sorted, cumulative from the top)
+    order = np.argsort(p, kind="stable")
+    ps, ys = p[order], y[order]
+    start = np.searchsorted(ps, ts, side="left")  # first row with p >= t
+    pos_above = np.concatenate([np.cumsum(ys[::-1])[::-1], [0]])
+    tp = pos_above[start].astype(float)
+    fp = (len(p) - start) - tp
+    fn = ys.sum() - tp
+    den = 1.25 * tp + 0.25 * fn + fp
+    f = np.divide(1.25 * tp, den, out=np.zeros_like(tp), where=den > 0)
     best_t, best_f = 1.0, -1.0
-    for t in np.unique(np.clip(p, _EPS, 1.0)):
-        f = ConfusionMatrix.from_predictions(p >= t, y.astype(bool)).f05
-        if f > best_f + 1e-12:
-            best_t, best_f = float(t), f
+    for t, value in zip(ts.tolist(), f.tolist(), strict=True):
+        if value > best_f + 1e-12:
+            best_t, best_f = float(t), value
     return best_t
 
 

@@ -517,5 +517,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="also the physical twins (TU_A_P, ...) of the virtual models")  # fmt: skip
     p.set_defaults(func=cmd_export)
     from transfertwin.cli._cps_floor import register as register_floor
+    from transfertwin.cli._cps_study import register as register_study
 
     register_floor(csub)
+    register_study(csub)

@@ -1,23 +1,164 @@
-"""The Experiment Manager in its own process (`AssetNode`)."""
+"""The Experiment Manager in its own process (`AssetNode`): single experiments against a
+unit (``RunExperiment``) and studies on request (``StartStudy``, ``StopStudy``,
+``StudyStatus``; docs/architecture.md, "Studies through the Experiment Manager").
+
+A study runs in a thread of this process (`StudyJob`); its progress and ETA are the
+``Study*`` OperationalData properties. What the manager was asked last is persisted: a
+study that was running when the process ended (a crash, ``cps down``) resumes when it comes
+back; one stopped with ``StopStudy`` stays stopped until ``StartStudy`` names it again.
+"""
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
+import logging
+from pathlib import Path
 from typing import Any
 
+from transfertwin._errors import InputError
 from transfertwin.cps._roles import Role
 
 __all__ = ["ExperimentRole"]
 
+log = logging.getLogger("transfertwin.cps")
+
+#: Seconds `StopStudy` waits for the batch in flight before it answers.
+STOP_WAIT_S = 120.0
+
 
 class ExperimentRole(Role):
     """The Experiment Manager: runs E^V against a unit through that unit's OPC UA interface;
-    the virtual unit's physics runs here and mirrors its belt commands (`MirroredUnitHAL`)."""
+    the virtual unit's physics runs here and mirrors its belt commands (`MirroredUnitHAL`).
+    Runs studies into result stores (`StudyJob`)."""
+
+    def __init__(self, node) -> None:
+        super().__init__(node)
+        self.job = None  # the last StudyJob
+        self._task: asyncio.Task | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._start_lock = asyncio.Lock()
+
+    def initial(self) -> dict[str, Any]:
+        return {"study": None}  # {"request": text, "store": path, "want": running|stopped}
 
     def handlers(self) -> dict[str, Any]:
-        return {"RunExperiment": self._run}
+        return {"RunExperiment": self._run, "StartStudy": self._start_study,
+                "StopStudy": self._stop_study, "StudyStatus": self._study_status}  # fmt: skip
 
+    async def start(self) -> None:
+        self._loop = asyncio.get_running_loop()
+        study = self.state.data.get("study")
+        if study and study.get("want") == "running":  # it was running when we went down
+            log.info("EM: resuming the study into %s", study["store"])
+            try:
+                await self._launch(study["request"], Path(study["store"]))
+            except InputError as exc:
+                log.warning("EM: the study cannot resume: %s", exc)
+                study["want"] = "failed"
+                self.state.save()
+
+    async def stop(self) -> None:
+        if self.job is not None and self._task is not None and not self._task.done():
+            self.job.stop()  # the persisted wish stays 'running': it resumes on restart
+            with contextlib.suppress(Exception):
+                await asyncio.wait_for(asyncio.shield(self._task), 10.0)
+
+    async def live(self) -> dict[str, Any]:
+        running = self._task is not None and not self._task.done()
+        return {"state": "running_study" if running else "idle"}
+
+    # -- studies --------------------------------------------------------------------------
+    def _default_store(self, plan_hash: str) -> Path:
+        return (self.node.cfg.state_dir / "studies" / f"study-{plan_hash[:12]}.sqlite").resolve()
+
+    async def _start_study(self, plan_json: str, store: str) -> str:
+        async with self._start_lock:
+            running = self._task is not None and not self._task.done()
+            saved = self.state.data.get("study")
+            if not plan_json.strip():
+                if saved is None:
+                    raise ValueError("no study to resume: give a plan")
+                plan_json, store = saved["request"], store or saved["store"]
+            try:
+                request = await asyncio.to_thread(_parse, plan_json)
+            except InputError as exc:
+                raise ValueError(str(exc)) from None
+            path = Path(store) if store else request.store
+            path = path.resolve() if path else self._default_store(request.plan.plan_hash)
+            if running:
+                same = (self.job.request.plan.plan_hash == request.plan.plan_hash
+                        and self.job.store == path)  # fmt: skip
+                if same:
+                    return json.dumps(self.job.status())
+                st = self.job.status()
+                raise ValueError(f"a study is running (plan {st['plan']}, {st['done']}/"
+                                 f"{st['planned']}): stop it first")  # fmt: skip
+            try:
+                await self._launch(plan_json, path, request)
+            except InputError as exc:
+                raise ValueError(str(exc)) from None
+            return json.dumps(self.job.status())
+
+    async def _launch(self, plan_json: str, store: Path, request=None) -> None:
+        """Check the store (refused if it holds another plan), persist the wish, run."""
+        from transfertwin.cps.apps import StudyJob, record_store
+
+        if request is None:
+            request = await asyncio.to_thread(_parse, plan_json)
+        job = StudyJob(request, store, on_update=self._published)
+        await asyncio.to_thread(job.check_store)
+        record_store(self.node.cfg.state_dir, store)
+        self.state.data["study"] = {"request": plan_json, "store": str(store), "want": "running"}
+        self.state.save()
+        self.job = job
+        await self._publish(job.status())
+        self._task = self.node.spawn(self._run_job(job))
+
+    async def _run_job(self, job) -> None:
+        final = await asyncio.to_thread(job.run)
+        await self._publish(final)
+        study = self.state.data.get("study")
+        if study is not None and final["state"] in ("finished", "failed") and self.job is job:
+            study["want"] = final["state"]
+            self.state.save()
+        log.info("EM: study %s %s (%d/%d)%s", final["plan"], final["state"], final["done"],
+                 final["planned"], f": {final['error']}" if final["error"] else "")  # fmt: skip
+
+    def _published(self, status: dict[str, Any]) -> None:
+        """From the job's thread: the status into the OPC UA variables."""
+        if self._loop is not None and not self._loop.is_closed():
+            asyncio.run_coroutine_threadsafe(self._publish(status), self._loop)
+
+    async def _publish(self, status: dict[str, Any]) -> None:
+        from transfertwin.cps.apps import study_opcua_values
+
+        for prop, value in study_opcua_values(status).items():
+            with contextlib.suppress(Exception):  # a server going down mid-update
+                await self.set(prop, value)
+
+    async def _stop_study(self) -> str:
+        if self.job is None:
+            raise ValueError("no study has been started")
+        study = self.state.data.get("study")
+        if self._task is not None and not self._task.done():
+            if study is not None:
+                study["want"] = "stopped"
+                self.state.save()
+            self.job.stop()
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(asyncio.shield(self._task), STOP_WAIT_S)
+        return json.dumps(self.job.status())
+
+    async def _study_status(self) -> str:
+        if self.job is not None:
+            return json.dumps(self.job.status())
+        study = self.state.data.get("study")
+        return json.dumps({"state": "none" if study is None else study["want"],
+                           "store": None if study is None else study["store"]})  # fmt: skip
+
+    # -- single experiments ---------------------------------------------------------------
     async def _run(self, unit: str, obj: str, face: str, conveyor: str, theta_deg: int,
                    seed: int) -> str:  # fmt: skip
         from transfertwin.cps._role_tm import MirroredUnitHAL, load_scene
@@ -39,3 +180,9 @@ class ExperimentRole(Role):
             await self.set("State", "idle")
         await self.set("ExperimentsDone", int(await self.get("ExperimentsDone")) + 1)
         return json.dumps(result.row())
+
+
+def _parse(plan_json: str):  # -> StudyRequest
+    from transfertwin.cps.apps import StudyRequest
+
+    return StudyRequest.parse(plan_json)

@@ -28,6 +28,7 @@ from transfertwin.web._serve import console_url, serve
 from transfertwin.web._studies import (
     RATE_WINDOW,
     StudyView,
+    StudyViews,
     analysis_view,
     progress_of,
     success_map,
@@ -43,6 +44,7 @@ __all__ = [
     "LiveTransfer",
     "Order",
     "StudyView",
+    "StudyViews",
     "TransferBusyError",
     "TransferRequest",
     "WebConfig",

@@ -51,7 +51,7 @@ from transfertwin.web._config import WebConfig
 from transfertwin.web._gateway import CpsGateway
 from transfertwin.web._live import LiveTransfer, TransferBusyError, TransferRequest
 from transfertwin.web._replay import ReplayService
-from transfertwin.web._studies import StudyView
+from transfertwin.web._studies import StudyView, StudyViews
 
 __all__ = ["MAX_BODY_BYTES", "create_app", "plotly_js"]
 
@@ -136,7 +136,7 @@ class _SecurityHeaders:
 def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = None) -> Starlette:
     """The console app for `config` (its CPS sessions open with the app's lifespan);
     `replays` are replay documents served under ``/replay?key=K``."""
-    studies = {p.name: StudyView(p) for p in config.dbs}
+    studies = StudyViews(config.dbs, config.cps)
     replay_service = ReplayService({p.name: p for p in config.dbs}, replays)
     calibrations = {p.name: p for p in config.calibrations}
     live = LiveTransfer()

@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 import tempfile
 import threading
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -20,7 +20,14 @@ from transfertwin.store import SQLiteResultStore, export_results
 from transfertwin.study.experiment import StudyPlan
 from transfertwin.study.fullstate import AnalysisResult, SelectedState, analyze, object_sort_key
 
-__all__ = ["RATE_WINDOW", "StudyView", "analysis_view", "progress_of", "success_map"]
+__all__ = [
+    "RATE_WINDOW",
+    "StudyView",
+    "StudyViews",
+    "analysis_view",
+    "progress_of",
+    "success_map",
+]
 
 #: The rate is measured over at most this many of the most recently finished rows.
 RATE_WINDOW = 100
@@ -243,6 +250,41 @@ class StudyView:
         with tempfile.TemporaryDirectory(prefix="tt-web-") as tmp:
             path = export_results(rows, Path(tmp) / f"results.{fmt}")
             return Path(path).read_bytes()
+
+
+class StudyViews(Mapping[str, StudyView]):
+    """The console's study stores by name: those it was given (``--db``) and, with a
+    process floor (``--cps W``), the stores of the studies its Experiment Manager runs
+    (``cps study start``), looked up again on every read so a study started after the
+    console appears in it. A name given with ``--db`` wins over a floor's store of that
+    name."""
+
+    def __init__(self, dbs: Iterable[Path], cps: Path | None = None) -> None:
+        self._views = {p.name: StudyView(p) for p in dbs}
+        self._cps = cps
+        self._lock = threading.Lock()
+
+    def _scan(self) -> None:
+        if self._cps is None:
+            return
+        from transfertwin.cps.apps import study_stores
+
+        for path in study_stores(self._cps):
+            with self._lock:
+                if path.name not in self._views:
+                    self._views[path.name] = StudyView(path)
+
+    def __getitem__(self, name: str) -> StudyView:
+        self._scan()
+        return self._views[name]
+
+    def __iter__(self) -> Iterator[str]:
+        self._scan()
+        return iter(list(self._views))
+
+    def __len__(self) -> int:
+        self._scan()
+        return len(self._views)
 
 
 def _finite(d: dict[str, object]) -> dict[str, object]:

@@ -77,8 +77,10 @@ EXPECTED_ELEMENTS = {
     "EM": {
         "Identification": ["AssetId", "AssetClass", "AssetKind", "Provenance"],
         "Capabilities": ["Experiment"],
-        "OperationalData": ["State", "ExperimentsDone"],
-        "ControlInterface": ["RunExperiment"],
+        "OperationalData": ["State", "ExperimentsDone", "StudyState", "StudyPlan",
+                            "StudyStore", "StudyDone", "StudyPlanned", "StudyProgress",
+                            "StudyRate", "StudyEtaS"],
+        "ControlInterface": ["RunExperiment", "StartStudy", "StopStudy", "StudyStatus"],
     },
     "PropS": {
         "Identification": ["AssetId", "AssetClass", "AssetKind", "Provenance"],
@@ -115,6 +117,9 @@ EXPECTED_OPERATIONS = [
      [("source", _S), ("subject", _S), ("x", _D), ("y", _D), ("theta", _D), ("sigma_xy", _D),
       ("sigma_theta", _D)],
      [("ok", _B)]),
+    ("EM", "StartStudy", [("plan_json", _S), ("store", _S)], [("status_json", _S)]),
+    ("EM", "StopStudy", [], [("status_json", _S)]),
+    ("EM", "StudyStatus", [], [("status_json", _S)]),
     ("PropS", "FusedPose", [("subject", _S)], [("pose_json", _S)]),
     ("KG", "Query", [("sparql", _S)], [("result_json", _S)]),
     # one process per asset (docs/architecture.md, "Deployment")

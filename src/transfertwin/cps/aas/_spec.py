@@ -158,7 +158,25 @@ OPERATIONAL_DATA: Mapping[str, tuple[PropertySpec, ...]] = MappingProxyType(
             PropertySpec("KpisJson", _S, "{}",
                          description="Every KPI as JSON (utilisation, failures by reason)."),
         ),
-        "experiment_manager": (_state(), _count("ExperimentsDone", "finished experiments")),
+        "experiment_manager": (
+            _state(),
+            _count("ExperimentsDone", "finished experiments"),
+            PropertySpec(
+                "StudyState",
+                _S,
+                "none",
+                description="none|starting|running|stopping|stopped|finished|failed.",
+            ),
+            PropertySpec("StudyPlan", _S, "", description="Hash (12 digits) of the study's plan."),
+            PropertySpec("StudyStore", _S, "", description="The study's SQLite result store."),
+            _count("StudyDone", "experiments of the study in its store"),
+            _count("StudyPlanned", "experiments the study plans"),
+            PropertySpec("StudyProgress", _D, 0.0, description="StudyDone / StudyPlanned."),
+            PropertySpec("StudyRate", _D, 0.0, "1/s", description="Experiments per second."),
+            PropertySpec(
+                "StudyEtaS", _D, -1.0, "s", description="Seconds left at that rate; -1 unknown."
+            ),
+        ),
         "props": (_state(), _count("FusedPoses", "fused poses")),
         "knowledge_graph": (
             _state(),
@@ -287,6 +305,25 @@ CONTROL_INTERFACE: Mapping[str, tuple[OperationSpec, ...]] = MappingProxyType(
                 ),
                 (Arg("result_json", _S),),
                 "Plan and run one transfer experiment.",
+            ),
+            OperationSpec(
+                "StartStudy",
+                (Arg("plan_json", _S), Arg("store", _S)),
+                (Arg("status_json", _S),),
+                "Start a study from a JSON plan into a result store ('' : the manager's "
+                "default); an empty plan resumes the last study; the same plan resumes it.",
+            ),
+            OperationSpec(
+                "StopStudy",
+                (),
+                (Arg("status_json", _S),),
+                "Stop the running study after the experiments in flight (resumable).",
+            ),
+            OperationSpec(
+                "StudyStatus",
+                (),
+                (Arg("status_json", _S),),
+                "State, progress, rate, ETA and store of the last study.",
             ),
         ),
         "props": (

@@ -1,5 +1,5 @@
-"""The assets' applications: TMS, Experiment Manager, PropS, virtual environment, and the
-transport module's operation flow (Fig. 5.9a) on the shop floor.
+"""The assets' applications: TMS, Experiment Manager (and its studies), PropS, virtual
+environment, and the transport module's operation flow (Fig. 5.9a) on the shop floor.
 
 The names load on first use (PEP 562): an asset process imports only what its role needs
 (a unit or an object needs neither the simulation nor the navigation stack).
@@ -22,6 +22,14 @@ if TYPE_CHECKING:
         fuse_poses,
         wrap_angle,
     )
+    from transfertwin.cps.apps._study_job import (
+        STUDY_INDEX,
+        StudyJob,
+        StudyRequest,
+        record_store,
+        study_opcua_values,
+        study_stores,
+    )
     from transfertwin.cps.apps._transport import (
         STEPS,
         Leg,
@@ -36,6 +44,7 @@ if TYPE_CHECKING:
 __all__ = [
     "HOME_POSE",
     "STEPS",
+    "STUDY_INDEX",
     "AssetApplications",
     "Environment",
     "FloorRobot",
@@ -49,12 +58,17 @@ __all__ = [
     "PoseObservation",
     "ScaledClock",
     "StepResult",
+    "StudyJob",
+    "StudyRequest",
     "TransportSkills",
     "VirtualTransport",
     "form_ots",
     "fuse_poses",
     "legs_of",
+    "record_store",
     "run_transport_operation",
+    "study_opcua_values",
+    "study_stores",
     "wrap_angle",
 ]
 

@@ -477,7 +477,7 @@ $("transfer-form").addEventListener("submit", async (ev) => {
   connectTransfer();
   $("no-calibrations").hidden = config.calibrations.length > 0;
   $("cal-select").replaceChildren(...config.calibrations.map((n) => el("option", { value: n, text: n })));
-  if (config.studies.length) {
+  if (config.studies.length || config.cps) {  // a floor's Experiment Manager may start one
     await loadStudies();
     setInterval(loadStudies, 2000);
     if (!config.cps) document.querySelector('nav .tab[data-tab="studies"]').click();

@@ -54,8 +54,6 @@ def cmd_replay(args: argparse.Namespace) -> int:
     notice = hull_notice(spec.object_ref, spec.units)
     if notice:
         print(notice, file=sys.stderr, flush=True)
-    print(f"re-simulating {spec.object_ref} {spec.face}/{spec.conveyor}/{spec.theta_deg}° "
-          f"seed {spec.seed} …", file=sys.stderr, flush=True)  # fmt: skip
     replay = record_experiment(spec)
     source: dict[str, object] = {"kind": "transfer"}
     if found is not None:

@@ -254,16 +254,20 @@ class TmsRole(Role):
         from transfertwin.cps._dispatch import Bid, choose
 
         op = self.ops[op_id]
-        targets = [t for t in op["targets"] if t != op["source"]]
-        if self.policy != "predictive":
-            targets = targets[:1]
         p = (op.get("plan") or {}).get("prediction") or {}
-        order = json.dumps({"operation": op_id, "object": op["object"], "source": op["source"],
-                            "targets": targets})  # fmt: skip
         while True:
+            # the destination's units whose belts are free (or will be), the source excepted
+            targets = [t for t in op["targets"] if t != op["source"] and not self._occupied(t)]
+            if self.policy != "predictive":
+                targets = targets[:1]
+            if not targets:
+                await asyncio.sleep(0.5)
+                continue
+            order = json.dumps({"operation": op_id, "object": op["object"],
+                                "source": op["source"], "targets": targets})  # fmt: skip
             eligible = await self._eligible(op)
 
-            async def ask(m: str) -> Bid | None:
+            async def ask(m: str, order: str = order) -> Bid | None:
                 try:
                     doc = json.loads(await asyncio.wait_for(
                         self.node.peers.call(m, "Bid", order), 10))  # fmt: skip

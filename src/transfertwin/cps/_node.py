@@ -31,6 +31,7 @@ from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
 from transfertwin.cps._asset_config import AssetConfig
 from transfertwin.cps._floor_file import FloorSpec, load_floor
+from transfertwin.cps._plant_assets import PROVENANCE as PLANT_PROVENANCE
 from transfertwin.cps.aas import AssetDescriptor, build_representation, externally_synced
 from transfertwin.cps.opcua import (
     AssetClient,
@@ -48,7 +49,7 @@ log = logging.getLogger("transfertwin.cps")
 #: What an asset's AAS says its data come from, by HAL (the plant's seed and parameters are
 #: not named; a remote asset's gateway is in its asset file, not in its AAS).
 PROVENANCE = {"virtual": "transfertwin virtual model (MuJoCo)",
-              "plant": "emulated plant (transfertwin.plant)",
+              "plant": PLANT_PROVENANCE,
               "remote": "physical asset behind a HAL gateway (OPC UA)"}  # fmt: skip
 
 

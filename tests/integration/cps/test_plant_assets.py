@@ -242,7 +242,9 @@ def test_nothing_the_twin_can_reach_holds_a_hidden_parameter(plant_cps, capfd):
 
 def test_the_cps_touches_the_plant_only_through_its_public_methods(monkeypatch):
     """Statically: only `cps._plant_assets` names the plant, and there only `stations` and
-    `operate` of it; at run time: a recording plant sees nothing else."""
+    `operate` of it; only `cps._hal` names the plant's physics (a plant floor's module), and
+    there only `PlantPhysics(seed).system`; at run time: a recording plant sees nothing
+    else."""
     from transfertwin.cps import _plant_assets
     from transfertwin.plant import EmulatedPlant, PlantRequest
 
@@ -250,7 +252,14 @@ def test_the_cps_touches_the_plant_only_through_its_public_methods(monkeypatch):
                  SRC / "cli" / "_cps.py"]:  # fmt: skip
         text = path.read_text()
         assert "_EmulatedPlant__" not in text and "plant._" not in text, path
-        if path.name != "_plant_assets.py":
+        assert "_PlantPhysics__" not in text, path
+        if path.name == "_hal.py":
+            assert "EmulatedPlant" not in text
+            assert "from transfertwin.plant import PlantPhysics\n" in text
+            tree = ast.parse(text)
+            assert {n.attr for n in ast.walk(tree) if isinstance(n, ast.Attribute)
+                    and isinstance(n.value, ast.Name) and n.value.id == "physics"} == {"system"}
+        elif path.name != "_plant_assets.py":
             assert "transfertwin.plant" not in text and "EmulatedPlant" not in text, path
     tree = ast.parse((SRC / "cps" / "_plant_assets.py").read_text())
     used = {

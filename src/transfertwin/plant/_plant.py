@@ -15,6 +15,7 @@ same rows, bit for bit, with any number of workers.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import math
 import multiprocessing as mp
@@ -28,6 +29,15 @@ import numpy as np
 from transfertwin._errors import InputError
 from transfertwin.objects import ProxySpec, builtin_ids, load_builtin, proxy_model
 from transfertwin.ots import state_index
+from transfertwin.plant._mismatch import (
+    PLANT_KINDS,
+    MismatchObject,
+    MismatchScene,
+    draw_mismatch_object,
+    draw_mismatch_scene,
+    mismatched_hulls,
+    mismatched_inertia,
+)
 from transfertwin.plant._truth import (
     PLANT_TAG,
     DockingTruth,
@@ -55,6 +65,9 @@ PLANT_COLUMNS = (
     "experiment_id", "transfer_unit", "object_id", "theta_deg", "face", "conveyor", "success",
     "dock_err_x_mm", "dock_err_y_mm", "dock_err_theta_deg", "gap_area_cm2",
 )  # fmt: skip
+
+#: A mismatch plant's structural differences of one object and of the scene.
+_Mismatch = tuple[MismatchObject, MismatchScene]
 
 #: Attempts per experiment when the plant's simulation does not give a valid outcome
 #: (an invalid settled state or a diverged run): a real operator would place again.
@@ -96,19 +109,62 @@ class _SlippingHAL(MujocoUnitHAL):
         return self._commanded.get(belt, 0.0)
 
 
+class _RipplingHAL(_SlippingHAL):
+    """A mismatch plant's unit: on top of the slip, each belt's speed ripples by
+    ±`ripple` at its pulleys' revolution frequency (run-out), and the right belt runs
+    `1 + skew` times the left. Refreshed after every controller wait."""
+
+    def __init__(self, system: VirtualTransferSystem, unit: str, scale: float, ripple: float,
+                 phase: float, skew: float) -> None:  # fmt: skip
+        super().__init__(system, unit, scale)
+        self._ripple, self._phase, self._skew = ripple, phase, skew
+        system.step_listeners.append(self._refresh)
+
+    def _actual(self, belt: str, speed_m_s: float) -> float:
+        v = speed_m_s * (1.0 + self._skew if belt == "right" else 1.0)
+        t = float(self._system.data.time)
+        return v * (1.0 + self._ripple * math.sin(abs(v) * self._scale / self._r * t
+                                                  + self._phase))  # fmt: skip
+
+    def set_belt_speed(self, belt: str, speed_m_s: float) -> None:
+        super().set_belt_speed(belt, self._actual(belt, speed_m_s))
+        self._commanded[belt] = float(speed_m_s)
+
+    def _refresh(self) -> None:
+        for belt, v in self._commanded.items():
+            if v:
+                _SlippingHAL.set_belt_speed(self, belt, self._actual(belt, v))
+                self._commanded[belt] = v
+
+
 class _PlantSystem(VirtualTransferSystem):
     """The plant's compiled system: hidden object, mass and belt-speed error (the TU's
-    height step and pitch are scene settings, see `_scene_config`)."""
+    height step and pitch are scene settings, see `_scene_config`); with `mismatch` the
+    structural differences of `transfertwin.plant._mismatch` on top."""
 
-    def __init__(self, obj: ObjectTruth, scene: SceneTruth, cfg: SceneConfig) -> None:
+    def __init__(self, obj: ObjectTruth, scene: SceneTruth, cfg: SceneConfig,
+                 mismatch: _Mismatch | None = None) -> None:  # fmt: skip
         model = _object_model(obj)
         mass = model.mass
         com = np.asarray(mass.com_m) + np.asarray(obj.com_offset_m)
         inertia = np.asarray(mass.inertia_kg_m2) * obj.mass_scale
-        super().__init__(model.hulls, mass.mass_kg * obj.mass_scale, com, inertia, cfg,
-                         feature_hulls=model.feature_hulls)  # fmt: skip
-        self.tm = _SlippingHAL(self, "tm", scene.belt_speed_scale)
-        self.tu = _SlippingHAL(self, "tu", scene.belt_speed_scale)
+        hulls, features = model.hulls, model.feature_hulls
+        if mismatch is not None:
+            hulls, features = mismatched_hulls(hulls, features, mismatch[0])
+            com = com + np.asarray(mismatch[0].com_shift_m)
+            inertia = mismatched_inertia(inertia, mismatch[0])
+        super().__init__(hulls, mass.mass_kg * obj.mass_scale, com, inertia, cfg,
+                         feature_hulls=features)  # fmt: skip
+        if mismatch is None:
+            self.tm = _SlippingHAL(self, "tm", scene.belt_speed_scale)
+            self.tu = _SlippingHAL(self, "tu", scene.belt_speed_scale)
+            return
+        ms = mismatch[1]
+        self.tm, self.tu = (
+            _RipplingHAL(self, unit, scene.belt_speed_scale, ms.ripple, ms.ripple_phase[k],
+                         ms.right_belt_skew[k])
+            for k, unit in enumerate(("tm", "tu"))
+        )  # fmt: skip
 
 
 def _object_model(obj: ObjectTruth):
@@ -116,13 +172,21 @@ def _object_model(obj: ObjectTruth):
     return proxy_model(base, ProxySpec(obj.object_id, obj.object_id, obj.protrusions))
 
 
-def _scene_config(scene: SceneTruth, obj: ObjectTruth, refine: int = 0) -> SceneConfig:
+def _scene_config(scene: SceneTruth, obj: ObjectTruth, refine: int = 0,
+                  mismatch: MismatchScene | None = None) -> SceneConfig:  # fmt: skip
     """The plant's scene for one object. Its physics is trusted only where it is plausible:
     the guard is on, and a run it marks 'unstable' is run again at half, then a quarter of
     the timestep (`refine`). The plant stands in for reality, so it takes none of the
-    twin's contact shortcuts: every hull of the object, multi-CCD on."""
+    twin's contact shortcuts: every hull of the object, multi-CCD on. A mismatch plant
+    (`mismatch`) contacts through another solver and contact model (module
+    `transfertwin.plant._mismatch`)."""
     physics = SceneConfig().physics
-    return SceneConfig().with_overrides(**{
+    extra = {} if mismatch is None else {
+        "physics.solver": "PGS", "physics.cone": "pyramidal", "physics.condim": 4,
+        "physics.impratio": mismatch.impratio,
+        "physics.solimp": (0.9, 0.95, mismatch.solimp_width_m, 0.5, 2.0),
+    }  # fmt: skip
+    return SceneConfig().with_overrides(**extra, **{
         "physics.multiccd": True,
         "physics.max_hulls": None,
         "physics.feature_solref": obj.feature_solref,
@@ -161,21 +225,32 @@ class _Job:
     error_mm_deg: tuple[float, float, float]
     seeds: tuple[int, ...]
     flip_u: float
+    mismatch: _Mismatch | None = None
 
 
-_SYSTEMS: dict[tuple[ObjectTruth, SceneTruth, int], _PlantSystem] = {}
+_SYSTEMS: dict[tuple[object, ...], _PlantSystem] = {}
 
 #: Timestep halvings tried when the plant's guard marks a run implausible.
 _REFINE = 2
 
 
-def _system(obj: ObjectTruth, scene: SceneTruth, refine: int = 0) -> _PlantSystem:
-    key = (obj, scene, refine)
+def _system(obj: ObjectTruth, scene: SceneTruth, refine: int = 0,
+            mismatch: _Mismatch | None = None) -> _PlantSystem:  # fmt: skip
+    key = (obj, scene, refine, mismatch)
     if key not in _SYSTEMS:
         if len(_SYSTEMS) >= 4:
             _SYSTEMS.clear()
-        _SYSTEMS[key] = _PlantSystem(obj, scene, _scene_config(scene, obj, refine))
+        ms = None if mismatch is None else mismatch[1]
+        _SYSTEMS[key] = _PlantSystem(obj, scene, _scene_config(scene, obj, refine, ms),
+                                     mismatch)  # fmt: skip
     return _SYSTEMS[key]
+
+
+@functools.lru_cache(maxsize=64)
+def _mismatch_object(seed: int, object_id: str) -> MismatchObject:
+    model = _object_model(draw_object(seed, object_id))
+    return draw_mismatch_object(seed, object_id, model.hulls,
+                                len(model.hulls) - model.feature_hulls)  # fmt: skip
 
 
 def _run_job(job: _Job) -> tuple[dict[str, object], float]:
@@ -186,11 +261,13 @@ def _run_job(job: _Job) -> tuple[dict[str, object], float]:
     success, t_end = 0, math.nan
     for seed in job.seeds:
         for refine in range(_REFINE + 1):
+            ms = None if job.mismatch is None else job.mismatch[1]
             spec = ExperimentSpec(req.object_id, req.face, req.conveyor, req.theta_deg,
                                   docking_error=error,
-                                  scene=_scene_config(job.scene, job.obj, refine),
+                                  scene=_scene_config(job.scene, job.obj, refine, ms),
                                   seed=seed)  # fmt: skip
-            result = run_experiment(spec, system=_system(job.obj, job.scene, refine))
+            result = run_experiment(spec, system=_system(job.obj, job.scene, refine,
+                                                         job.mismatch))  # fmt: skip
             if result.status != "unstable":
                 break
         if result.status == "ok":
@@ -211,26 +288,42 @@ def _run_job(job: _Job) -> tuple[dict[str, object], float]:
 class EmulatedPlant:
     """A transfer system with hidden ground truth, drawn from `seed`.
 
-    Only `seed`, `stations`, `experiments_run`, `fingerprint`, `run` and `weigh` (a noisy
-    measurement, like a scale's) are public; the hidden parameters cannot be read through
-    them.
+    Only `seed`, `kind`, `stations`, `experiments_run`, `fingerprint`, `run` and `weigh` (a
+    noisy measurement, like a scale's) are public; the hidden parameters cannot be read
+    through them.
 
     Args:
         seed: Plant seed (non-negative integer): draws every hidden parameter.
+        kind: 'in-class' (default): a plant of the twin's own model class with hidden
+            values; 'mismatch': the same plant with structural differences the twin cannot
+            represent (`transfertwin.plant._mismatch`).
     """
 
-    __slots__ = ("__docking", "__next_id", "__scene", "__seed")
+    __slots__ = ("__docking", "__kind", "__mismatch", "__next_id", "__scene", "__seed")
 
-    def __init__(self, seed: int) -> None:
+    def __init__(self, seed: int, kind: str = "in-class") -> None:
         if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
             raise InputError(f"--plant-seed must be a non-negative integer, got {seed!r}")
+        if kind not in PLANT_KINDS:
+            raise InputError(f"--plant-kind must be one of {', '.join(PLANT_KINDS)}, got {kind!r}")
         self.__seed = seed
+        self.__kind = kind
         self.__scene: SceneTruth = draw_scene(seed)
         self.__docking: DockingTruth = draw_docking(seed)
+        self.__mismatch: MismatchScene | None = (
+            draw_mismatch_scene(seed) if kind == "mismatch" else None
+        )
         self.__next_id = 0
 
     def __repr__(self) -> str:
-        return f"EmulatedPlant(seed={self.__seed})"
+        if self.__kind == "in-class":
+            return f"EmulatedPlant(seed={self.__seed})"
+        return f"EmulatedPlant(seed={self.__seed}, kind={self.__kind!r})"
+
+    @property
+    def kind(self) -> str:
+        """'in-class' or 'mismatch' (a setting, not a hidden value)."""
+        return self.__kind
 
     def __reduce__(self) -> None:  # type: ignore[override]
         raise TypeError("an EmulatedPlant cannot be pickled (its parameters are hidden)")
@@ -255,6 +348,9 @@ class EmulatedPlant:
         for equal plants, and reveals nothing of them."""
         parts = [asdict(self.__scene), asdict(self.__docking)]
         parts += [asdict(draw_object(self.__seed, o)) for o in object_ids]
+        if self.__mismatch is not None:
+            parts += [asdict(self.__mismatch)]
+            parts += [asdict(_mismatch_object(self.__seed, o)) for o in object_ids]
         return hashlib.sha256(repr(parts).encode()).hexdigest()
 
     def weigh(self, object_id: str) -> MassReading:
@@ -266,6 +362,8 @@ class EmulatedPlant:
         rng = np.random.default_rng([PLANT_TAG, self.__seed, 5, zlib.crc32(object_id.encode())])
         kg = mass.mass_kg * obj.mass_scale * (1 + rng.normal(0.0, 0.002))
         com = np.asarray(mass.com_m) + np.asarray(obj.com_offset_m) + rng.normal(0, 0.001, 3)
+        if self.__mismatch is not None:
+            com = com + np.asarray(_mismatch_object(self.__seed, object_id).com_shift_m)
         return MassReading(object_id, round(float(kg), 3), tuple(round(float(v), 4) for v in com))  # type: ignore[arg-type]
 
     def _jobs(self, requests: Sequence[PlantRequest]) -> list[_Job]:
@@ -291,9 +389,12 @@ class EmulatedPlant:
             err = np.asarray(dock.shift[k]) + np.asarray(dock.scale[k]) * raw[0]
             err = np.clip(err, [-150.0, -150.0, -25.0], [150.0, 150.0, 25.0])
             flip_u = float(np.random.default_rng(words[1]).random())
+            mismatch = None
+            if self.__mismatch is not None:
+                mismatch = (_mismatch_object(self.__seed, req.object_id), self.__mismatch)
             jobs.append(_Job(
                 eid, req, draw_object(self.__seed, req.object_id), self.__scene, units[0],
-                tuple(round(float(v), 2) for v in err), tuple(words[2:]), flip_u,
+                tuple(round(float(v), 2) for v in err), tuple(words[2:]), flip_u, mismatch,
             ))  # fmt: skip
         return jobs
 

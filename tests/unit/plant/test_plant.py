@@ -60,8 +60,8 @@ def test_feature_depths_follow_the_prior() -> None:
 def test_the_plant_exposes_no_hidden_parameter() -> None:
     plant = EmulatedPlant(3)
     public = {n for n in dir(plant) if not n.startswith("_")}
-    assert public == {"seed", "stations", "experiments_run", "fingerprint", "run", "operate",
-                      "weigh"}  # fmt: skip
+    assert public == {"seed", "kind", "stations", "experiments_run", "fingerprint", "run",
+                      "operate", "weigh"}  # fmt: skip
     assert not hasattr(plant, "__dict__")  # slots only: no stray attributes
     assert repr(plant) == "EmulatedPlant(seed=3)"
     with pytest.raises(TypeError):

@@ -142,7 +142,8 @@ function buildGap(doc, tuBody) {
   g.setIndex([0, 1, 2, 0, 2, 3]);
   const mesh = new THREE.Mesh(g, new THREE.MeshBasicMaterial({ color: 0xff3030, transparent: true,
     opacity: 0.35, side: THREE.DoubleSide }));
-  return { mesh, tmTip: tm[1], tuNear: tu[0], halfSpan: h, top: z };
+  const mid = a.clone().add(b).multiplyScalar(0.5);
+  return { mesh, tmTip: tm[1], tuNear: tu[0], tuNearX: mid.x, halfSpan: h, top: z };
 }
 
 function buildObject(doc) {
@@ -226,8 +227,9 @@ async function main() {
   THREE.Object3D.DEFAULT_UP.set(0, 0, 1);
   const canvas = $('scene');
   const renderer = new THREE.WebGLRenderer({ canvas, antialias: true,
-    preserveDrawingBuffer: true });
+    preserveDrawingBuffer: true, context: window.__replayGl || undefined });
   renderer.setPixelRatio(window.devicePixelRatio || 1);
+  state.timing.rendererMs = performance.now();
   const scene = new THREE.Scene();
   scene.background = new THREE.Color(0x1b1e25);
   scene.add(new THREE.HemisphereLight(0xffffff, 0x404050, 1.6));
@@ -250,6 +252,7 @@ async function main() {
   scene.add(gap.mesh);
   const obj = buildObject(doc);
   scene.add(obj.group);
+  state.timing.sceneMs = performance.now();
 
   const camera = new THREE.PerspectiveCamera(40, 1, 0.01, 30);
   camera.position.set(-0.25, -1.05, 0.75);
@@ -261,7 +264,9 @@ async function main() {
   state.duration = f.t[f.t.length - 1];
   state.frames = f.t.length;
   state.markers = doc.markers;
-  state.gap = { tmTip: gap.tmTip, tuNear: gap.tuNear, halfSpan: gap.halfSpan };
+  // tuNear: the TU's near belt end in its own frame; tuNearX: in F_T, on the TU's axis.
+  state.gap = { tmTip: gap.tmTip, tuNear: gap.tuNear, tuNearX: gap.tuNearX,
+    halfSpan: gap.halfSpan };
   describe(doc);
 
   const scrub = $('scrub');
@@ -340,6 +345,10 @@ async function main() {
   }
   function pause() { state.playing = false; $('play').textContent = '▶ play'; }
   state.seek = seek; state.play = play; state.pause = pause;
+  state.screenOf = (p) => {  // a world point's position on the canvas, CSS pixels
+    const v = new THREE.Vector3(p[0], p[1], p[2]).project(camera);
+    return [(v.x + 1) / 2 * canvas.clientWidth, (1 - v.y) / 2 * canvas.clientHeight];
+  };
   state.setSpeed = (s) => { state.speed = s; $('speed').value = String(s); };
 
   $('play').disabled = false;

@@ -148,10 +148,56 @@ def _wait_online(wd: Path, expected: set[str], timeout_s: float, procs) -> set[s
 
 
 def cmd_asset(args: argparse.Namespace) -> int:
-    """Serve one asset until SIGINT/SIGTERM; announce the leave; exit 0."""
-    from transfertwin.cps import AssetNode, load_asset_config
+    """Serve one asset until SIGINT/SIGTERM; announce the leave; exit 0. With several
+    ``--config``: fork one such process per asset from this one (`_fork_assets`)."""
+    if len(args.config) > 1 or args.log_dir is not None:
+        return _fork_assets(args.config, args.log_dir)
+    from transfertwin.cps import load_asset_config
 
-    cfg = load_asset_config(args.config)
+    _serve_asset(load_asset_config(args.config[0]))
+
+
+def _fork_assets(paths: list[str], log_dir: str | None) -> int:
+    """Prepare once (imports, the standard address space), then fork one asset process
+    per file: each in a session of its own, its output in ``LOG_DIR/<id>.log``, serving as
+    ``cps asset --config`` does. Prints ``forked <id> <pid>`` per asset and exits: the
+    assets do not depend on this process (they share its prepared pages copy-on-write)."""
+    from transfertwin.cps import load_asset_config, prepare_forking
+
+    if log_dir is None:
+        raise InputError("--log-dir is required with several --config (each asset's output "
+                         "goes to LOG_DIR/<id>.log)")  # fmt: skip
+    configs = [load_asset_config(p) for p in paths]  # every file checked before any fork
+    logs = Path(log_dir)
+    logs.mkdir(parents=True, exist_ok=True)
+    prepare_forking()
+    sys.stdout.flush()
+    for cfg in configs:
+        pid = os.fork()
+        if pid == 0:  # the asset process
+            try:
+                os.setsid()
+                out = os.open(logs / f"{cfg.asset_id}.log", os.O_WRONLY | os.O_CREAT | os.O_APPEND)
+                null = os.open(os.devnull, os.O_RDONLY)
+                os.dup2(null, 0)
+                os.dup2(out, 1)
+                os.dup2(out, 2)
+                _serve_asset(cfg)
+            except BaseException:
+                import traceback
+
+                traceback.print_exc()
+            finally:
+                os._exit(1)  # only reached when serving failed before it could exit itself
+        print(f"forked {cfg.asset_id} {pid}", flush=True)
+    return 0
+
+
+def _serve_asset(cfg) -> None:
+    """The asset process: serve `cfg`'s asset until SIGINT/SIGTERM, announce the leave,
+    end the process (never returns)."""
+    from transfertwin.cps import AssetNode
+
     logging.getLogger("transfertwin.cps").setLevel(logging.INFO)
     handler = logging.StreamHandler()
     handler.setFormatter(logging.Formatter("%(asctime)s %(message)s"))
@@ -185,7 +231,12 @@ def cmd_asset(args: argparse.Namespace) -> int:
             pid_file.unlink(missing_ok=True)
         print(f"{cfg.asset_id} left", flush=True)
 
-    asyncio.run(serve())
+    try:
+        asyncio.run(serve())
+    except InputError as exc:  # e.g. a plant seed file that cannot be read
+        print(f"transfertwin: error: {exc}", file=sys.stderr, flush=True)
+        logging.shutdown()
+        os._exit(2)
     # Every change of state was written when it happened and the leave is announced: end
     # here rather than wait for a simulation thread still stepping (the interpreter joins
     # its worker threads at exit, a transfer in real time takes tens of seconds).
@@ -326,7 +377,10 @@ def cmd_locate(args: argparse.Namespace) -> int:
 def register(csub: argparse._SubParsersAction) -> None:
     """Add `cps asset|down|locate` (`cps up --floor` is `cps up`'s option)."""
     p = csub.add_parser("asset", help="serve one asset of a floor (one process per asset)")
-    p.add_argument("--config", required=True, help="ASSET.toml (W/assets/<id>.toml)")
+    p.add_argument("--config", required=True, action="append",
+                   help="ASSET.toml (W/assets/<id>.toml); several: one process forked per "
+                        "asset (with --log-dir), this one exits")  # fmt: skip
+    p.add_argument("--log-dir", help="where forked assets write <id>.log")
     p.set_defaults(func=cmd_asset)
     p = csub.add_parser("down", help="stop every asset process of a floor")
     p.add_argument("--workdir", required=True)

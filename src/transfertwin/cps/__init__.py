@@ -63,7 +63,7 @@ if TYPE_CHECKING:
         stop_floor,
         write_floor_info,
     )
-    from transfertwin.cps._node import AssetNode
+    from transfertwin.cps._node import AssetNode, prepare_forking
     from transfertwin.cps._plant_assets import (
         PHYSICAL_RECORD_EXTRA,
         PLANT_LOG,
@@ -96,6 +96,7 @@ _LAZY = {
     "stop_floor": "_launcher",
     "write_floor_info": "_launcher",
     "AssetNode": "_node",
+    "prepare_forking": "_node",
     "PHYSICAL_RECORD_EXTRA": "_plant_assets",
     "PLANT_LOG": "_plant_assets",
     "RUN_TRANSFER": "_plant_assets",
@@ -173,6 +174,7 @@ __all__ = [
     "physical_twin",
     "plant_descriptors",
     "prepare_floor",
+    "prepare_forking",
     "read_export",
     "start_asset",
     "stop_floor",

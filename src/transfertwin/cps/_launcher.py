@@ -127,18 +127,82 @@ def floor_configs(workdir: Path) -> dict[str, AssetConfig]:
     return {p.stem: load_asset_config(p) for p in sorted((workdir / "assets").glob("*.toml"))}
 
 
-def launch(configs: dict[str, AssetConfig], workdir: Path,
-           skip: Iterable[str] = ()) -> dict[str, subprocess.Popen]:  # fmt: skip
-    """Start one detached process per asset (logs in ``W/logs/<id>.log``)."""
+def launch(configs: dict[str, AssetConfig], workdir: Path, skip: Iterable[str] = (), *,
+           fork: bool = True) -> dict[str, subprocess.Popen | ForkedAsset]:  # fmt: skip
+    """Start one detached process per asset (logs in ``W/logs/<id>.log``).
+
+    With `fork` (the default) one ``cps asset`` process prepares what every asset needs
+    once and forks the asset processes from it (they share those pages copy-on-write:
+    docs/scaling.md), then exits; otherwise each asset is an interpreter of its own
+    (`start_asset`, as a restart by hand is).
+    """
     logs = workdir / "logs"
     logs.mkdir(parents=True, exist_ok=True)
     skip = set(skip)
+    order = [a for a in sorted(configs, key=lambda a: (a not in SEED_ASSETS, a)) if a not in skip]
+    files = {aid: workdir / "assets" / f"{aid}.toml" for aid in order}
+    if not fork:
+        return {aid: start_asset(files[aid], logs / f"{aid}.log") for aid in order}
+    if not order:
+        return {}
+    cmd = [sys.executable, "-m", "transfertwin", "cps", "asset", "--log-dir", str(logs)]
+    for aid in order:
+        cmd += ["--config", str(files[aid])]
+    done = subprocess.run(cmd, capture_output=True, text=True, stdin=subprocess.DEVNULL,
+                          timeout=120, env={**os.environ, "PYTHONUNBUFFERED": "1"})  # fmt: skip
     procs = {}
-    for aid in sorted(configs, key=lambda a: (a not in SEED_ASSETS, a)):
-        if aid in skip:
-            continue
-        procs[aid] = start_asset(workdir / "assets" / f"{aid}.toml", logs / f"{aid}.log")
+    for line in done.stdout.splitlines():
+        word, aid, pid = [*line.split(), "", "", ""][:3]
+        if word == "forked" and aid in files and pid.isdigit():
+            procs[aid] = ForkedAsset(int(pid))
+    if done.returncode != 0 or set(procs) != set(order):
+        for p in procs.values():
+            p.kill()
+        last = (done.stderr.strip().splitlines() or ["no output"])[-1]
+        raise InputError(f"the asset processes could not be started ({done.returncode}): {last}")
     return procs
+
+
+class ForkedAsset:
+    """A forked asset process, seen as much like a `subprocess.Popen` as a launcher needs
+    (`pid`, `poll`, `wait`, `kill`); it is not this process's child, so its exit code is
+    not known here (``returncode`` 'unknown' once it has ended)."""
+
+    def __init__(self, pid: int) -> None:
+        self.pid = pid
+        self.returncode: str | None = None
+
+    def poll(self) -> str | None:
+        if self.returncode is None and not pid_alive(self.pid):
+            self.returncode = "unknown"
+        return self.returncode
+
+    def wait(self, timeout: float | None = None) -> str:
+        import time
+
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while self.poll() is None:
+            if deadline is not None and time.monotonic() > deadline:
+                raise subprocess.TimeoutExpired(f"asset process {self.pid}", timeout)
+            time.sleep(0.1)
+        return self.returncode
+
+    def kill(self) -> None:
+        with contextlib.suppress(OSError):
+            os.kill(self.pid, signal.SIGKILL)
+
+
+def pid_alive(pid: int) -> bool:
+    """Whether process `pid` runs (a zombie, ended but not reaped, does not)."""
+    try:
+        os.kill(pid, 0)
+    except OSError:
+        return False
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return True
+    return state not in ("Z", "X")
 
 
 def start_asset(config: Path, log_file: Path) -> subprocess.Popen:
@@ -182,10 +246,10 @@ def asset_pids(workdir: Path) -> dict[str, int]:
     for f in (workdir / "assets").glob("*/state/pid"):
         try:
             pid = int(f.read_text())
-            os.kill(pid, 0)
         except (ValueError, OSError):
             continue
-        pids[f.parent.parent.name] = pid
+        if pid_alive(pid):
+            pids[f.parent.parent.name] = pid
     return pids
 
 

@@ -1,5 +1,6 @@
 """OPC UA servers and clients built from the AAS, security and decentralised discovery."""
 
+from transfertwin.cps.opcua._aspace import build_standard_address_space
 from transfertwin.cps.opcua._client import AssetClient, connect
 from transfertwin.cps.opcua._discovery import Discovery, Peer
 from transfertwin.cps.opcua._remote_hal import OpcUaUnitHAL
@@ -41,6 +42,7 @@ __all__ = [
     "RoleUserManager",
     "ServerConfig",
     "TrustList",
+    "build_standard_address_space",
     "connect",
     "ensure_certificate",
     "free_port",

@@ -25,7 +25,7 @@ from asyncua.server.address_space import (
 )
 from asyncua.server.standard_address_space.standard_address_space import fill_address_space
 
-__all__ = ["share_standard_address_space"]
+__all__ = ["build_standard_address_space", "share_standard_address_space"]
 
 _template: dict[ua.NodeId, NodeData] | None = None
 _lock = threading.Lock()
@@ -40,6 +40,12 @@ def _standard_nodes() -> dict[ua.NodeId, NodeData]:
             fill_address_space(NodeManagementService(aspace))
             _template = aspace._nodes
         return _template
+
+
+def build_standard_address_space() -> int:
+    """Build this process's template now (a process that forks asset processes builds it
+    once, and they share its pages copy-on-write); the number of nodes."""
+    return len(_standard_nodes())
 
 
 def _copy_attribute(value: AttributeValue) -> AttributeValue:

@@ -15,7 +15,8 @@ o3 and o7, K = 40 calibration experiments, R = 2, 10 validation runs per best/wo
 
 With several K (``-k 25,50,100``) it runs one rehearsal per K and prints the curve.
 
-    python benchmarks/rehearsal.py [--plant-seed 1] [--objects o3,o7] [-k 40] [--runs 2]
+    python benchmarks/rehearsal.py [--plant-seed 1] [--plant-kind in-class|mismatch]
+        [--objects o3,o7] [-k 40] [--runs 2]
         [--validation-runs 10] [--test-experiments 0] [--workers 2] [--tune-trials 0]
         [--ablate mass,stability,compliance] [--operations 20] [--out DIR]
 
@@ -111,6 +112,8 @@ def _report(doc: dict, cfg: RehearsalConfig) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--plant-seed", type=int, default=1)
+    ap.add_argument("--plant-kind", default="in-class", choices=("in-class", "mismatch"),
+                    help="mismatch: a plant outside the twin's model class")  # fmt: skip
     ap.add_argument("--objects", default="o3,o7")
     ap.add_argument("-k", "--calibration-experiments", default="40")
     ap.add_argument("--runs", type=int, default=2)
@@ -134,11 +137,11 @@ def main() -> None:
             theta_step=args.theta_step, test_experiments=args.test_experiments,
             tune_trials=args.tune_trials, seed=args.seed,
             workers=args.workers, ablate=(args.ablate,) if args.ablate else (),
-            operations=args.operations,
+            operations=args.operations, plant_kind=args.plant_kind,
         )  # fmt: skip
         where = out if len(ks) == 1 else out / f"K{k}"
         t0 = time.perf_counter()
-        print(f"== K = {k}")
+        print(f"== K = {k}, plant {args.plant_kind} (seed {args.plant_seed})")
         doc = rehearse(
             cfg, where, on_stage=lambda s, t0=t0: print(f"[{time.perf_counter() - t0:6.0f} s] {s}")
         )

@@ -82,6 +82,7 @@ def cmd_rehearse(args: argparse.Namespace) -> int:
             proxy_positions=parse_positions(args.proxy_positions, "--proxy-positions"),
             tune_trials=args.tune_trials, seed=args.seed, workers=worker_count(args.workers),
             scene=scene, ablate=tuple(args.ablate or ()), operations=args.operations,
+            plant_kind=args.plant_kind,
         )
         for k in ks
     ]  # fmt: skip
@@ -133,6 +134,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         required=True,
         metavar="N",
         help="seed of the emulated plant (draws its hidden parameters)",
+    )
+    p.add_argument(
+        "--plant-kind",
+        default="in-class",
+        metavar="KIND",
+        help="in-class (default): a plant of the twin's own model class with hidden values; "
+        "mismatch: structural differences the twin cannot represent (shape outside the proxy "
+        "family, 3-D mass, belt ripple and skew, another contact model and solver)",
     )
     p.add_argument("--objects", required=True, metavar="IDS", help="built-in cores, e.g. o3,o7")
     p.add_argument(

@@ -6,7 +6,15 @@ table (`PLANT_COLUMNS`). The package sits above `transfertwin.study` in the laye
 calibration, study or validation code can import it; `transfertwin.rehearsal` drives both.
 """
 
+from transfertwin.plant._mismatch import PLANT_KINDS
 from transfertwin.plant._physics import PlantPhysics
 from transfertwin.plant._plant import PLANT_COLUMNS, EmulatedPlant, MassReading, PlantRequest
 
-__all__ = ["PLANT_COLUMNS", "EmulatedPlant", "MassReading", "PlantPhysics", "PlantRequest"]
+__all__ = [
+    "PLANT_COLUMNS",
+    "PLANT_KINDS",
+    "EmulatedPlant",
+    "MassReading",
+    "PlantPhysics",
+    "PlantRequest",
+]

@@ -37,7 +37,7 @@ from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
 from transfertwin.objects import PROXY_SUFFIX, ProxySpec, builtin_ids, write_proxy
 from transfertwin.ots import FACES, THETA_SINGLE, experiment_states, filter_theta_step
-from transfertwin.plant import PLANT_COLUMNS, EmulatedPlant, PlantRequest
+from transfertwin.plant import PLANT_COLUMNS, PLANT_KINDS, EmulatedPlant, PlantRequest
 from transfertwin.rehearsal._operations import run_operations
 from transfertwin.sim import DockingError, SceneConfig
 from transfertwin.store import DOCKING_ERROR_COLUMNS
@@ -180,6 +180,9 @@ class RehearsalConfig:
             extra twin variants that reuse the plant's calibration rows.
         operations: Orders per policy in the operational comparison (0: none), see
             `run_operations`.
+        plant_kind: 'in-class' (a plant of the twin's model class with hidden values) or
+            'mismatch' (structural differences the twin cannot represent), see
+            `transfertwin.plant.EmulatedPlant`.
     """
 
     plant_seed: int
@@ -198,9 +201,14 @@ class RehearsalConfig:
     scene: SceneConfig = field(default_factory=SceneConfig)
     ablate: tuple[str, ...] = ()
     operations: int = 0
+    plant_kind: str = "in-class"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "ablate", parse_ablations(self.ablate))
+        if self.plant_kind not in PLANT_KINDS:
+            raise InputError(
+                f"--plant-kind must be one of {', '.join(PLANT_KINDS)}, got {self.plant_kind!r}"
+            )
         if self.operations < 0:
             raise InputError("--operations must be >= 0")
         for name in ("plant_seed", "seed"):
@@ -242,6 +250,8 @@ def _config_record(cfg: RehearsalConfig) -> dict[str, object]:
     out = {k: v for k, v in asdict(cfg).items() if k != "scene"}
     if set(cfg.proxy_positions) == {0.5}:
         del out["proxy_positions"]
+    if cfg.plant_kind == "in-class":
+        del out["plant_kind"]
     return out
 
 
@@ -585,7 +595,7 @@ def rehearse(
     stage = on_stage or (lambda name: None)
     progress = on_progress or (lambda done, total: None)
     cfg, t0 = config, time.perf_counter()
-    plant = EmulatedPlant(cfg.plant_seed)
+    plant = EmulatedPlant(cfg.plant_seed, kind=cfg.plant_kind)
     out.mkdir(parents=True, exist_ok=True)
 
     test_rows: list[dict[str, object]] = []

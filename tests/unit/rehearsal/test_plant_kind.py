@@ -1,0 +1,29 @@
+"""`rehearse --plant-kind` (issue 29): the plant kind is a checked setting, recorded only
+when it is not today's in-class plant."""
+
+from __future__ import annotations
+
+import pytest
+
+from transfertwin._errors import InputError
+from transfertwin.cli import main
+from transfertwin.rehearsal import RehearsalConfig
+from transfertwin.rehearsal._rehearse import _config_record
+
+
+def test_plant_kind_is_checked_and_recorded_only_when_it_is_the_mismatch() -> None:
+    base = {"plant_seed": 1, "objects": ("o3",), "calibration_experiments": 20}
+    assert "plant_kind" not in _config_record(RehearsalConfig(**base))
+    cfg = RehearsalConfig(**base, plant_kind="mismatch")
+    assert _config_record(cfg)["plant_kind"] == "mismatch"
+    with pytest.raises(InputError, match="--plant-kind"):
+        RehearsalConfig(**base, plant_kind="drake")
+
+
+def test_rehearse_refuses_an_unknown_plant_kind(tmp_path, monkeypatch, capfd) -> None:
+    monkeypatch.chdir(tmp_path)
+    code = main(["rehearse", "--plant-seed", "1", "--plant-kind", "sapien", "--objects", "o3",
+                 "--calibration-experiments", "20", "--out", "r"])  # fmt: skip
+    err = capfd.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "--plant-kind" in err[0]
+    assert list(tmp_path.iterdir()) == []

@@ -11,6 +11,11 @@ query (the graph's `Status`, median and 95th percentile of 20). A size whose pro
 would not fit in the memory available is skipped with the reason (its figures are then a
 projection, docs/scaling.md). Ratios against the smallest floor are printed in the same run.
 
+Asset processes are forked from one prepared process, as `cps up` starts them (they share
+the imports and the OPC UA standard address space copy-on-write); the smallest size is
+also run with one interpreter per asset (`--baseline`, how a restart by hand starts one),
+and the memory ratio of the two is printed.
+
 Objects beyond the 37 built-in cores are ids only here: nothing is transported.
 """
 
@@ -88,7 +93,8 @@ async def status_latency(wd: Path, repeats: int = 20) -> list[float]:
     return out
 
 
-def run_size(n: int, base: Path, lease: float, idle_s: float, per_process_mb: float | None):
+def run_size(n: int, base: Path, lease: float, idle_s: float, per_process_mb: float | None,
+             fork: bool = True):  # fmt: skip
     from transfertwin.cli._cps_floor import _wait_online
     from transfertwin.cps import asset_pids, launch, prepare_floor, stop_floor, write_floor_info
 
@@ -96,13 +102,13 @@ def run_size(n: int, base: Path, lease: float, idle_s: float, per_process_mb: fl
         return {"n": n, "skipped": f"needs about {n * per_process_mb * 1.5 / 1024:.1f} GB, "
                                    f"{available_mb() / 1024:.1f} GB available"}  # fmt: skip
     floor = floor_of(n)
-    wd = base / f"floor{n}"
+    wd = base / f"floor{n}{'' if fork else '-exec'}"
     t0 = time.monotonic()
     configs = prepare_floor(floor, wd, time_scale=0.0, lease_s=lease)
     t_prep = time.monotonic() - t0
     write_floor_info(wd, configs, floor)
     t1 = time.monotonic()
-    procs = launch(configs, wd)
+    procs = launch(configs, wd, fork=fork)
     try:
         _wait_online(wd, set(procs), 60.0 + 3.0 * n, procs)
         t_up = time.monotonic() - t1
@@ -125,7 +131,7 @@ def run_size(n: int, base: Path, lease: float, idle_s: float, per_process_mb: fl
                             []).append(pss)  # fmt: skip
     rss = [r for r, _ in mem.values()]
     pss = [p for _, p in mem.values()]
-    return {"n": n, "prepare_s": t_prep, "startup_s": t_up,
+    return {"n": n, "fork": fork, "prepare_s": t_prep, "startup_s": t_up,
             "rss_median_mb": statistics.median(rss), "rss_max_mb": max(rss),
             "pss_median_mb": statistics.median(pss), "pss_total_mb": sum(pss),
             "pss_by_class": {k: round(statistics.median(v), 1) for k, v in by_class.items()},
@@ -141,26 +147,40 @@ def main() -> int:
     ap.add_argument("--lease", type=float, default=5.0)
     ap.add_argument("--idle", type=float, default=30.0, help="seconds of idle traffic measured")
     ap.add_argument("--workdir")
+    ap.add_argument("--no-baseline", dest="baseline", action="store_false",
+                    help="skip the smallest size with one interpreter per asset")
     args = ap.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")]
     base = Path(args.workdir or tempfile.mkdtemp(prefix="cps-scale-"))
     rows = []
     per_process = None
-    for n in sizes:
-        row = run_size(n, base, args.lease, args.idle, per_process)
+    runs = [(sizes[0], False)] if args.baseline else []
+    for n, fork in [*runs, *((n, True) for n in sizes)]:
+        row = run_size(n, base, args.lease, args.idle, per_process if fork else None, fork)
         rows.append(row)
         if "skipped" in row:
             print(f"{n:4d} assets: skipped ({row['skipped']})", flush=True)
             continue
-        per_process = row["pss_median_mb"]  # shared pages (libraries) count once
-        print(f"{n:4d} assets: up in {row['startup_s']:.1f} s (certificates "
+        if fork:
+            per_process = max(per_process or 0.0, row["pss_total_mb"] / n)
+        how = "forked" if fork else "one interpreter each (baseline)"
+        print(f"{n:4d} assets, {how}: up in {row['startup_s']:.1f} s (certificates "
               f"{row['prepare_s']:.1f} s before), RSS median {row['rss_median_mb']:.0f} MB "
               f"(max {row['rss_max_mb']:.0f}), PSS median {row['pss_median_mb']:.0f} MB, "
               f"total PSS {row['pss_total_mb'] / 1024:.2f} GB, by class {row['pss_by_class']}, "
               f"loopback {row['lo_bytes_per_asset_min'] / 1024:.1f} KiB per asset per min, "
               f"status {row['status_median_ms']:.1f} ms (p95 {row['status_p95_ms']:.1f})",
               flush=True)  # fmt: skip
-    done = [r for r in rows if "skipped" not in r]
+    base_row = next((r for r in rows if r.get("fork") is False), None)
+    same = next((r for r in rows if r.get("fork") and base_row and r["n"] == base_row["n"]),
+                None)  # fmt: skip
+    if base_row and same:
+        print(f"{same['n']} assets, forked vs one interpreter each: PSS per asset "
+              f"{same['pss_total_mb'] / base_row['pss_total_mb']:.2f}x "
+              f"({same['pss_total_mb'] / same['n']:.0f} vs "
+              f"{base_row['pss_total_mb'] / base_row['n']:.0f} MB), start-up "
+              f"{same['startup_s'] / base_row['startup_s']:.2f}x")  # fmt: skip
+    done = [r for r in rows if "skipped" not in r and r.get("fork")]
     if len(done) > 1:
         a = done[0]
         for r in done[1:]:
@@ -169,7 +189,8 @@ def main() -> int:
                   f"{r['startup_s'] / a['startup_s']:.1f}x, traffic per asset "
                   f"{r['lo_bytes_per_asset_min'] / a['lo_bytes_per_asset_min']:.2f}x, "
                   f"status latency {r['status_median_ms'] / a['status_median_ms']:.1f}x, "
-                  f"PSS per asset {r['pss_median_mb'] / a['pss_median_mb']:.2f}x")  # fmt: skip
+                  f"PSS per asset "
+                  f"{r['pss_total_mb'] / r['n'] / (a['pss_total_mb'] / a['n']):.2f}x")  # fmt: skip
     print(json.dumps(rows))
     return 0
 

@@ -45,7 +45,40 @@ class ExperimentRole(Role):
 
     def handlers(self) -> dict[str, Any]:
         return {"RunExperiment": self._run, "StartStudy": self._start_study,
-                "StopStudy": self._stop_study, "StudyStatus": self._study_status}  # fmt: skip
+                "StopStudy": self._stop_study, "StudyStatus": self._study_status,
+                "Predict": self._predict}  # fmt: skip
+
+    async def _predict(self, obj: str, runs: int, seed: int) -> str:
+        """The twin's ranked states for `obj` from virtual experiments (the TMS asks when
+        its study store has no answer; `cps._predict.virtual_predictions`). They take longer
+        than a request may: the first call starts them and answers '' (running), a later
+        call with the same arguments answers the JSON list once they are done."""
+        if obj not in {o for o, _ in self.node.floor.objects}:
+            raise ValueError(f"{obj!r} is not an object of this floor")
+        if not 1 <= int(runs) <= 100:
+            raise ValueError(f"runs must be 1..100, got {runs}")
+        jobs = self.__dict__.setdefault("_predicting", {})
+        key = (obj, int(runs), int(seed))
+        job = jobs.get(key)
+        if job is None:
+            job = jobs[key] = asyncio.get_running_loop().create_task(self._predict_now(*key))
+        if not job.done():
+            return ""
+        if job.exception() is not None:
+            del jobs[key]  # asked again: tried again
+            raise job.exception()
+        return job.result()
+
+    async def _predict_now(self, obj: str, runs: int, seed: int) -> str:
+        from transfertwin.cps._predict import virtual_predictions
+        from transfertwin.cps._role_tm import load_scene
+
+        await self.set("State", "predicting")
+        try:
+            preds = await asyncio.to_thread(virtual_predictions, obj, runs, seed, load_scene())
+        finally:
+            await self.set("State", "idle")
+        return json.dumps([p.as_dict() for p in preds])
 
     async def start(self) -> None:
         self._loop = asyncio.get_running_loop()

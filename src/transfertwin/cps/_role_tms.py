@@ -33,6 +33,9 @@ __all__ = ["TmsRole", "order_view"]
 
 log = logging.getLogger("transfertwin.cps")
 
+#: Seconds the TMS waits for the Experiment Manager's on-the-fly predictions of an object.
+PREDICT_TIMEOUT_S = 900.0
+
 
 class TmsRole(Role):
     """The Transport Module System."""
@@ -348,16 +351,26 @@ class TmsRole(Role):
             self.ops[op_id]["history"].append(
                 [time.time(), f"asking the Experiment Manager to predict {obj}"])
             try:
-                preds = json.loads(await asyncio.wait_for(self.node.peers.call(
-                    "EM", "Predict", obj, spec.runs, self.node.cfg.seed), 900))  # fmt: skip
+                preds = await asyncio.wait_for(self._ask_em(obj), PREDICT_TIMEOUT_S)
             except Exception as exc:
-                log.info("TMS: no prediction for %s from the EM: %s", obj, exc)
+                log.info("TMS: no prediction for %s from the EM: %r", obj, exc)
                 self.ops[op_id]["history"].append(
-                    [time.time(), f"no prediction ({type(exc).__name__}): default state"])
+                    [time.time(), f"no prediction ({type(exc).__name__}: {exc}): default "
+                                  "state"])  # fmt: skip
                 return []
         cache[obj] = preds
         self._save()
         return preds
+
+    async def _ask_em(self, obj: str) -> list[dict[str, Any]]:
+        """Poll the Experiment Manager's `Predict` until its experiments are done."""
+        spec = self.node.floor.operation
+        while True:
+            answer = await asyncio.wait_for(self.node.peers.call(
+                "EM", "Predict", obj, spec.runs, self.node.cfg.seed), 10)  # fmt: skip
+            if answer:
+                return json.loads(answer)
+            await asyncio.sleep(1.0)
 
     async def _execute(self, op_id: str) -> None:
         from transfertwin.cps.opcua import OperationRefused

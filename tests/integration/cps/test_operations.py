@@ -1,7 +1,7 @@
 """Operations that use the twin on a floor of asset processes (docs/architecture.md,
 "Operation"): orders by destination and by destination group, the auction, the object
-loaded in the study store's best state, chained orders, refusals up front, the queue and
-the KPIs."""
+loaded in the study store's best state (or the Experiment Manager's, predicted on the fly
+for an object the store lacks), chained orders, refusals up front, the queue and the KPIs."""
 
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ pytestmark = pytest.mark.slow
 FLOOR = """
 name = "operations"
 size_m = [12.0, 8.0]
-logical = ["KG", "TMS"]
+logical = ["KG", "TMS", "EM"]
 
 [[station]]
 name = "A"
@@ -64,6 +64,7 @@ at = "TU_B"
 [operation]
 policy = "predictive"
 study = "study.sqlite"
+runs = 1
 
 [operation.groups]
 out = ["TU_B", "TU_C"]
@@ -71,14 +72,14 @@ out = ["TU_B", "TU_C"]
 
 
 def _study(path: Path) -> None:
-    """A real study of o1 and o2: the 12 states at θ = 0, ±90 and 180, one run each."""
+    """A real study of o1 (not o2): the 12 states at θ = 0, ±90 and 180, one run each."""
     from transfertwin.cps._runtime import _docking_model
     from transfertwin.store import SQLiteResultStore
     from transfertwin.study.experiment import StudyPlan, run_study
 
     store = SQLiteResultStore(path)
     try:
-        run_study(StudyPlan(("o1", "o2"), 90, 1, 0, _docking_model()), store, workers=1)
+        run_study(StudyPlan(("o1",), 90, 1, 0, _docking_model()), store, workers=1)
     finally:
         store.close()
 
@@ -167,6 +168,19 @@ def test_orders_for_one_object_chain_and_what_cannot_start_is_refused(floor, cap
     nowhere = run_main(capfd, "cps", "order", "--workdir", str(floor), "--object", "o1",
                        "--to", "TU_Z")  # fmt: skip
     assert nowhere.returncode == 2 and "destination groups: out" in nowhere.stderr
+
+
+def test_an_object_the_store_lacks_is_predicted_by_the_experiment_manager(floor):
+    ledger = json.loads(_tms(floor, "Ledger"))
+    assert "o2" not in ledger["unknown"]
+    status = _wait_finished(floor, _tms(floor, "OrderTo", "o2", "out"), timeout_s=300)
+    plan = status["plan"]
+    assert "prediction" in plan, status["history"]
+    assert plan["prediction"]["source"] == "virtual experiments (1 runs per state)"
+    assert plan["prediction"]["n"] == 1 and plan["next_best"] is not None
+    assert any("asking the Experiment Manager" in what for _, what in status["history"])
+    if status["result"].get("loaded_state") is not None:  # it was loaded: in that state
+        assert status["result"]["loaded_state"] == plan["state"]
 
 
 def test_kpis_count_every_order(floor, capfd):

@@ -80,7 +80,8 @@ EXPECTED_ELEMENTS = {
         "OperationalData": ["State", "ExperimentsDone", "StudyState", "StudyPlan",
                             "StudyStore", "StudyDone", "StudyPlanned", "StudyProgress",
                             "StudyRate", "StudyEtaS"],
-        "ControlInterface": ["RunExperiment", "StartStudy", "StopStudy", "StudyStatus"],
+        "ControlInterface": ["RunExperiment", "Predict", "StartStudy", "StopStudy",
+                             "StudyStatus"],
     },
     "PropS": {
         "Identification": ["AssetId", "AssetClass", "AssetKind", "Provenance"],
@@ -113,6 +114,7 @@ EXPECTED_OPERATIONS = [
      [("unit", _S), ("object", _S), ("face", _S), ("conveyor", _S), ("theta_deg", _I),
       ("seed", _I)],
      [("result_json", _S)]),
+    ("EM", "Predict", [("object", _S), ("runs", _I), ("seed", _I)], [("predictions_json", _S)]),
     ("PropS", "ReportPose",
      [("source", _S), ("subject", _S), ("x", _D), ("y", _D), ("theta", _D), ("sigma_xy", _D),
       ("sigma_theta", _D)],

@@ -307,6 +307,14 @@ CONTROL_INTERFACE: Mapping[str, tuple[OperationSpec, ...]] = MappingProxyType(
                 "Plan and run one transfer experiment.",
             ),
             OperationSpec(
+                "Predict",
+                (Arg("object", _S), Arg("runs", _I), Arg("seed", _I)),
+                (Arg("predictions_json", _S),),
+                "The twin's success share per pre-transfer state of an object, best first, "
+                "from virtual experiments (28 states, runs each); '' while they run (the "
+                "first call starts them; call again).",
+            ),
+            OperationSpec(
                 "StartStudy",
                 (Arg("plan_json", _S), Arg("store", _S)),
                 (Arg("status_json", _S),),

@@ -38,6 +38,7 @@ logical = ["TMS", "EM", "PropS", "KG"]    # optional; these four by default
 policy = "predictive"                     # or "nearest-idle" (the default)
 study = "out/quick.sqlite"                # a study store with the twin's per-state shares
 runs = 4                                  # runs per state of on-the-fly virtual experiments
+capacity = 1                              # objects a unit may hold (0, the default: no limit)
 
 [operation.groups]                        # destinations with a choice of unit
 inspection = ["TU_C", "TU_D"]
@@ -138,6 +139,7 @@ class OperationSpec:
     study: str | None = None
     runs: int = 4
     groups: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    capacity: int = 0
 
     def group(self, name: str) -> tuple[str, ...] | None:
         """The units of destination group `name` (None: no such group)."""
@@ -299,6 +301,8 @@ def _check(floor: FloorSpec) -> None:
                          f"got {op.policy!r}")  # fmt: skip
     if not 1 <= op.runs <= 1000:
         raise InputError(f"{where}: operation.runs must be 1..1000, got {op.runs}")
+    if op.capacity < 0:
+        raise InputError(f"{where}: operation.capacity must be >= 0, got {op.capacity}")
     for group, units in op.groups:
         if group in floor.units or group in seen:
             raise InputError(f"{where}: destination group {group!r} is also an asset id")
@@ -383,21 +387,22 @@ def _operation(table: object, name: str) -> OperationSpec:
     where = f"floor {name}: [operation]"
     if not isinstance(table, dict):
         raise InputError(f"{where} must be a table")
-    known = {"policy", "study", "runs", "groups"}
+    known = {"policy", "study", "runs", "groups", "capacity"}
     if unknown := sorted(set(table) - known):
         raise InputError(f"{where}: unknown key {unknown[0]!r}; known: {', '.join(sorted(known))}")
     study = table.get("study")
     if study is not None and (not isinstance(study, str) or not study):
         raise InputError(f"{where}: study must be the path of a study store")
-    runs = table.get("runs", 4)
-    if isinstance(runs, bool) or not isinstance(runs, int):
-        raise InputError(f"{where}: runs must be an integer, got {runs!r}")
+    runs, capacity = table.get("runs", 4), table.get("capacity", 0)
+    for key, value in (("runs", runs), ("capacity", capacity)):
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise InputError(f"{where}: {key} must be an integer, got {value!r}")
     groups = table.get("groups", {})
     if not isinstance(groups, dict) or not all(
             isinstance(v, list) and all(isinstance(u, str) for u in v) for v in groups.values()):
         raise InputError(f"{where}: groups must map a name to a list of unit ids")  # fmt: skip
     return OperationSpec(str(table.get("policy", "nearest-idle")), study, runs,
-                         tuple((g, tuple(u)) for g, u in groups.items()))  # fmt: skip
+                         tuple((g, tuple(u)) for g, u in groups.items()), capacity)  # fmt: skip
 
 
 def load_floor(path: Path | str, *, check_cores: bool = True) -> FloorSpec:
@@ -453,7 +458,8 @@ def floor_toml(floor: FloorSpec) -> str:
     for obj, at in floor.objects:
         lines += ["", "[[object]]", f"id = {json.dumps(obj)}", f"at = {json.dumps(at)}"]
     op = floor.operation
-    lines += ["", "[operation]", f"policy = {json.dumps(op.policy)}", f"runs = {op.runs}"]
+    lines += ["", "[operation]", f"policy = {json.dumps(op.policy)}", f"runs = {op.runs}",
+              f"capacity = {op.capacity}"]
     if op.study is not None:
         lines.append(f"study = {json.dumps(op.study)}")
     if op.groups:

@@ -177,9 +177,13 @@ class TmsRole(Role):
         return op_id
 
     def _occupied(self, unit: str) -> bool:
-        """`unit`'s belts hold an object that no unfinished order takes away."""
+        """`unit` holds as many objects as the floor's capacity allows (0: no limit),
+        counting none that an unfinished order takes away."""
+        capacity = self.node.floor.operation.capacity
+        if capacity == 0:
+            return False
         leaving = {o["object"] for o in self.ops.values() if o["state"] != "finished"}
-        return any(o not in leaving for o in self.ledger.objects_at(unit))
+        return sum(o not in leaving for o in self.ledger.objects_at(unit)) >= capacity
 
     async def _orders(self) -> str:
         return json.dumps([order_view(op) for op in self.ops.values()])

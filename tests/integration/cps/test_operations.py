@@ -65,6 +65,7 @@ at = "TU_B"
 policy = "predictive"
 study = "study.sqlite"
 runs = 1
+capacity = 1
 
 [operation.groups]
 out = ["TU_B", "TU_C"]

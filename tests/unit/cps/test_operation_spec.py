@@ -22,18 +22,19 @@ def _with(tmp_path, table: str):
 def test_operation_round_trips_and_a_relative_study_is_the_floor_files(tmp_path):
     (tmp_path / "s.sqlite").write_bytes(b"")
     path = _with(tmp_path, '[operation]\npolicy = "predictive"\nstudy = "s.sqlite"\nruns = 3\n'
+                           'capacity = 1\n'
                            '[operation.groups]\nout = ["TU_C", "TU_D"]\n')
     spec = load_floor(path)
     op = spec.operation
-    assert (op.policy, op.runs, op.group("out"), op.group("TU_C")) == (
-        "predictive", 3, ("TU_C", "TU_D"), None)
+    assert (op.policy, op.runs, op.capacity, op.group("out"), op.group("TU_C")) == (
+        "predictive", 3, 1, ("TU_C", "TU_D"), None)
     assert op.study == str((tmp_path / "s.sqlite").resolve())
     (tmp_path / "again.toml").write_text(floor_toml(spec))
     assert load_floor(tmp_path / "again.toml") == spec
 
 
 def test_the_default_is_nearest_idle_without_a_study():
-    assert default_floor_spec().operation == OperationSpec("nearest-idle", None, 4, ())
+    assert default_floor_spec().operation == OperationSpec("nearest-idle", None, 4, (), 0)
 
 
 @pytest.mark.parametrize(("table", "message"), [
@@ -41,6 +42,7 @@ def test_the_default_is_nearest_idle_without_a_study():
     ('[operation]\nruns = 0\n', "operation.runs must be 1..1000"),
     ('[operation]\nruns = "4"\n', "runs must be an integer"),
     ('[operation]\nspeed = 1\n', "unknown key 'speed'"),
+    ('[operation]\ncapacity = -1\n', "capacity must be >= 0"),
     ('[operation.groups]\nout = ["TU_Z"]\n', "must list transfer units"),
     ('[operation.groups]\nTU_A = ["TU_B"]\n', "is also an asset id"),
 ])

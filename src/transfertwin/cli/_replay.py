@@ -59,7 +59,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
     if found is not None:
         check = compare_with_row(replay.result, found.row) if found.row else None
         source = {"kind": "study", "study": found.store, "stored": found.row is not None,
-                  "check": check}  # fmt: skip
+                  "check": check, "runs": found.runs}  # fmt: skip
         if check is None:
             print(f"note: {found.store} has no row for this experiment yet", file=sys.stderr)
         elif not check["same"]:

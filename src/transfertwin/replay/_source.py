@@ -42,12 +42,13 @@ COMPARED_COLUMNS = ("status", "y1", "y2", "success", "t_end_s", "t_end_1_s", "t_
 
 @dataclasses.dataclass(frozen=True)
 class StudyRow:
-    """One experiment of a study: its spec as the plan makes it and its stored row (None
-    when the study has not run it yet)."""
+    """One experiment of a study: its spec as the plan makes it, its stored row (None
+    when the study has not run it yet), the store's file name and the plan's runs per state."""
 
     spec: ExperimentSpec
     row: dict[str, object] | None
     store: str
+    runs: int = 1
 
 
 class _AllBut:
@@ -110,7 +111,7 @@ def study_spec(
         row = next((r for r in store.rows() if _key(r) == key), None)
     if len(specs) != 1:
         raise InputError(f"the study plans no experiment {key}")
-    return StudyRow(specs[0][1], row, path.name)
+    return StudyRow(specs[0][1], row, path.name, plan.runs)
 
 
 def _same(a: object, b: object) -> bool:

@@ -119,7 +119,7 @@ class ReplayService:
             replay = record_experiment(found.spec)
             check = compare_with_row(replay.result, found.row) if found.row else None
             source = {"kind": "study", "study": name, "stored": found.row is not None,
-                      "check": check}  # fmt: skip
+                      "check": check, "runs": found.runs}  # fmt: skip
             return replay_payload(replay, source=source)
         ref = params.get("object", "")
         if not is_builtin_id(ref):

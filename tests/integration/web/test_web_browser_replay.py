@@ -167,3 +167,25 @@ def test_a_30_s_transfer_replay_loads_in_under_2_s(browser, tmp_path):
     finally:
         server.stop()
     assert min(loads) < LOAD_LIMIT_MS, loads
+
+
+def test_the_studies_page_links_each_state_to_its_replay(browser, tiny_study, console_factory):
+    console = console_factory("--db", str(tiny_study))
+    page = browser.new_page(viewport={"width": 1280, "height": 900})
+    page.set_default_timeout(60_000)
+    page.goto(console.url)
+    page.wait_for_selector("#bw-o1 a.replay-link")
+    best = page.get_attribute("#bw-o1 a.replay-link", "href")
+    assert best.startswith("/replay?study=tiny.sqlite&object=o1&face=") and best.endswith("run=0")
+    # A click on a state in the success map opens that state's replay in a new page.
+    point = page.locator("#polar .scatterlayer path.point").first
+    point.wait_for()
+    box = point.bounding_box()
+    with page.context.expect_page() as opened:
+        page.mouse.click(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    replay = opened.value
+    replay.wait_for_function(READY)
+    assert replay.evaluate("window.__replay.error") is None
+    assert "/replay?study=tiny.sqlite&object=o1" in replay.url
+    replay.wait_for_selector("#check")
+    assert "same bits as the stored row of tiny.sqlite" in replay.inner_text("#check")

@@ -40,7 +40,7 @@ def test_a_study_row_replays_with_the_stored_bits(client, tiny_study):
     assert res.status_code == 200, res.text
     doc = res.json()
     assert doc["source"] == {"kind": "study", "study": tiny_study.name, "stored": True,
-                             "check": {"same": True, "differences": []}}  # fmt: skip
+                             "check": {"same": True, "differences": []}, "runs": 1}  # fmt: skip
     assert doc["result"]["t_end_s"] == row["t_end_s"] and doc["spec"]["seed"] == row["seed"]
     assert doc["markers"][1]["kind"] == "pre"
 

@@ -224,6 +224,9 @@ $("map-study").addEventListener("change", () => { fillObjects(); drawMap(); draw
 $("map-object").addEventListener("change", () => { drawMap(); drawAnalysis(); });
 
 const SYMBOL = { left: "triangle-up", both: "circle", right: "triangle-down" };
+// The 3-D replay of one experiment of a study (run r of a state): /replay (replay.js).
+const replayUrl = (study, obj, s, run = 0) => "/replay?" + new URLSearchParams({ study,
+  object: obj, face: s.face, conveyor: s.conveyor, theta: s.theta_deg, run });
 // θ is signed, -179..180 (as in the tables and the report): ticks every 30°, 210° reads -150°.
 const YAW_TICKS = Array.from({ length: 12 }, (_, i) => 30 * i);
 async function drawMap() {
@@ -252,16 +255,27 @@ async function drawMap() {
       if (!pts.length) continue;
       traces.push({ type: "scatterpolar", mode: "markers", subplot: key,
         name: face + " / " + conveyor, r: pts.map((p) => p.r), theta: pts.map((p) => p.theta_deg),
-        customdata: pts.map((p) => [conveyor, p.n, p.successes, p.share, face]),
+        customdata: pts.map((p) => [conveyor, p.n, p.successes, p.share, face, p.theta_deg]),
         marker: { size: 10, symbol: SYMBOL[conveyor], color: pts.map((p) => p.share),
           cmin: 0, cmax: 1, colorscale: [[0, "#cf222e"], [0.5, "#e3b341"], [1, "#1a7f37"]],
           showscale: !traces.some((t) => t.marker && t.marker.showscale), colorbar: { title: { text: "success" }, len: 0.6 },
           line: { width: 0.5, color: "#333" } },
         hovertemplate: obj + " %{customdata[4]}, θ = %{theta}, conveyor %{customdata[0]}<br>" +
-          "success %{customdata[2]} of %{customdata[1]} (%{customdata[3]:.0%})<extra></extra>" });
+          "success %{customdata[2]} of %{customdata[1]} (%{customdata[3]:.0%})<br>" +
+          "click: replay run 0 in 3-D<extra></extra>" });
     }
   });
   Plotly.react("polar", traces, layout, { displaylogo: false, responsive: true });
+  const polar = $("polar");
+  if (!polar.dataset.replayClick) {  // a state's point opens its replay
+    polar.dataset.replayClick = "1";
+    polar.on("plotly_click", (ev) => {
+      const c = ev.points && ev.points[0] && ev.points[0].customdata;
+      if (!c) return;
+      window.open(replayUrl($("map-study").value, $("map-object").value,
+        { face: c[4], conveyor: c[0], theta_deg: c[5] }), "_blank", "noopener");
+    });
+  }
 }
 
 // -- per-state intervals and best/worst states -------------------------------------------
@@ -314,7 +328,10 @@ async function drawAnalysis() {
   $("bestworst").querySelector("tbody").replaceChildren(...sel.map((s) => el("tr", { id: "bw-" + s.object_id },
     el("td", { text: s.object_id }), el("td", { class: "best", text: stateText(s.best) }),
     el("td", { text: ciText(s.best) }), el("td", { class: "worst", text: stateText(s.worst) }),
-    el("td", { text: ciText(s.worst) }))));
+    el("td", { text: ciText(s.worst) }),
+    el("td", {}, ...["best", "worst"].map((w) => el("a", { class: "replay-link", href:
+      replayUrl(name, s.object_id, s[w]), target: "_blank", rel: "noopener", text: w + " ",
+      title: "replay run 0 of the " + w + " state in 3-D" }))))));
 }
 
 // -- calibration -----------------------------------------------------------------------------

@@ -215,7 +215,24 @@ function describe(doc) {
   } else {
     $('check').textContent = `re-simulated (${src.kind || 'replay'}), seed ${s.seed}`;
   }
+  if (src.kind === 'study' && src.runs > 1) {  // step through the state's runs
+    const runs = document.createElement('span');
+    runs.id = 'runs';
+    runs.append(` · run ${s.run} of 0..${src.runs - 1}: `);
+    for (const [text, r] of [['‹ previous', s.run - 1], ['next ›', s.run + 1]]) {
+      if (r < 0 || r >= src.runs) continue;
+      const q = new URLSearchParams({ study: src.study, object: doc.result.object_id, face: s.face,
+        conveyor: s.conveyor, theta: s.theta_deg, run: r });
+      const a = document.createElement('a');
+      a.href = '/replay?' + q.toString();
+      a.textContent = text + ' ';
+      a.className = 'run-link';
+      runs.append(a);
+    }
+    $('check').append(runs);
+  }
 }
+
 
 // -- main -------------------------------------------------------------------------------------
 const tModule = performance.now();  // the module graph (three.js) has loaded

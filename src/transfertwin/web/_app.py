@@ -255,7 +255,8 @@ def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = No
         return JSONResponse({"assets": gw.assets(), "kg_error": gw.floor_error or gw.kg_error,
                              "tms_error": gw.tms_error, "mode": gw.info.mode,
                              "objects": gw.ids_of("object"),
-                             "units": gw.ids_of("transfer_unit")})  # fmt: skip
+                             "units": gw.ids_of("transfer_unit"),
+                             "groups": gw.destination_groups()})  # fmt: skip
 
     @_api
     async def api_aas(request: Request) -> Response:
@@ -273,6 +274,7 @@ def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = No
             while not max_events or n < max_events:
                 payload = gw.live()
                 payload["orders"] = gw.order_rows()
+                payload["kpis"] = gw.kpis()
                 yield f"event: live\ndata: {json.dumps(payload)}\n\n"
                 n += 1
                 if await request.is_disconnected():

@@ -49,6 +49,7 @@ class FloorInfo:
         insecure: NoSecurity (``--insecure``).
         stamp: (mtime ns, size, inode) of cps.json: changes when a CPS rewrites it.
         started: When cps.json was written (local time, as cps.log's timestamps are).
+        groups: Destination groups of a process floor (name, units), orderable by name.
     """
 
     mode: str
@@ -58,6 +59,7 @@ class FloorInfo:
     insecure: bool
     stamp: tuple[int, int, int]
     started: datetime
+    groups: tuple[tuple[str, tuple[str, ...]], ...] = ()
 
 
 def read_floor_info(workdir: Path) -> FloorInfo | None:
@@ -78,6 +80,7 @@ def read_floor_info(workdir: Path) -> FloorInfo | None:
         insecure=bool(info.get("insecure")),
         stamp=(st.st_mtime_ns, st.st_size, st.st_ino),
         started=datetime.fromtimestamp(st.st_mtime).replace(microsecond=0),
+        groups=tuple((str(g), tuple(u)) for g, u in info.get("groups", ())),
     )
 
 

@@ -467,6 +467,20 @@ class CpsGateway(OrderDesk):
         # a process floor's TMS takes an order onward from a module holding the object
         return self.ids_of("transport_module") if self.processes else []
 
+    def by_destination(self) -> bool:
+        return self.processes
+
+    def destination_groups(self) -> list[str]:
+        return [g for g, _ in self.info.groups] if self.processes else []
+
+    def kpis(self) -> dict[str, Any] | None:
+        """The TMS's KPIs as it publishes them (`KpisJson`; a process floor's), or None."""
+        text = self.values.get("TMS", {}).get("KpisJson") if self.processes else None
+        try:
+            return json.loads(text) if text else None
+        except ValueError:
+            return None
+
     async def _where(self, obj: str) -> str:
         units = self.ids_of("transfer_unit") + self._module_sources()
         if self.processes:

@@ -91,12 +91,17 @@ class OrderDesk:
     def ids_of(self, cls: str) -> list[str]:  # provided by the gateway
         raise NotImplementedError
 
+    def destination_groups(self) -> list[str]:
+        """Destination groups an order may name as its target (a process floor's)."""
+        return []
+
     def _unit(self, what: str, value: object) -> str:
-        """A transfer unit id, or the unit standing at a station named by its id."""
+        """A transfer unit id, or the unit standing at a station named by its id (or, for
+        the target, a destination group)."""
         units = self.ids_of("transfer_unit")
         if not isinstance(value, str) or not _ID.match(value):
             raise InputError(f"{what} must be a transfer unit or station id, got {value!r:.70}")
-        if value in units:
+        if value in units or (what == "target" and value in self.destination_groups()):
             return value
         at = [r["id"] for r in self.kg_rows if r.get("station") == value and r["id"] in units]
         if len(at) == 1:
@@ -115,6 +120,8 @@ class OrderDesk:
             raise InputError(f"object must be one of {', '.join(objects)}, got {obj!r:.70}")
         target = self._unit("target", body.get("target"))
         source = body.get("source") or None
+        if source is None and self.by_destination():
+            return obj, None, target  # the TMS finds where it is (OrderTo): orders chain
         if source is None:
             source = await self._where(obj)
         if source not in self._module_sources():
@@ -131,14 +138,22 @@ class OrderDesk:
         """Transport modules an order may start from (an object left on a module)."""
         return []
 
-    async def submit(self, obj: str, source: str, target: str, client: str) -> Order:
-        """Place a validated order with the TMS; it is followed in the background."""
-        order = Order(f"w{len(self.orders) + 1}", obj, source, target,
+    def by_destination(self) -> bool:
+        """The TMS takes orders by destination (`OrderTo`; a process floor's)."""
+        return False
+
+    async def submit(self, obj: str, source: str | None, target: str, client: str) -> Order:
+        """Place a validated order with the TMS (by destination when `source` is None); it
+        is followed in the background."""
+        order = Order(f"w{len(self.orders) + 1}", obj, source or "where it is", target,
                       datetime.now(UTC).isoformat(timespec="seconds"), client,
                       run=self._run_stamp())  # fmt: skip
         try:
-            order.operation = str(await self._tms_call("SubmitTransportOperation", source,
-                                                       target, obj))  # fmt: skip
+            if source is None:
+                order.operation = str(await self._tms_call("OrderTo", obj, target))
+            else:
+                order.operation = str(await self._tms_call("SubmitTransportOperation", source,
+                                                           target, obj))  # fmt: skip
         except ua.UaStatusCodeError as exc:
             reason = status_text(exc)
             audit.info("order refused: %s %s -> %s from %s: %s", obj, source, target, client,

@@ -7,6 +7,7 @@ unique operation id, with the TMS's history. Marked slow: a floor takes ~40 s to
 
 from __future__ import annotations
 
+import asyncio
 import json
 import os
 import signal
@@ -49,6 +50,13 @@ def restart(wd: Path, aid: str) -> subprocess.Popen:
         [sys.executable, "-m", "transfertwin", "cps", "asset", "--config",
          str(wd / "assets" / f"{aid}.toml")], stdout=log, stderr=subprocess.STDOUT,
         start_new_session=True)  # fmt: skip
+
+
+async def _tms(wd: Path, op: str, *args):
+    from transfertwin.cli._cps_floor import _call, _info
+
+    info, creds = _info(wd)
+    return await _call(info, creds, "TMS", op, *args)
 
 
 def pid_of(wd: Path, aid: str) -> int:
@@ -107,6 +115,19 @@ def test_item8_3_cli_orders_are_in_the_orders_tab_and_a_joining_module_appears(f
         assert done["steps"][0]["text"] == "queued" and done["outcome"]
         ops = [r["operation"] for r in c.get("/api/orders").json()["orders"]]
         assert ops == [op, mine["operation"]]
+        # placed by destination (OrderTo: the TMS found the source); the KPIs are live
+        status = json.loads(asyncio.run(_tms(floor, "OperationStatus", mine["operation"])))
+        assert status["destination"] == back["target"] and status["source"] == at
+
+        def kpis() -> dict | None:
+            live = c.get("/api/live?max_events=1").text
+            event = json.loads(next(ln[6:] for ln in live.splitlines() if ln.startswith("data: ")))
+            k = event.get("kpis")
+            return k if k and k["finished"] == 2 else None
+
+        k = wait_for(kpis, 20, "the TMS's KPIs in the live feed")
+        assert k["orders"] == 2 and k["policy"] == "nearest-idle"
+        assert "groups" in c.get("/api/assets").json()
 
         proc = restart(floor, "TM_2")  # the standby module joins at runtime
         try:

@@ -84,7 +84,7 @@ function fillOrderForm(data) {
   };
   fill("order-object", data.objects, false);
   fill("order-source", data.units, true);
-  fill("order-target", data.units, false);
+  fill("order-target", [...data.units, ...(data.groups || [])], false);
 }
 
 async function showAas(id) {
@@ -135,11 +135,32 @@ function connectLive() {
         : el("span", { class: "live", text: text }));
     }
     renderOrders(data.orders);
+    renderKpis(data.kpis);
   });
   source.onerror = () => { $("live-status").textContent = "live: reconnecting ..."; };
 }
 
 // -- orders --------------------------------------------------------------------------------
+function renderKpis(k) {
+  // the TMS's KPIs (process floors): what a shift supervisor reads first
+  const p = $("kpis");
+  p.hidden = !k;
+  if (!k) return;
+  const pct = (v) => v == null ? "n/a" : (100 * v).toFixed(1) + " %";
+  const [lo, hi] = k.success_share_ci95 || [null, null];
+  const util = (u) => Object.entries(u).map(([a, v]) => a + " " + pct(v)).join(", ");
+  const failed = Object.entries(k.failed_by_reason || {}).map(([r, n]) => r + ": " + n).join(", ");
+  p.replaceChildren(
+    el("span", { text: "policy " + k.policy + " · " + k.orders + " orders, " + k.delivered +
+      " delivered, " + k.failed + " failed, " + k.in_progress + " in progress" }), el("br"),
+    el("span", { id: "kpi-share", text: "success share " + pct(k.success_share) +
+      (lo == null ? "" : " [" + pct(lo) + ", " + pct(hi) + "] (Clopper–Pearson 95 %)") +
+      " · " + k.operations_per_hour.toFixed(1) + " operations/h · mean lead time " +
+      (k.mean_lead_time_s == null ? "n/a" : k.mean_lead_time_s.toFixed(1) + " s") }), el("br"),
+    el("span", { text: "modules: " + util(k.utilisation.modules) + " · units: " +
+      util(k.utilisation.units) + (failed ? " · failed: " + failed : "") }));
+}
+
 function renderOrders(orders) {
   const tbody = document.querySelector("#orders tbody");
   tbody.replaceChildren(...orders.slice().reverse().map((o) => {

@@ -14,11 +14,27 @@ from transfertwin.cli._paths import out_file
 __all__ = ["register"]
 
 _TRANSFER_ONLY = ("seed", "dock_error", "profile", "mu", "gap_mm")
+_STATE = ("object", "face", "conveyor", "theta")
 
 
-def _spec(args: argparse.Namespace):  # -> (ExperimentSpec, StudyRow | None)
-    from transfertwin.replay import study_spec, transfer_spec
+def _spec(args: argparse.Namespace):  # -> (ExperimentSpec, StudyRow | CalibrationRow | None)
+    from transfertwin.replay import calibration_spec, study_spec, transfer_spec
 
+    if args.calibration is not None:
+        given = [f"--{k.replace('_', '-')}" for k in (*_TRANSFER_ONLY, *_STATE, "db")
+                 if getattr(args, k) is not None]  # fmt: skip
+        if given:
+            raise InputError(f"{', '.join(given)}: a calibration row's experiment comes from "
+                             "its folder (give --row and --run only)")  # fmt: skip
+        if args.row is None:
+            raise InputError("--calibration needs --row (the real row's index)")
+        found = calibration_spec(args.calibration, args.row, args.run or 0)
+        return found.spec, found
+    if args.row is not None:
+        raise InputError("--row needs --calibration (a 'calibrate run' folder)")
+    missing = [f"--{k}" for k in _STATE if getattr(args, k) is None]
+    if missing:
+        raise InputError(f"the replay needs {', '.join(missing)} (or --calibration DIR --row N)")
     if args.db is not None:
         given = [f"--{k.replace('_', '-')}" for k in _TRANSFER_ONLY if getattr(args, k) is not None]
         if given:
@@ -41,7 +57,13 @@ def _spec(args: argparse.Namespace):  # -> (ExperimentSpec, StudyRow | None)
 def cmd_replay(args: argparse.Namespace) -> int:
     """Record the experiment, write the files asked for, then serve the 3-D view."""
     from transfertwin.cli._transfer import hull_notice
-    from transfertwin.replay import compare_with_row, record_experiment, replay_payload
+    from transfertwin.replay import (
+        CalibrationRow,
+        calibration_source,
+        compare_with_row,
+        record_experiment,
+        replay_payload,
+    )
 
     outputs = {
         "json": out_file(args.json, (".json",)) if args.json else None,
@@ -56,7 +78,13 @@ def cmd_replay(args: argparse.Namespace) -> int:
         print(notice, file=sys.stderr, flush=True)
     replay = record_experiment(spec)
     source: dict[str, object] = {"kind": "transfer"}
-    if found is not None:
+    if isinstance(found, CalibrationRow):
+        name = Path(args.calibration).resolve().name
+        source = calibration_source(name, args.row, found, replay.result)
+        print(f"calibration row {args.row}, run {found.spec.run}: real {found.real_success}, "
+              f"predicted {found.predicted}, replayed {source['replayed']} ({found.note})",
+              file=sys.stderr)  # fmt: skip
+    elif found is not None:
         check = compare_with_row(replay.result, found.row) if found.row else None
         source = {"kind": "study", "study": found.store, "stored": found.row is not None,
                   "check": check, "runs": found.runs}  # fmt: skip
@@ -98,6 +126,7 @@ def _serve(args: argparse.Namespace, doc: dict[str, object]) -> int:
     from transfertwin.web import WebConfig, serve
 
     config = WebConfig(dbs=(Path(args.db),) if args.db else (), host=args.host,
+                       calibrations=(Path(args.calibration),) if args.calibration else (),
                        port=8765 if args.port is None else args.port)  # fmt: skip
 
     def ready(url: str) -> None:
@@ -121,12 +150,16 @@ def register(sub: argparse._SubParsersAction) -> None:
         "served locally), or write it as JSON, glTF (.glb, animated) or GIF.",
     )  # fmt: skip
     p.add_argument("--db", help="study store (SQLite): replay its row (object, state, --run)")
-    p.add_argument("--run", type=int, help="with --db: the row's repetition index r")
-    p.add_argument("--object", required=True, help="object id (o1..o37) or a mesh path")
+    p.add_argument("--run", type=int, help="with --db: the row's repetition index r; with "
+                   "--calibration: the calibration's run (default 0)")  # fmt: skip
+    p.add_argument("--calibration", metavar="DIR",
+                   help="a 'calibrate run' output folder: replay its real row --row")  # fmt: skip
+    p.add_argument("--row", type=int, help="with --calibration: the real row's index")
+    p.add_argument("--object", help="object id (o1..o37) or a mesh path")
     p.add_argument("--units", default="m", help="length unit of a mesh file: m, cm, mm, in")
-    p.add_argument("--face", required=True, help="front or back")
-    p.add_argument("--conveyor", required=True, help="left, right or both")
-    p.add_argument("--theta", required=True, type=int, help="yaw in integer degrees, -179..180")
+    p.add_argument("--face", help="front or back")
+    p.add_argument("--conveyor", help="left, right or both")
+    p.add_argument("--theta", type=int, help="yaw in integer degrees, -179..180")
     p.add_argument("--dock-error", help="without --db: X_MM,Y_MM,THETA_DEG (default 0,0,0)")
     p.add_argument("--seed", type=int, help="without --db: the experiment's seed (default 0)")
     p.add_argument("--profile", help="without --db: physics profile TOML or built-in name")

@@ -21,8 +21,12 @@ from transfertwin.replay._record import (
 )
 from transfertwin.replay._scene import GeomPart, MeshData, SceneGeometry, scene_geometry
 from transfertwin.replay._source import (
+    BUILTIN_REAL,
     COMPARED_COLUMNS,
+    CalibrationRow,
     StudyRow,
+    calibration_source,
+    calibration_spec,
     compare_with_row,
     parse_dock_error,
     study_spec,
@@ -32,10 +36,12 @@ from transfertwin.replay._source import (
 __all__ = [
     "BARRIER_NAMES",
     "BELT_NAMES",
+    "BUILTIN_REAL",
     "COMPARED_COLUMNS",
     "MAX_GIF_FRAMES",
     "OTS_CODES",
     "PAYLOAD_VERSION",
+    "CalibrationRow",
     "GeomPart",
     "Marker",
     "MeshData",
@@ -43,6 +49,8 @@ __all__ = [
     "SceneGeometry",
     "StudyRow",
     "belt_travel",
+    "calibration_source",
+    "calibration_spec",
     "compare_with_row",
     "compile_system",
     "gif_frame_times",

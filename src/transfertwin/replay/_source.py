@@ -1,9 +1,17 @@
-"""Where a replay comes from: a study store's row, or a `transfer`'s arguments.
+"""Where a replay comes from: a study store's row, a calibration's row, or a `transfer`'s
+arguments.
 
 A study row's experiment is rebuilt from the store's plan (`StudyPlan.specs`, which derives
 every seed and docking error from the master seed, the object, the state and the run), so
 the replay is the experiment the study ran; `compare_with_row` says whether its result has
 the stored row's bits (y1, y2, success, t_end and the pre-transfer state).
+
+A `calibrate run` folder's row is rebuilt as `calibrate` replayed it (`replay_specs`: the
+real row's state and measured docking error, the seed from the master seed, the real object
+id, the row index and the run) from what the folder records: the real table, the profile
+(a built-in one), the object map and the number of real rows. The master seed is not
+recorded there; the default 0 of `calibrate run --seed` is assumed, and the replay says
+whether its outcome agrees with the run's prediction in predictions.csv.
 """
 
 from __future__ import annotations
@@ -18,7 +26,7 @@ from transfertwin._errors import InputError
 from transfertwin.objects import is_builtin_id, load_object
 from transfertwin.ots import check_theta_deg, parse_conveyor, parse_face
 from transfertwin.sim import DockingError, SceneConfig
-from transfertwin.store import SQLITE_SUFFIXES, SQLiteResultStore
+from transfertwin.store import SQLITE_SUFFIXES, SQLiteResultStore, read_results
 from transfertwin.study.experiment import (
     ExperimentResult,
     ExperimentSpec,
@@ -28,7 +36,10 @@ from transfertwin.study.experiment import (
 
 __all__ = [
     "COMPARED_COLUMNS",
+    "CalibrationRow",
     "StudyRow",
+    "calibration_source",
+    "calibration_spec",
     "compare_with_row",
     "parse_dock_error",
     "study_spec",
@@ -169,3 +180,84 @@ def transfer_spec(
         object_ref=object_ref, face=face, conveyor=conveyor, theta_deg=theta_deg,
         docking_error=parse_dock_error(dock_error), scene=scene, seed=seed, units=units,
     )  # fmt: skip
+
+
+#: The `--real` default of `calibrate`: the real table shipped with the package.
+BUILTIN_REAL = "builtin:calibration_experiments.csv"
+
+
+@dataclasses.dataclass(frozen=True)
+class CalibrationRow:
+    """One real row of a calibration, replayed: its spec, the real outcome and the run's
+    prediction (1 success; 0 failure or not 'ok'), and how the spec was rebuilt."""
+
+    spec: ExperimentSpec
+    real_success: int
+    predicted: int | None
+    runs: int
+    note: str
+
+
+def _json_object(path: Path) -> dict[str, object]:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise InputError(f"{path.parent.name}/{path.name}: unreadable ({exc})") from None
+    if not isinstance(data, dict):
+        raise InputError(f"{path.parent.name}/{path.name}: not a JSON object")
+    return data
+
+
+def calibration_spec(folder: str | Path, row: int, run: int, seed: int = 0) -> CalibrationRow:
+    """The experiment `calibrate run` (output in `folder`) ran for real row `row`, run `run`."""
+    import csv
+
+    from transfertwin.data import calibration_csv_path
+    from transfertwin.study.calibration import replay_specs
+
+    folder = Path(folder)
+    metrics_path = folder / "metrics.json"
+    if not metrics_path.is_file():
+        raise InputError(f"{folder.name}: no metrics.json ('calibrate run' writes it); rows of "
+                         "'calibrate evaluate' are not replayed")  # fmt: skip
+    metrics = _json_object(metrics_path)
+    try:
+        n_real, runs = int(metrics["n_real"]), len(metrics["runs"])
+        object_map = {str(k): str(v) for k, v in dict(metrics["object_map"]).items()}
+        real, profile = str(metrics["real"]), str(metrics.get("profile") or "default")
+    except (KeyError, TypeError, ValueError) as exc:
+        raise InputError(f"{folder.name}/metrics.json: not written by 'calibrate run' "
+                         f"({type(exc).__name__}: {exc})") from None  # fmt: skip
+    if isinstance(row, bool) or not 0 <= row < n_real:
+        raise InputError(f"row must be in 0..{n_real - 1}, got {row}")
+    if isinstance(run, bool) or not 0 <= run < runs:
+        raise InputError(f"run must be in 0..{runs - 1}, got {run}")
+    path = calibration_csv_path() if real == BUILTIN_REAL else Path(real)
+    if not path.is_file():
+        raise InputError(f"{folder.name}: its real table {real} is not found")
+    rows = list(read_results(path))[:n_real]
+    scene = SceneConfig() if profile == "default" else load_profile(profile)[1]
+    spec = replay_specs(rows, scene=scene, object_map=object_map, run=run, seed=seed)[row]
+    predicted = None
+    preds = folder / "predictions.csv"
+    if preds.is_file():
+        with preds.open(newline="", encoding="utf-8") as fh:
+            for rec in csv.DictReader(fh):
+                if rec.get("row") == str(row) and rec.get(f"pred_run{run}") in ("0", "1"):
+                    predicted = int(rec[f"pred_run{run}"])
+    note = (f"real row {row} of {real}, run {run}, profile {profile}, master seed {seed} "
+            "(calibrate run's default; the folder does not record it)")
+    return CalibrationRow(spec, int(rows[row]["success"]), predicted, runs, note)
+
+
+def calibration_source(
+    name: str, row: int, found: CalibrationRow, result: ExperimentResult
+) -> dict[str, object]:
+    """The replay document's ``source`` for a calibration row: the real outcome, the run's
+    prediction and whether this replay's outcome agrees with it."""
+    outcome = int(result.status == "ok" and result.success == 1)
+    agrees = None if found.predicted is None else outcome == found.predicted
+    return {"kind": "calibration", "calibration": name, "row": row, "run": found.spec.run,
+            "runs": found.runs, "real_success": found.real_success,
+            "predicted": found.predicted, "replayed": outcome, "agrees": agrees,
+            "note": found.note}  # fmt: skip

@@ -137,8 +137,8 @@ def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = No
     """The console app for `config` (its CPS sessions open with the app's lifespan);
     `replays` are replay documents served under ``/replay?key=K``."""
     studies = StudyViews(config.dbs, config.cps)
-    replay_service = ReplayService({p.name: p for p in config.dbs}, replays)
     calibrations = {p.name: p for p in config.calibrations}
+    replay_service = ReplayService({p.name: p for p in config.dbs}, replays, calibrations)
     live = LiveTransfer()
     state: dict[str, CpsGateway | None] = {"cps": None}
     token = config.session_token

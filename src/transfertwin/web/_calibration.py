@@ -29,6 +29,7 @@ from transfertwin.study.fullstate import clopper_pearson, object_sort_key
 __all__ = [
     "BOOTSTRAP_REPLICATES",
     "BOOTSTRAP_SEED",
+    "MAX_LISTED_ROWS",
     "bootstrap_f05",
     "calibration_view",
     "check_calibration_dir",
@@ -129,6 +130,10 @@ def check_calibration_dir(folder: Path) -> str:
                      "evaluation.json ('calibrate evaluate') in it")  # fmt: skip
 
 
+#: At most this many real rows are listed (with their replay links) on the page.
+MAX_LISTED_ROWS = 2000
+
+
 def _run_view(folder: Path) -> dict[str, object]:
     metrics = _read_json(folder / "metrics.json")
     try:
@@ -172,6 +177,15 @@ def _run_view(folder: Path) -> dict[str, object]:
         per_core[str(o)] = (int(actual[m].sum()), int(m.sum()), int(predicted[:, m].sum()),
                             int(m.sum()) * len(cols))  # fmt: skip
     out["shares"] = _shares(per_core)
+    # The real rows with each run's prediction: the page links each row × run to its replay.
+    out["rows"] = [
+        {"row": int(r["row"]) if str(r.get("row", "")).isdigit() else i,
+         "object_id": r["object_id"], "face": r.get("face"), "conveyor": r.get("conveyor"),
+         "theta_deg": r.get("theta_deg"), "success": int(actual[i]),
+         "predicted": [int(v) for v in predicted[:, i]]}
+        for i, r in enumerate(rows[:MAX_LISTED_ROWS])
+    ]  # fmt: skip
+    out["rows_total"] = len(rows)
     return out
 
 

@@ -8,6 +8,9 @@
   the stored row's bits);
 - ``object=o1&face=..&conveyor=..&theta=..[&seed=0][&dock_error=X,Y,T][&gap_mm=..][&mu=..]``:
   a `transfer` with a built-in core (a mesh path is not taken from a URL);
+- ``calibration=NAME&row=I&run=R``: real row I of a `calibrate run` folder the console
+  shows, as its run R replayed it (the document says whether the outcome agrees with the
+  run's prediction);
 - ``key=K``: a replay the `transfertwin replay` command computed before serving.
 
 Replays are computed one at a time in fresh systems and the last few are kept.
@@ -24,6 +27,8 @@ from typing import Any
 from transfertwin._errors import InputError
 from transfertwin.objects import is_builtin_id
 from transfertwin.replay import (
+    calibration_source,
+    calibration_spec,
     compare_with_row,
     record_experiment,
     replay_payload,
@@ -75,12 +80,17 @@ class ReplayService:
     Args:
         studies: Study store file name → path (the console's ``--db``).
         preload: Replay documents by key (`transfertwin replay` serves its own this way).
+        calibrations: Calibration folder name → path (the console's ``--calibration``).
     """
 
     def __init__(
-        self, studies: Mapping[str, Path], preload: Mapping[str, dict[str, Any]] | None = None
+        self,
+        studies: Mapping[str, Path],
+        preload: Mapping[str, dict[str, Any]] | None = None,
+        calibrations: Mapping[str, Path] | None = None,
     ) -> None:
         self._studies = dict(studies)
+        self._calibrations = dict(calibrations or {})
         self._preload = dict(preload or {})
         self._cache: OrderedDict[tuple, dict[str, Any]] = OrderedDict()
         self._lock = threading.Lock()
@@ -104,6 +114,16 @@ class ReplayService:
             return doc
 
     def _compute(self, params: Mapping[str, str]) -> dict[str, Any]:
+        if "calibration" in params:
+            name = params["calibration"]
+            if name not in self._calibrations:
+                raise LookupError(f"no calibration {name[:80]!r}; calibrations: "
+                                  f"{', '.join(self._calibrations) or 'none'}")  # fmt: skip
+            found = calibration_spec(self._calibrations[name], _int(params, "row"),
+                                     _int(params, "run", 0))  # fmt: skip
+            replay = record_experiment(found.spec)
+            source = calibration_source(name, _int(params, "row"), found, replay.result)
+            return replay_payload(replay, source=source)
         for name in ("face", "conveyor"):
             if not params.get(name):
                 raise InputError(f"the replay needs {name}=...")

@@ -37,6 +37,11 @@ def test_replay_writes_its_document_and_glb(tmp_path, capsys):
         ([*R, "--dock-error", "1,2"], "--dock-error"),
         ([*R, "--port", "70000"], "--port"),
         (["replay", "--object", "o99", *R[3:]], "o99"),
+        (["replay", "--face", "front"], "needs --object, --conveyor, --theta"),
+        ([*R, "--row", "1"], "--row needs --calibration"),
+        (["replay", "--calibration", "nowhere", "--row", "0"], "no metrics.json"),
+        (["replay", "--calibration", "nowhere"], "--calibration needs --row"),
+        ([*R, "--calibration", "nowhere", "--row", "0"], "comes from its folder"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(tmp_path, monkeypatch, capsys, args, words):

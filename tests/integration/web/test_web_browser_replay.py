@@ -189,3 +189,25 @@ def test_the_studies_page_links_each_state_to_its_replay(browser, tiny_study, co
     assert "/replay?study=tiny.sqlite&object=o1" in replay.url
     replay.wait_for_selector("#check")
     assert "same bits as the stored row of tiny.sqlite" in replay.inner_text("#check")
+
+
+def test_the_calibration_page_links_each_row_to_its_replay(browser, console_factory, tmp_path):
+    from transfertwin.cli import main
+
+    out = tmp_path / "cal2"
+    assert main(["calibrate", "run", "--limit", "2", "--runs", "1", "--workers", "1",
+                 "--out", str(out)]) == 0  # fmt: skip
+    console = console_factory("--calibration", str(out))
+    page = browser.new_page(viewport={"width": 1280, "height": 900})
+    page.set_default_timeout(60_000)
+    page.goto(console.url)
+    page.click('nav .tab[data-tab="calibration"]')
+    page.wait_for_selector("#cal-row-1 a.replay-link")
+    href = page.get_attribute("#cal-row-1 a.replay-link", "href")
+    assert href == "/replay?calibration=cal2&row=1&run=0"
+    with page.context.expect_page() as opened:
+        page.click("#cal-row-1 a.replay-link")
+    replay = opened.value
+    replay.wait_for_function(READY)
+    assert replay.evaluate("window.__replay.error") is None
+    assert "cal2 row 1" in replay.inner_text("#check") and "(agrees)" in replay.inner_text("#check")

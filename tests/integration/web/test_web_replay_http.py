@@ -15,8 +15,19 @@ LOOPBACK = "http://127.0.0.1"
 
 
 @pytest.fixture(scope="module")
-def client(tiny_study):
-    cfg = WebConfig(dbs=(tiny_study,))
+def calibration(tmp_path_factory):
+    """`calibrate run` on the first 3 real rows, 2 runs (6 experiments)."""
+    from transfertwin.cli import main
+
+    out = tmp_path_factory.mktemp("cal") / "cal3"
+    assert main(["calibrate", "run", "--limit", "3", "--runs", "2", "--workers", "1",
+                 "--out", str(out)]) == 0  # fmt: skip
+    return out
+
+
+@pytest.fixture(scope="module")
+def client(tiny_study, calibration):
+    cfg = WebConfig(dbs=(tiny_study,), calibrations=(calibration,))
     with TestClient(create_app(cfg), base_url=LOOPBACK, raise_server_exceptions=False) as c:
         yield c
 
@@ -61,3 +72,19 @@ def test_a_transfer_replay_and_bad_requests(client):
         res = client.get(f"/api/replay?{query}")
         assert res.status_code == status, (query, res.text)
         assert words in res.json()["error"]
+
+
+def test_calibration_rows_link_to_replays_that_agree_with_the_predictions(client):
+    view = client.get("/api/calibrations/cal3").json()
+    assert view["rows_total"] == 3 and [r["row"] for r in view["rows"]] == [0, 1, 2]
+    for row in view["rows"]:
+        for run, predicted in enumerate(row["predicted"]):
+            res = client.get(f"/api/replay?calibration=cal3&row={row['row']}&run={run}")
+            assert res.status_code == 200, res.text
+            src = res.json()["source"]
+            assert (src["predicted"], src["real_success"]) == (predicted, row["success"])
+            assert src["agrees"] is True, src  # the same experiment as calibrate ran
+    for query, status in (("calibration=cal3&row=3&run=0", 422),
+                          ("calibration=cal3&row=0&run=2", 422),
+                          ("calibration=other&row=0&run=0", 404)):  # fmt: skip
+        assert client.get(f"/api/replay?{query}").status_code == status

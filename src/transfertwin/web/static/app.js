@@ -385,6 +385,7 @@ async function drawCalibration() {
       title: { text: "confusion matrix: " + d.confusion_label, font: { size: 13 } } },
     { displaylogo: false, responsive: true });
 
+  drawCalibrationRows(name, d);
   const sh = d.shares;
   const bars = [["real", "real", "#57606a"], ["sim", "twin", "#2f81f7"]].map(([key, label, color]) => ({
     type: "bar", name: label, x: sh.map((s) => s.object_id), y: sh.map((s) => s[key].share), marker: { color },
@@ -400,6 +401,31 @@ async function drawCalibration() {
     legend: { orientation: "h", y: -0.2 } }, { displaylogo: false, responsive: true });
 }
 $("cal-select").addEventListener("change", drawCalibration);
+
+// The real rows of a `calibrate run` folder, each run's prediction linked to its 3-D replay.
+function drawCalibrationRows(name, d) {
+  const box = $("cal-rows");
+  if (!d.rows || !d.rows.length) {
+    box.replaceChildren(el("p", { class: "muted", text: d.kind === "run" ? "no predictions.csv: no rows to replay" :
+      "rows of 'calibrate evaluate' are not replayed (a 'calibrate run' folder lists its rows)" }));
+    return;
+  }
+  const runs = d.rows[0].predicted.length;
+  const head = el("tr", {}, ...["row", "core", "state", "real"].map((t) => el("th", { text: t })),
+    ...Array.from({ length: runs }, (_, r) => el("th", { text: "twin, run " + r })));
+  const body = d.rows.map((row) => el("tr", { id: "cal-row-" + row.row },
+    el("td", { text: String(row.row) }), el("td", { text: row.object_id }),
+    el("td", { text: row.face + " / " + row.conveyor + " / θ = " + row.theta_deg + "°" }),
+    el("td", { text: row.success ? "success" : "failure" }),
+    ...row.predicted.map((p, r) => el("td", {}, el("a", { class: "replay-link", target: "_blank",
+      rel: "noopener", title: "replay this row as run " + r + " replayed it, in 3-D",
+      href: "/replay?" + new URLSearchParams({ calibration: name, row: row.row, run: r }),
+      text: (p ? "success" : "failure") + " ▶" })))));
+  const more = d.rows_total > d.rows.length ? [el("p", { class: "muted", text:
+    "the first " + d.rows.length + " of " + d.rows_total + " rows" })] : [];
+  box.replaceChildren(el("h3", { text: "real rows: replay any in 3-D" }),
+    el("table", { id: "cal-row-table" }, el("thead", {}, head), el("tbody", {}, ...body)), ...more);
+}
 
 // -- live transfer ---------------------------------------------------------------------------
 const SVG = "http://www.w3.org/2000/svg";

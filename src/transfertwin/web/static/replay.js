@@ -212,6 +212,12 @@ function describe(doc) {
       `differs from the stored row: ${src.check.differences.join('; ')}`;
   } else if (src.kind === 'study') {
     $('check').textContent = `not in ${src.study} yet`;
+  } else if (src.kind === 'calibration') {
+    const word = (y) => (y === null || y === undefined ? '–' : y ? 'success' : 'failure');
+    $('check').textContent = `${src.calibration} row ${src.row}: real ${word(src.real_success)}; ` +
+      `run ${src.run} predicted ${word(src.predicted)}, this replay ${word(src.replayed)}` +
+      (src.agrees === null ? '' : src.agrees ? ' (agrees)' : ' (differs)');
+    $('check').title = src.note || '';
   } else {
     $('check').textContent = `re-simulated (${src.kind || 'replay'}), seed ${s.seed}`;
   }

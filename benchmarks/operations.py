@@ -1,0 +1,248 @@
+"""The twin in operation, measured on the emulated plant: the same orders under the TMS's
+``nearest-idle`` and ``predictive`` policies (docs/architecture.md, "Operation").
+
+    PYTHONPATH=src .venv/bin/python benchmarks/operations.py --orders 200
+
+For each policy it starts the floor (default ``examples/floor-large.toml``: 8 stations, 3
+transport modules, 20 cores) as asset processes on the emulated plant (``--plant-seed``: the
+plant's hidden physics, not the twin's, decide every transfer), sends the same seeded
+sequence of orders by destination (each object's next destination differs from its last
+two), at most one order per object and one per module in flight, and reads every finished
+operation back from the TMS. An object lost in the gap is put back where it was last seen
+by an operator (`Locate`) before its next order. ``predictive`` loads each object in the
+twin's best state from a study store of the floor's cores (made first, ``--runs`` runs per
+state of the 28-state grid, docking errors from the fitted generator), ``nearest-idle`` in
+the default state.
+
+Prints, per policy: orders, delivered, success share with its Clopper–Pearson 95 % interval,
+operations per hour of modelled floor time (each operation's ``floor_s``: driving from the
+planner, docking, the transfers' simulated time; the work divided among the modules) with a
+bootstrap 95 % interval; then predictive minus nearest-idle: the success-share difference
+with its Newcombe interval and the operations-per-hour difference with a bootstrap interval.
+Writes ``benchmarks/results/operations.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import json
+import random
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+BOOTSTRAP = 4000
+
+
+def tt(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "transfertwin", *args], capture_output=True,
+                          text=True, timeout=timeout)  # fmt: skip
+
+
+def make_study(floor, path: Path, runs: int, seed: int) -> None:
+    """The twin's study of the floor's cores (the predictive policy's store)."""
+    from transfertwin.cps._runtime import _docking_model
+    from transfertwin.store import SQLiteResultStore
+    from transfertwin.study.experiment import StudyPlan, run_study
+
+    objects = tuple(o for o, _ in floor.objects)
+    plan = StudyPlan(objects, 30, runs, seed, _docking_model())
+    store = SQLiteResultStore(path)
+    t0 = time.monotonic()
+
+    def progress(done: int, total: int) -> None:
+        if done % 200 == 0 or done == total:
+            print(f"  study: {done}/{total} experiments ({time.monotonic() - t0:.0f} s)",
+                  flush=True)  # fmt: skip
+
+    try:
+        run_study(plan, store, workers=2, on_progress=progress)
+    finally:
+        store.close()
+
+
+def order_sequence(floor, n: int, seed: int) -> list[tuple[str, str]]:
+    """`n` orders (object, destination unit): each object's destination differs from its
+    last two (so it is never ordered to where it lies, whatever failed before)."""
+    rng = random.Random(seed)
+    history = {o: [at] for o, at in floor.objects}
+    out = []
+    for _ in range(n):
+        obj = rng.choice(sorted(history))
+        dest = rng.choice([u for u in floor.units if u not in history[obj][-2:]])
+        history[obj].append(dest)
+        out.append((obj, dest))
+    return out
+
+
+class Tms:
+    def __init__(self, wd: Path) -> None:
+        from transfertwin.cli._cps_floor import _info
+
+        self.info, self.creds = _info(wd)
+
+    def __call__(self, op: str, *args):
+        from transfertwin.cli._cps_floor import _call
+
+        return asyncio.run(_call(self.info, self.creds, "TMS", op, *args, timeout_s=20))
+
+
+def drive(wd: Path, orders: list[tuple[str, str]], inflight: int, timeout_s: float) -> dict:
+    """Send `orders` to the floor in `wd`; returns the finished operations and counts."""
+    from transfertwin.cps.opcua import OperationRefused
+
+    tms = Tms(wd)
+    pending = list(orders)
+    running: dict[str, str] = {}  # object -> operation
+    refused, located, retried = [], 0, 0
+    t0 = time.monotonic()
+    while pending or running:
+        if time.monotonic() - t0 > timeout_s:
+            raise SystemExit(f"orders did not finish within {timeout_s:g} s")
+        ops = {o["operation"]: o for o in json.loads(tms("Orders"))}
+        for obj, op in list(running.items()):
+            if ops[op]["state"] in ("done", "failed"):
+                del running[obj]
+        ledger = None
+        while pending and len(running) < inflight:
+            nxt = next((i for i, (o, _) in enumerate(pending) if o not in running), None)
+            if nxt is None:
+                break
+            obj, dest = pending.pop(nxt)
+            ledger = ledger or json.loads(tms("Ledger"))
+            if obj in ledger["unknown"]:  # an operator takes it out of the gap
+                tms("Locate", obj, ledger["unknown"][obj]["last_seen"])
+                located += 1
+                ledger = json.loads(tms("Ledger"))
+            try:
+                running[obj] = tms("OrderTo", obj, dest)
+            except OperationRefused as exc:
+                if exc.status == "BadResourceUnavailable":  # no module now: try again later
+                    pending.insert(nxt, (obj, dest))
+                    retried += 1
+                    break
+                refused.append({"object": obj, "destination": dest, "reason": exc.reason})
+        done = len(orders) - len(pending) - len(running)
+        print(f"\r  {done}/{len(orders)} orders ended ({time.monotonic() - t0:.0f} s)", end="",
+              flush=True)  # fmt: skip
+        time.sleep(0.5)
+    print(flush=True)
+    ledger = json.loads(tms("Ledger"))
+    kpis = json.loads(tms("Kpis"))
+    return {"operations": ledger["operations"], "refused": refused, "located": located,
+            "retried": retried, "kpis": kpis,
+            "wall_s": round(time.monotonic() - t0, 1)}  # fmt: skip
+
+
+def summarise(ops: list[dict], modules: int, rng: np.random.Generator) -> dict:
+    from transfertwin.study.fullstate import clopper_pearson
+
+    finished = [o for o in ops if o["state"] == "finished"]
+    ok = np.array([o["result"].get("status") == "delivered" for o in finished], dtype=float)
+    floor_s = np.array([float(o["result"].get("floor_s") or 0.0) for o in finished])
+    ci = clopper_pearson(int(ok.sum()), len(ok))
+
+    def per_hour(ok_, s_):
+        return 3600.0 * ok_.sum() / (s_.sum() / modules)
+
+    idx = rng.integers(0, len(ok), size=(BOOTSTRAP, len(ok)))
+    boot = np.array([per_hour(ok[i], floor_s[i]) for i in idx])
+    return {"n": len(ok), "delivered": int(ok.sum()), "share": float(ok.mean()),
+            "share_ci95": [ci.low, ci.high], "ops_per_floor_hour": per_hour(ok, floor_s),
+            "ops_ci95": [float(np.percentile(boot, 2.5)), float(np.percentile(boot, 97.5))],
+            "boot": boot, "failed_by_reason": _reasons(finished)}  # fmt: skip
+
+
+def _reasons(finished: list[dict]) -> dict[str, int]:
+    out: dict[str, int] = {}
+    for o in finished:
+        r = o["result"]
+        if r.get("status") != "delivered":
+            key = f"failed while {r.get('failed_step')}"
+            out[key] = out.get(key, 0) + 1
+    return out
+
+
+def main() -> int:
+    from transfertwin.cps import load_floor
+    from transfertwin.study.validation import newcombe_difference
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--floor", default=str(ROOT / "examples" / "floor-large.toml"))
+    ap.add_argument("--orders", type=int, default=200)
+    ap.add_argument("--plant-seed", type=int, default=7)
+    ap.add_argument("--seed", type=int, default=0, help="orders, study and floor seed")
+    ap.add_argument("--runs", type=int, default=4, help="study runs per state (default 4)")
+    ap.add_argument("--study", help="an existing study store of the floor's cores")
+    ap.add_argument("--workdir", help="where floors and the study go (default: a temp dir)")
+    ap.add_argument("--timeout", type=float, default=3600.0, help="per policy, seconds")
+    ap.add_argument("--lease", type=float, default=30.0,
+                    help="the floor's lease, s (default 30: a 35-process floor on a loaded "
+                         "2-core host misses 5 s heartbeats)")  # fmt: skip
+    args = ap.parse_args()
+    floor = load_floor(args.floor)
+    wd = Path(args.workdir or tempfile.mkdtemp(prefix="operations-"))
+    wd.mkdir(parents=True, exist_ok=True)
+    study = Path(args.study) if args.study else wd / "study.sqlite"
+    if not args.study:
+        print(f"study of {len(floor.objects)} cores x 28 states x {args.runs} runs -> {study}")
+        make_study(floor, study, args.runs, args.seed)
+    orders = order_sequence(floor, args.orders, args.seed)
+    rng = np.random.default_rng(args.seed)
+    out: dict[str, dict] = {}
+    for policy in ("nearest-idle", "predictive"):
+        pwd = wd / policy
+        print(f"{policy}: starting {floor.name} on plant seed {args.plant_seed}", flush=True)
+        up = tt("cps", "up", "--floor", args.floor, "--workdir", str(pwd), "--detach",
+                "--time-scale", "0", "--seed", str(args.seed), "--plant-seed",
+                str(args.plant_seed), "--policy", policy, "--study", str(study),
+                "--lease", str(args.lease), "--start-timeout", "600", timeout=900)  # fmt: skip
+        if up.returncode != 0:
+            print(up.stderr, file=sys.stderr)
+            return 1
+        try:
+            run = drive(pwd, orders, len(floor.modules), args.timeout)
+        finally:
+            tt("cps", "down", "--workdir", str(pwd))
+        out[policy] = {**summarise(run["operations"], len(floor.modules), rng),
+                       "refused": run["refused"], "located": run["located"],
+                       "retried": run["retried"], "wall_s": run["wall_s"]}  # fmt: skip
+    a, b = out["nearest-idle"], out["predictive"]
+    diff = newcombe_difference(b["delivered"], b["n"], a["delivered"], a["n"])
+    dboot = b.pop("boot") - a.pop("boot")
+    ops_diff = [float(np.percentile(dboot, 2.5)), float(np.percentile(dboot, 97.5))]
+    print(f"\n{args.orders} orders on {floor.name}, plant seed {args.plant_seed}")
+    print(f"{'policy':<14}{'n':>5}{'deliv.':>8}{'success share [95% CP]':>30}"
+          f"{'ops/floor-hour [95% boot.]':>32}{'refused':>9}")
+    for policy, r in out.items():
+        lo, hi = r["share_ci95"]
+        olo, ohi = r["ops_ci95"]
+        share = f"{r['share']:.3f} [{lo:.3f}, {hi:.3f}]"
+        ops = f"{r['ops_per_floor_hour']:.1f} [{olo:.1f}, {ohi:.1f}]"
+        print(f"{policy:<14}{r['n']:>5}{r['delivered']:>8}{share:>30}{ops:>32}"
+              f"{len(r['refused']):>9}")
+    print(f"predictive - nearest-idle: success share {diff.estimate:+.3f} "
+          f"[{diff.low:+.3f}, {diff.high:+.3f}] (Newcombe); ops/floor-hour "
+          f"{b['ops_per_floor_hour'] - a['ops_per_floor_hour']:+.1f} "
+          f"[{ops_diff[0]:+.1f}, {ops_diff[1]:+.1f}] (bootstrap)")
+    for policy, r in out.items():
+        print(f"{policy}: failures {r['failed_by_reason'] or 'none'}; objects located by an "
+              f"operator {r['located']}; refused {[x['reason'] for x in r['refused']]}")
+    result = {"orders": args.orders, "floor": floor.name, "plant_seed": args.plant_seed,
+              "seed": args.seed, "runs": args.runs, "policies": out,
+              "share_difference": {"diff": diff.estimate, "ci95": [diff.low, diff.high]},
+              "ops_per_floor_hour_difference_ci95": ops_diff}  # fmt: skip
+    res = ROOT / "benchmarks" / "results" / "operations.json"
+    res.write_text(json.dumps(result, indent=2) + "\n")
+    print(f"wrote {res}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

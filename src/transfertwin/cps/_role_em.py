@@ -93,10 +93,9 @@ class ExperimentRole(Role):
                 self.state.save()
 
     async def stop(self) -> None:
-        if self.job is not None and self._task is not None and not self._task.done():
+        if self.job is not None:  # (the node has cancelled the task that awaited it)
             self.job.stop()  # the persisted wish stays 'running': it resumes on restart
-            with contextlib.suppress(Exception):
-                await asyncio.wait_for(asyncio.shield(self._task), 10.0)
+            await asyncio.to_thread(self.job.wait, 10.0)
 
     async def live(self) -> dict[str, Any]:
         running = self._task is not None and not self._task.done()
@@ -187,9 +186,10 @@ class ExperimentRole(Role):
     async def _study_status(self) -> str:
         if self.job is not None:
             return json.dumps(self.job.status())
-        study = self.state.data.get("study")
+        study = self.state.data.get("study")  # none yet, or resuming after a restart
         return json.dumps({"state": "none" if study is None else study["want"],
-                           "store": None if study is None else study["store"]})  # fmt: skip
+                           "store": None if study is None else study["store"],
+                           "plan": None, "done": None, "planned": None})  # fmt: skip
 
     # -- single experiments ---------------------------------------------------------------
     async def _run(self, unit: str, obj: str, face: str, conveyor: str, theta_deg: int,

@@ -61,7 +61,7 @@ def test_not_json_is_refused():
 
 def test_a_study_runs_stops_and_resumes_with_the_rows_of_an_uninterrupted_one(tmp_path):
     req = _request(runs=3)  # 6 experiments
-    whole = StudyJob(req, tmp_path / "whole.sqlite")
+    whole = StudyJob(req, tmp_path / "whole.sqlite", own_process=False)
     whole.check_store()
     final = whole.run()
     assert (final["state"], final["done"], final["planned"]) == ("finished", 6, 6)
@@ -74,12 +74,12 @@ def test_a_study_runs_stops_and_resumes_with_the_rows_of_an_uninterrupted_one(tm
         if status["done"] >= 2:
             job.stop()
 
-    job = StudyJob(req, tmp_path / "parts.sqlite", on_update=stop_after_two)
+    job = StudyJob(req, tmp_path / "parts.sqlite", on_update=stop_after_two, own_process=False)
     job.check_store()
     first = job.run()
     assert first["state"] == "stopped" and 2 <= first["done"] < 6, first
     assert any(s["state"] == "running" and s["eta_s"] is not None for s in seen)
-    again = StudyJob(req, tmp_path / "parts.sqlite")
+    again = StudyJob(req, tmp_path / "parts.sqlite", own_process=False)
     again.check_store()
     second = again.run()
     assert (second["state"], second["done"], second["ran"]) == ("finished", 6, 6 - first["done"])

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import threading
 import time
 from collections.abc import Callable
@@ -179,18 +180,30 @@ class StudyJob:
     """One study run into one store; `run` blocks (call it in a thread), `stop` asks it to
     end after the batch in flight, `status` is safe from any thread.
 
+    The experiments run in a process of their own (spawned; with ``workers`` > 1 or Ray it
+    hands them on): the manager's process keeps answering at full speed, and its own
+    single experiments (``RunExperiment``) never share a compiled simulation with the
+    study's (the per-process cache of `system_for` is not for two threads). That process
+    ends when the manager's does, also on SIGKILL.
+
     Args:
         request: What to run.
         store: The SQLite result store.
         on_update: Called (in the job's thread) with `status()` after every change.
+        own_process: False runs the experiments in the calling thread (for a caller that
+            runs no simulation of its own; saves the process start).
     """
 
     def __init__(self, request: StudyRequest, store: Path,
-                 on_update: Callable[[dict[str, Any]], None] | None = None) -> None:  # fmt: skip
+                 on_update: Callable[[dict[str, Any]], None] | None = None,
+                 own_process: bool = True) -> None:  # fmt: skip
         self.request = request
+        self.own_process = own_process
         self.store = Path(store)
         self._on_update = on_update or (lambda status: None)
         self._stop = threading.Event()
+        self._stop_child: Any = None  # the multiprocessing Event of the running process
+        self._ended = threading.Event()
         self._lock = threading.Lock()
         plan = request.plan
         self._status: dict[str, Any] = {
@@ -225,53 +238,127 @@ class StudyJob:
     def stop(self) -> None:
         """End after the batch in flight (its results are stored)."""
         self._stop.set()
+        child = self._stop_child
+        if child is not None:
+            child.set()
         if self.status()["state"] in ("starting", "running"):
             self._update(state="stopping")
 
+    def wait(self, timeout_s: float) -> bool:
+        """Block until `run` has returned (True) or `timeout_s` passed (False)."""
+        return self._ended.wait(timeout_s)
+
     def run(self) -> dict[str, Any]:
-        """Run what the store does not hold yet; the final status (state finished, stopped
-        or failed with the error)."""
-        from transfertwin.store import SQLiteResultStore
-        from transfertwin.study.experiment import run_study
+        """Run what the store does not hold yet in a process of its own; the final status
+        (state finished, stopped or failed with the error)."""
+        import multiprocessing as mp
+        import queue as queues
 
-        plan = self.request.plan
-        t0 = time.monotonic()
         try:
-            with SQLiteResultStore(self.store) as store:
-                before = store.count()
-                if self._stop.is_set():
+            if not self.own_process:
+                self._update(**_run(self.request, self.store, self._stop.is_set,
+                                    lambda changes: self._update(**changes)))  # fmt: skip
+                return self.status()
+            ctx = mp.get_context("spawn")
+            updates, stop = ctx.Queue(), ctx.Event()
+            self._stop_child = stop
+            if self._stop.is_set():
+                stop.set()
+            proc = ctx.Process(target=_study_process, name="transfertwin-study",
+                               args=(self.request.text, str(self.store), stop, updates,
+                                     os.getpid()))  # fmt: skip
+            proc.start()
+            ended = False
+            while not ended:
+                try:
+                    changes = updates.get(timeout=0.2)
+                except queues.Empty:
+                    if proc.is_alive():
+                        continue
+                    try:  # what it said last, if anything
+                        changes = updates.get(timeout=1.0)
+                    except queues.Empty:
+                        proc.join()
+                        self._update(state="failed", eta_s=None,
+                                     error=f"the study's process ended with code "
+                                           f"{proc.exitcode}")  # fmt: skip
+                        break
+                ended = changes.get("state") in ("finished", "stopped", "failed")
+                self._update(**changes)
+            proc.join(10.0)
+            return self.status()
+        finally:
+            self._ended.set()
+
+
+def _exit_with_parent(parent_pid: int) -> None:
+    """End this process once the manager's is gone (killed with -9: no clean-up ran)."""
+
+    def watch() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(0.5)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
+
+
+def _study_process(text: str, store: str, stop, updates, parent_pid: int) -> None:
+    """The study's process: read the request again (a fitted docking model does not
+    pickle; the store refuses a plan whose hash came out otherwise), run it, put status
+    changes on `updates` (the last one with the end state)."""
+    _exit_with_parent(parent_pid)
+    try:
+        request = StudyRequest.parse(text)
+    except Exception as exc:
+        updates.put({"state": "failed", "eta_s": None, "error": f"plan: {exc}"})
+        return
+    updates.put(_run(request, Path(store), stop.is_set, updates.put))
+
+
+def _run(request: StudyRequest, path: Path, should_stop: Callable[[], bool],
+         report: Callable[[dict[str, Any]], None]) -> dict[str, Any]:  # fmt: skip
+    """Run the study into the store at `path`; `report` gets every change, the return
+    value is the last one (state finished, stopped or failed)."""
+    from transfertwin.store import SQLiteResultStore
+    from transfertwin.study.experiment import run_study
+
+    plan = request.plan
+    t0 = time.monotonic()
+    try:
+        with SQLiteResultStore(path) as store:
+            before = store.count()
+            if should_stop():
+                raise _StopRequestedError
+            report({"state": "running", "done": before, "ran": 0,
+                    "fraction": before / plan.n_experiments})  # fmt: skip
+
+            def on_progress(ran: int, todo: int) -> None:
+                elapsed = time.monotonic() - t0
+                rate = ran / elapsed if ran and elapsed > 0 else None
+                left = todo - ran
+                eta = left / rate if rate else (0.0 if left == 0 else None)
+                done = before + ran
+                report({"done": done, "ran": ran, "fraction": done / plan.n_experiments,
+                        "rate_per_s": rate, "eta_s": eta})  # fmt: skip
+                if should_stop() and left > 0:
                     raise _StopRequestedError
-                self._update(state="running", done=before, ran=0,
-                             fraction=before / plan.n_experiments)  # fmt: skip
 
-                def on_progress(ran: int, todo: int) -> None:
-                    elapsed = time.monotonic() - t0
-                    rate = ran / elapsed if ran and elapsed > 0 else None
-                    left = todo - ran
-                    eta = left / rate if rate else (0.0 if left == 0 else None)
-                    done = before + ran
-                    self._update(done=done, ran=ran, fraction=done / plan.n_experiments,
-                                 rate_per_s=rate, eta_s=eta)  # fmt: skip
-                    if self._stop.is_set() and left > 0:
-                        raise _StopRequestedError
-
-                executor = self.request.executor_object()
-                if executor is None:
-                    run_study(plan, store, workers=self.request.workers,
-                              on_progress=on_progress)  # fmt: skip
-                else:
-                    with executor:
-                        run_study(plan, store, on_progress=on_progress, executor=executor)
-                done = store.count()
-            state = "finished" if done >= plan.n_experiments else "stopped"
-            self._update(state=state, done=done, eta_s=0.0 if state == "finished" else None)
-        except _StopRequestedError:
-            self._update(state="stopped", eta_s=None)
-        except Exception as exc:  # the study fails; the manager keeps serving
-            text = str(exc).strip().splitlines()
-            self._update(state="failed", eta_s=None,
-                         error=f"{type(exc).__name__}: {text[0] if text else ''}")  # fmt: skip
-        return self.status()
+            executor = request.executor_object()
+            if executor is None:
+                run_study(plan, store, workers=request.workers, on_progress=on_progress)
+            else:
+                with executor:
+                    run_study(plan, store, on_progress=on_progress, executor=executor)
+            done = store.count()
+        finished = done >= plan.n_experiments
+        return {"state": "finished" if finished else "stopped", "done": done,
+                "eta_s": 0.0 if finished else None}  # fmt: skip
+    except _StopRequestedError:
+        return {"state": "stopped", "eta_s": None}
+    except Exception as exc:  # the study fails; the manager keeps serving
+        text = str(exc).strip().splitlines()
+        return {"state": "failed", "eta_s": None,
+                "error": f"{type(exc).__name__}: {text[0] if text else ''}"}  # fmt: skip
 
 
 def study_opcua_values(status: dict[str, Any]) -> dict[str, object]:

@@ -7,7 +7,8 @@ package), ``/api/config``, ``/api/assets``, ``/api/assets/{id}/aas``, ``/api/liv
 ``/api/studies/{name}/results.{csv|parquet}``, ``/api/transfer`` (GET; POST starts a
 simulated transfer), ``/api/transfer/live`` (SSE), ``/api/calibrations``,
 ``/api/calibrations/{name}``, ``/replay`` (the 3-D replay page) and ``/api/replay``
-(its JSON document, `transfertwin.web._replay`).
+(its JSON document, `transfertwin.web._replay`), ``/floor3d`` (the running floor in 3-D) and
+``/api/floor`` (its static layout, `transfertwin.web._floor3d`).
 
 Every error is a JSON ``{"error": message}`` with a 4xx status (5xx only for a fault of the
 console itself, without a traceback). Write actions need the token (header
@@ -48,6 +49,7 @@ from starlette.staticfiles import StaticFiles
 from transfertwin._errors import InputError
 from transfertwin.web._calibration import calibration_view
 from transfertwin.web._config import WebConfig
+from transfertwin.web._floor3d import floor_layout
 from transfertwin.web._gateway import CpsGateway
 from transfertwin.web._live import LiveTransfer, TransferBusyError, TransferRequest
 from transfertwin.web._replay import ReplayService
@@ -222,13 +224,22 @@ def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = No
             response.set_cookie(_COOKIE, token, httponly=True, samesite="strict")
         return response
 
-    async def replay_page(request: Request) -> Response:
-        given = request.query_params.get("token")
-        if config.reads_need_token and not (
-            matches(given) or matches(request.cookies.get(_COOKIE))
-        ):
-            return HTMLResponse("<h1>401</h1><p>Open the replay with ?token=...</p>", 401)
-        return HTMLResponse((_static_dir() / "replay.html").read_text())
+    def page_of(name: str) -> Callable[[Request], Awaitable[Response]]:
+        async def page(request: Request) -> Response:
+            given = request.query_params.get("token")
+            if config.reads_need_token and not (
+                matches(given) or matches(request.cookies.get(_COOKIE))
+            ):
+                return HTMLResponse("<h1>401</h1><p>Open this page with ?token=...</p>", 401)
+            return HTMLResponse((_static_dir() / name).read_text())
+
+        return page
+
+    @_api
+    async def api_floor(request: Request) -> Response:
+        check_read(request)
+        gateway()  # 404 without a CPS
+        return JSONResponse(await run_in_threadpool(floor_layout, config.cps))
 
     @_api
     async def api_replay(request: Request) -> Response:
@@ -415,7 +426,9 @@ def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = No
         Route("/api/transfer/live", api_transfer_live),
         Route("/api/calibrations", api_calibrations),
         Route("/api/calibrations/{name}", api_calibration),
-        Route("/replay", replay_page),
+        Route("/replay", page_of("replay.html")),
+        Route("/floor3d", page_of("floor3d.html")),
+        Route("/api/floor", api_floor),
         Route("/api/replay", api_replay),
         Route("/{path:path}", not_found),
     ]

@@ -143,6 +143,16 @@ def launch(configs: dict[str, AssetConfig], workdir: Path, skip: Iterable[str] =
     files = {aid: workdir / "assets" / f"{aid}.toml" for aid in order}
     if not fork:
         return {aid: start_asset(files[aid], logs / f"{aid}.log") for aid in order}
+    # the seeds first, and the rest once they answer: an asset joins through them
+    seeds = [a for a in order if a in SEED_ASSETS]
+    procs = _fork(seeds, files, logs)
+    _wait_listening({a: configs[a] for a in seeds}, procs)
+    procs.update(_fork([a for a in order if a not in SEED_ASSETS], files, logs))
+    return procs
+
+
+def _fork(order: list[str], files: dict[str, Path], logs: Path) -> dict[str, ForkedAsset]:
+    """Fork the assets `order` from one ``cps asset --config ... --log-dir`` process."""
     if not order:
         return {}
     cmd = [sys.executable, "-m", "transfertwin", "cps", "asset", "--log-dir", str(logs)]
@@ -161,6 +171,24 @@ def launch(configs: dict[str, AssetConfig], workdir: Path, skip: Iterable[str] =
         last = (done.stderr.strip().splitlines() or ["no output"])[-1]
         raise InputError(f"the asset processes could not be started ({done.returncode}): {last}")
     return procs
+
+
+def _wait_listening(configs: dict[str, AssetConfig], procs, timeout_s: float = 60.0) -> None:
+    """Wait until every asset in `configs` accepts connections on its port (or has ended:
+    the caller's wait for the floor reports that)."""
+    import socket
+    import time
+
+    deadline = time.monotonic() + timeout_s
+    waiting = dict(configs)
+    while waiting and time.monotonic() < deadline:
+        for aid, cfg in list(waiting.items()):
+            if procs[aid].poll() is not None:
+                waiting.pop(aid)
+                continue
+            with contextlib.suppress(OSError), socket.create_connection((cfg.host, cfg.port), 0.5):
+                waiting.pop(aid)
+        time.sleep(0.1)
 
 
 class ForkedAsset:

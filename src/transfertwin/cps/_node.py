@@ -105,6 +105,16 @@ class Peers:
         self._stacks[aid] = (url, stack, client)
         return client
 
+    async def open(self, aid: str) -> None:
+        """Open the session with `aid` now if it is not open (as `call` would)."""
+        lock = self._locks.setdefault(aid, asyncio.Lock())
+        async with lock:
+            try:
+                await self.session(aid)
+            except BaseException:
+                await self.drop(aid)
+                raise
+
     async def call(self, aid: str, operation: str, *args: object) -> Any:
         """Call `operation` on `aid`; a broken session is dropped and the error raised."""
         lock = self._locks.setdefault(aid, asyncio.Lock())
@@ -257,6 +267,11 @@ class AssetNode:
                                                 self.server.security_policy,
                                                 {"hal": self.cfg.hal.kind,
                                                  **await self.role.live()})  # fmt: skip
+                    # opening the session (a secure handshake) has its own, longer limit:
+                    # a graph busy with many joining assets must not see each handshake
+                    # cancelled by the heartbeat's limit and started again (no one would
+                    # ever get through)
+                    await asyncio.wait_for(self.peers.open("KG"), 15.0)
                     known = await asyncio.wait_for(self.peers.call("KG", "Heartbeat", payload),
                                                    max(period, 2.0))  # fmt: skip
                     for aid, url in json.loads(known).items():

@@ -63,6 +63,16 @@ def _report(doc: dict, cfg: RehearsalConfig) -> None:
     print(f"after - before: {doc['f05_after'] - doc['f05_before']:+.3f} [{lo:+.3f}, {hi:+.3f}] "
           "(paired bootstrap; an interval holding 0: no measurable change)")  # fmt: skip
     print("target F0.5 after >= 0.90:", "met" if doc["f05_after"] >= 0.90 else "NOT met")
+    t = doc.get("thresholded")
+    if t:
+        print(f"one decision per row (success iff P >= 0.5), as calibrate evaluate scores: F0.5 "
+              f"before {t['f05_before']:.3f} [{t['f05_before_ci'][0]:.2f}, "
+              f"{t['f05_before_ci'][1]:.2f}], after {t['f05_after']:.3f} "
+              f"[{t['f05_after_ci'][0]:.2f}, {t['f05_after_ci'][1]:.2f}], after - before "
+              f"{t['f05_delta']:+.3f} [{t['f05_delta_ci'][0]:+.2f}, {t['f05_delta_ci'][1]:+.2f}]; "
+              f"Brier before {t['brier_before']:.3f}, after {t['brier_after']:.3f}, after - "
+              f"before {t['brier_delta']:+.3f} [{t['brier_delta_ci'][0]:+.2f}, "
+              f"{t['brier_delta_ci'][1]:+.2f}]")  # fmt: skip
     print(f"significant best: {doc['significant_best']}/{n} {doc['significant_best_objects']}")
     print(f"significant worst: {doc['significant_worst']}/{n} {doc['significant_worst_objects']}")
     scaled = doc["significant_best"] / n * 37

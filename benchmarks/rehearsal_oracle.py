@@ -17,7 +17,9 @@ rebuilds the held-out rows exactly as `rehearse` chose them and the plant's own 
 - ``F0.5 oracle``: the predictor that knows the hidden parameters but not the placement draws
   (what the best possible twin can know): the plant's simulation of each held-out row at its
   logged state and docking error, N times with fresh placement seeds, no flips; the mean
-  over the N runs of each run's F0.5 (as ``f05_*``), and the majority vote.
+  over the N runs of each run's F0.5 (as ``f05_*``), and the majority vote (the plant's own
+  share per row thresholded at 0.5, as rehearsal.json's ``thresholded`` block thresholds the
+  twin), with the Brier score of that share.
 - 95 % percentile-bootstrap intervals over the held-out rows (`f05_intervals`, 2000
   resamples).
 
@@ -104,6 +106,7 @@ def oracle(folder: Path, n: int, workers: int) -> dict[str, object]:
         "f05_base_rate": doc["f05_base_rate"],
         "exact": _f05(exact[0], y), "oracle": float(np.mean([_f05(p, y) for p in per_run])),
         "majority": _f05(majority[0], y), "ci": ci,
+        "brier": float(np.mean((per_run.mean(axis=0) - y) ** 2)),
         "uncertain_rows": int(((per_run.mean(0) > 0) & (per_run.mean(0) < 1)).sum()),
     }  # fmt: skip
 
@@ -132,7 +135,9 @@ def main() -> None:
             f"[{ci['oracle'][0]:.2f}, {ci['oracle'][1]:.2f}], majority {o['majority']:.3f} "
             f"[{ci['majority'][0]:.2f}, {ci['majority'][1]:.2f}]; exact (errs only on flips) "
             f"{o['exact']:.3f} [{ci['exact'][0]:.2f}, {ci['exact'][1]:.2f}]; "
-            f"twin after / oracle {o['f05_after'] / o['oracle']:.2f}"
+            f"twin after / oracle {o['f05_after'] / o['oracle']:.2f}\n"
+            f"  ORACLE Brier of its rerun shares {o['brier']:.3f} (compare the twin's "
+            f"'thresholded' block in rehearsal.json: majority F0.5 and Brier)"
         )
 
 

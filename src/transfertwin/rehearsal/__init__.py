@@ -30,6 +30,7 @@ from transfertwin.rehearsal._rehearse import (
     rehearse,
     twin_scene,
 )
+from transfertwin.rehearsal._thresholded import majority_scores
 
 __all__ = [
     "COUNTER_MEASURES",
@@ -46,6 +47,7 @@ __all__ = [
     "docking_record",
     "f05_intervals",
     "holdout_split",
+    "majority_scores",
     "operation_summary",
     "parse_ablations",
     "parse_object_list",

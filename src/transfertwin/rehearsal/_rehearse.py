@@ -39,6 +39,7 @@ from transfertwin.objects import PROXY_SUFFIX, ProxySpec, builtin_ids, write_pro
 from transfertwin.ots import FACES, THETA_SINGLE, experiment_states, filter_theta_step
 from transfertwin.plant import PLANT_COLUMNS, PLANT_KINDS, EmulatedPlant, PlantRequest
 from transfertwin.rehearsal._operations import run_operations
+from transfertwin.rehearsal._thresholded import majority_scores
 from transfertwin.sim import DockingError, SceneConfig
 from transfertwin.store import DOCKING_ERROR_COLUMNS
 from transfertwin.study.calibration import (
@@ -657,6 +658,8 @@ def rehearse(
         "f05_after_ci": ci["after"],
         "f05_base_rate_ci": ci["base_rate"],
         "f05_delta_ci": ci["after_minus_before"],
+        "thresholded": majority_scores([h["p_before"] for h in held],
+                                       [h["p_after"] for h in held], y_test, seed=cfg.seed),
         **{k: v for k, v in main.items() if not k.startswith("_")},
         "plant_experiments": len(plant_rows)
         + len(test_rows)

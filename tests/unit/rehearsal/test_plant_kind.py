@@ -27,3 +27,18 @@ def test_rehearse_refuses_an_unknown_plant_kind(tmp_path, monkeypatch, capfd) ->
     err = capfd.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and "--plant-kind" in err[0]
     assert list(tmp_path.iterdir()) == []
+
+
+def test_majority_scores_threshold_each_row_and_pair_before_with_after() -> None:
+    from transfertwin.rehearsal import majority_scores
+
+    y = [1, 1, 0, 0, 1, 0, 1, 1]
+    perfect = [float(v) for v in y]
+    coin = [0.5] * len(y)  # every row 'success' at the 0.5 threshold
+    s = majority_scores(coin, perfect, y, n_resamples=200)
+    assert s["f05_after"] == 1.0 and s["brier_after"] == 0.0
+    base = 5 / 8
+    assert s["f05_before"] == pytest.approx(1.25 * base / (0.25 * base + 1))
+    assert s["brier_before"] == pytest.approx(0.25)
+    assert s["f05_delta"] > 0 and s["brier_delta"] == pytest.approx(-0.25)
+    assert s["brier_delta_ci"][1] < 0  # the same rows for both: never worse

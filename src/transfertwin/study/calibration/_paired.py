@@ -48,6 +48,8 @@ def _interval(stat, n: int, clusters: np.ndarray | None, n_resamples: int,
     from scipy.stats import bootstrap
 
     units = n if clusters is None else int(clusters.max()) + 1
+    if units < 2:  # nothing to resample
+        return float("nan"), float("nan")
 
     def statistic(draws: np.ndarray, axis: int = -1) -> np.ndarray:
         draws = np.moveaxis(np.asarray(draws), axis, -1)

@@ -31,6 +31,7 @@ and sag, and a second physics engine.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import zlib
 from dataclasses import dataclass
@@ -43,6 +44,11 @@ __all__: list[str] = []  # private to transfertwin.plant
 
 #: Plant kinds: today's plant of the twin's own model class, and the structural mismatch.
 PLANT_KINDS = ("in-class", "mismatch")
+
+#: Parts of the mismatch that can be switched off one by one (ablation, benchmark):
+#: shape (knobs, dents, appendage), mass (inertia, centre of mass), belts (ripple, skew),
+#: contact (solver and contact model).
+MISMATCH_PARTS = ("shape", "mass", "belts", "contact")
 
 
 @dataclass(frozen=True)
@@ -74,6 +80,7 @@ class MismatchScene:
     right_belt_skew: tuple[float, float]
     impratio: float
     solimp_width_m: float
+    contact: bool = True  # False: the twin's contact model and solver (an ablation)
 
 
 def _rng(seed: int, *key: int) -> np.random.Generator:
@@ -117,6 +124,21 @@ def draw_mismatch_object(seed: int, object_id: str, hulls: tuple[np.ndarray, ...
     shift = (float(rng.uniform(-0.012, 0.012)), float(rng.uniform(-0.006, 0.006)),
              float(rng.uniform(-0.006, 0.006)))  # fmt: skip
     return MismatchObject(tuple(bumps), tuple(dents), appendage, scale, shift)  # type: ignore[arg-type]
+
+
+def without_parts(obj: MismatchObject, scene: MismatchScene,
+                  off: frozenset[str]) -> tuple[MismatchObject, MismatchScene]:  # fmt: skip
+    """The mismatch with the parts in `off` (of `MISMATCH_PARTS`) switched back to the
+    in-class plant's."""
+    if "shape" in off:
+        obj = dataclasses.replace(obj, bumps=(), dents=(), appendage=None)
+    if "mass" in off:
+        obj = dataclasses.replace(obj, inertia_scale=(1.0, 1.0, 1.0), com_shift_m=(0.0, 0.0, 0.0))
+    if "belts" in off:
+        scene = dataclasses.replace(scene, ripple=0.0, right_belt_skew=(0.0, 0.0))
+    if "contact" in off:
+        scene = dataclasses.replace(scene, contact=False)
+    return obj, scene
 
 
 def draw_mismatch_scene(seed: int) -> MismatchScene:

@@ -30,6 +30,7 @@ from transfertwin._errors import InputError
 from transfertwin.objects import ProxySpec, builtin_ids, load_builtin, proxy_model
 from transfertwin.ots import state_index
 from transfertwin.plant._mismatch import (
+    MISMATCH_PARTS,
     PLANT_KINDS,
     MismatchObject,
     MismatchScene,
@@ -37,6 +38,7 @@ from transfertwin.plant._mismatch import (
     draw_mismatch_scene,
     mismatched_hulls,
     mismatched_inertia,
+    without_parts,
 )
 from transfertwin.plant._truth import (
     PLANT_TAG,
@@ -181,7 +183,7 @@ def _scene_config(scene: SceneTruth, obj: ObjectTruth, refine: int = 0,
     (`mismatch`) contacts through another solver and contact model (module
     `transfertwin.plant._mismatch`)."""
     physics = SceneConfig().physics
-    extra = {} if mismatch is None else {
+    extra = {} if mismatch is None or not mismatch.contact else {
         "physics.solver": "PGS", "physics.cone": "pyramidal", "physics.condim": 4,
         "physics.impratio": mismatch.impratio,
         "physics.solimp": (0.9, 0.95, mismatch.solimp_width_m, 0.5, 2.0),
@@ -299,13 +301,19 @@ class EmulatedPlant:
             represent (`transfertwin.plant._mismatch`).
     """
 
-    __slots__ = ("__docking", "__kind", "__mismatch", "__next_id", "__scene", "__seed")
+    __slots__ = ("__docking", "__kind", "__mismatch", "__next_id", "__off", "__scene", "__seed")
 
-    def __init__(self, seed: int, kind: str = "in-class") -> None:
+    def __init__(self, seed: int, kind: str = "in-class", *,
+                 mismatch_off: tuple[str, ...] = ()) -> None:  # fmt: skip
         if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
             raise InputError(f"--plant-seed must be a non-negative integer, got {seed!r}")
         if kind not in PLANT_KINDS:
             raise InputError(f"--plant-kind must be one of {', '.join(PLANT_KINDS)}, got {kind!r}")
+        bad = sorted(set(mismatch_off) - set(MISMATCH_PARTS))
+        if bad or (mismatch_off and kind != "mismatch"):
+            raise InputError(f"mismatch parts to switch off: {', '.join(MISMATCH_PARTS)} "
+                             f"(on a mismatch plant), got {', '.join(mismatch_off)}")  # fmt: skip
+        self.__off = frozenset(mismatch_off)
         self.__seed = seed
         self.__kind = kind
         self.__scene: SceneTruth = draw_scene(seed)
@@ -318,7 +326,8 @@ class EmulatedPlant:
     def __repr__(self) -> str:
         if self.__kind == "in-class":
             return f"EmulatedPlant(seed={self.__seed})"
-        return f"EmulatedPlant(seed={self.__seed}, kind={self.__kind!r})"
+        off = f", mismatch_off={tuple(sorted(self.__off))!r}" if self.__off else ""
+        return f"EmulatedPlant(seed={self.__seed}, kind={self.__kind!r}{off})"
 
     @property
     def kind(self) -> str:
@@ -349,9 +358,14 @@ class EmulatedPlant:
         parts = [asdict(self.__scene), asdict(self.__docking)]
         parts += [asdict(draw_object(self.__seed, o)) for o in object_ids]
         if self.__mismatch is not None:
-            parts += [asdict(self.__mismatch)]
-            parts += [asdict(_mismatch_object(self.__seed, o)) for o in object_ids]
+            parts += [asdict(self.__mismatch), sorted(self.__off)]
+            parts += [asdict(self.__mismatch_of(o)[0]) for o in object_ids]
         return hashlib.sha256(repr(parts).encode()).hexdigest()
+
+    def __mismatch_of(self, object_id: str) -> _Mismatch:
+        assert self.__mismatch is not None
+        return without_parts(_mismatch_object(self.__seed, object_id), self.__mismatch,
+                             self.__off)  # fmt: skip
 
     def weigh(self, object_id: str) -> MassReading:
         """Weigh and balance plant object `object_id` (the same reading every time)."""
@@ -363,7 +377,7 @@ class EmulatedPlant:
         kg = mass.mass_kg * obj.mass_scale * (1 + rng.normal(0.0, 0.002))
         com = np.asarray(mass.com_m) + np.asarray(obj.com_offset_m) + rng.normal(0, 0.001, 3)
         if self.__mismatch is not None:
-            com = com + np.asarray(_mismatch_object(self.__seed, object_id).com_shift_m)
+            com = com + np.asarray(self.__mismatch_of(object_id)[0].com_shift_m)
         return MassReading(object_id, round(float(kg), 3), tuple(round(float(v), 4) for v in com))  # type: ignore[arg-type]
 
     def _jobs(self, requests: Sequence[PlantRequest]) -> list[_Job]:
@@ -391,7 +405,7 @@ class EmulatedPlant:
             flip_u = float(np.random.default_rng(words[1]).random())
             mismatch = None
             if self.__mismatch is not None:
-                mismatch = (_mismatch_object(self.__seed, req.object_id), self.__mismatch)
+                mismatch = self.__mismatch_of(req.object_id)
             jobs.append(_Job(
                 eid, req, draw_object(self.__seed, req.object_id), self.__scene, units[0],
                 tuple(round(float(v), 2) for v in err), tuple(words[2:]), flip_u, mismatch,

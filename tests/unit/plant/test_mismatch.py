@@ -100,3 +100,23 @@ def test_same_seed_same_mismatch_rows() -> None:
     a = EmulatedPlant(4, kind="mismatch").run(REQUESTS)
     b = EmulatedPlant(4, kind="mismatch").run(REQUESTS)
     assert a == b
+
+
+def test_each_mismatch_part_switches_off_alone() -> None:
+    with pytest.raises(InputError, match="switch off"):
+        EmulatedPlant(1, kind="mismatch", mismatch_off=("friction",))
+    with pytest.raises(InputError, match="switch off"):
+        EmulatedPlant(1, mismatch_off=("shape",))  # only a mismatch plant has parts
+    full = EmulatedPlant(1, kind="mismatch")._jobs(REQUESTS)[0].mismatch
+    for part in ("shape", "mass", "belts", "contact"):
+        plant = EmulatedPlant(1, kind="mismatch", mismatch_off=(part,))
+        obj, scene = plant._jobs(REQUESTS)[0].mismatch
+        assert (obj, scene) != full and part in repr(plant)
+        assert (obj.bumps == ()) == (part == "shape")
+        assert (obj.inertia_scale == (1.0, 1.0, 1.0)) == (part == "mass")
+        assert (scene.ripple == 0.0) == (part == "belts")
+        physics = _scene_config(draw_scene(1), draw_object(1, "o3"), 0, scene).physics
+        assert (physics.solver == "Newton") == (part == "contact")
+    everything = ("shape", "mass", "belts", "contact")
+    off = EmulatedPlant(1, kind="mismatch", mismatch_off=everything)
+    assert off.weigh("o3") == EmulatedPlant(1).weigh("o3")

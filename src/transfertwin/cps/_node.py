@@ -212,8 +212,9 @@ class AssetNode:
         return self
 
     async def __aexit__(self, *exc: object) -> None:
-        with contextlib.suppress(Exception):  # announce the leave; the lease covers a crash
-            await asyncio.wait_for(self.peers.call("KG", "Leave", self.desc.asset_id), 2.0)
+        if self.desc.asset_id != "KG":  # the graph does not open a session to itself to leave
+            with contextlib.suppress(Exception):  # announce the leave; the lease covers a crash
+                await asyncio.wait_for(self.peers.call("KG", "Leave", self.desc.asset_id), 2.0)
         for task in list(self._tasks):
             task.cancel()
         await asyncio.gather(*self._tasks, return_exceptions=True)

@@ -86,8 +86,8 @@ EXPECTED_ELEMENTS = {
     "PropS": {
         "Identification": ["AssetId", "AssetClass", "AssetKind", "Provenance"],
         "Capabilities": ["FusePoses"],
-        "OperationalData": ["State", "FusedPoses"],
-        "ControlInterface": ["ReportPose", "FusedPose"],
+        "OperationalData": ["State", "FusedPoses", "FusedPosesJson", "DockingErrorsJson"],
+        "ControlInterface": ["ReportPose", "ReportRelativePose", "DockingError", "FusedPose"],
     },
     "KG": {
         "Identification": ["AssetId", "AssetClass", "AssetKind", "Provenance"],
@@ -123,6 +123,10 @@ EXPECTED_OPERATIONS = [
     ("EM", "StopStudy", [], [("status_json", _S)]),
     ("EM", "StudyStatus", [], [("status_json", _S)]),
     ("PropS", "FusedPose", [("subject", _S)], [("pose_json", _S)]),
+    ("PropS", "ReportRelativePose",
+     [("source", _S), ("subject", _S), ("relative_to", _S), ("x", _D), ("y", _D),
+      ("theta", _D), ("sigma_xy", _D), ("sigma_theta", _D)], [("ok", _B)]),
+    ("PropS", "DockingError", [("module", _S), ("unit", _S)], [("estimate_json", _S)]),
     ("KG", "Query", [("sparql", _S)], [("result_json", _S)]),
     # one process per asset (docs/architecture.md, "Deployment")
     ("TM_1", "AssignOperation",

@@ -177,7 +177,24 @@ OPERATIONAL_DATA: Mapping[str, tuple[PropertySpec, ...]] = MappingProxyType(
                 "StudyEtaS", _D, -1.0, "s", description="Seconds left at that rate; -1 unknown."
             ),
         ),
-        "props": (_state(), _count("FusedPoses", "fused poses")),
+        "props": (
+            _state(),
+            _count("FusedPoses", "fused poses"),
+            PropertySpec(
+                "FusedPosesJson",
+                _S,
+                "{}",
+                description="Each subject's fused pose (x, y m, theta rad) and standard "
+                "deviations (sd_x, sd_y, sd_theta) as JSON.",
+            ),
+            PropertySpec(
+                "DockingErrorsJson",
+                _S,
+                "{}",
+                description="Each module's last fused docking error (its pose in the unit's "
+                "goal frame) with standard deviations and covariance, as JSON.",
+            ),
+        ),
         "knowledge_graph": (
             _state(),
             _count("Triples", "triples in the graph"),
@@ -348,6 +365,29 @@ CONTROL_INTERFACE: Mapping[str, tuple[OperationSpec, ...]] = MappingProxyType(
                 ),
                 _OK,
                 "Report an observed pose of a subject (pose-graph edge).",
+            ),
+            OperationSpec(
+                "ReportRelativePose",
+                (
+                    Arg("source", _S),
+                    Arg("subject", _S),
+                    Arg("relative_to", _S),
+                    Arg("x", _D, "m"),
+                    Arg("y", _D, "m"),
+                    Arg("theta", _D, "rad"),
+                    Arg("sigma_xy", _D, "m"),
+                    Arg("sigma_theta", _D, "rad"),
+                ),
+                _OK,
+                "Report a subject's pose in another node's frame, e.g. a unit camera's "
+                "ChArUco observation of a docked module.",
+            ),
+            OperationSpec(
+                "DockingError",
+                (Arg("module", _S), Arg("unit", _S)),
+                (Arg("estimate_json", _S),),
+                "The fused pose of a module in a unit's docking goal frame, with its "
+                "standard deviations and covariance.",
             ),
             OperationSpec(
                 "FusedPose",

@@ -269,6 +269,11 @@ class AssetApplications:
             await self.assets[obj].server.set("OperationalData", "PossessedBy", location)
             self.kg.set_location(obj, location)
 
+    async def _docking_estimate(self, tm: str, unit: str, error, seed: int):
+        """The docking error the transfer uses, and what PropS said of it (None here: the
+        single-process CPS docks with the true error; a module's process asks PropS)."""
+        return error, None
+
     def _error(self, source: str, target: str, obj: str, leg: int):
         seed, _ = experiment_seeds(self.config.seed, f"{obj}:{source}:{target}", leg, 0)
         return self._docking.sample(seed)
@@ -395,6 +400,9 @@ class VirtualTransport:
         if res.status != "ok":
             return StepResult(False, f"docking at {leg.unit}: {res.reason}", info)
         err, env = res.docking_error(), cps.env
+        err, props = await cps._docking_estimate(self.tm, leg.unit, err, self._seed(leg))
+        if props is not None:
+            info["props"] = props
         if leg.name == "pick-up":  # the object lies on the source unit's belts
             await asyncio.to_thread(cps._locked, env.load_object_at_unit, self.obj, leg.unit, err,
                                     *_load_args(self.load_state))  # fmt: skip

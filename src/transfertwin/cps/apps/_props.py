@@ -124,6 +124,8 @@ class PoseGraphSolution:
         residual_norm: Euclidean norm of the weighted residual vector (dimensionless).
         anchor: Node fixed at the origin, or None when world observations fix the frame.
         converged: Whether the solver reported convergence.
+        joint: The joint covariance of every free node's (x, y, theta), shape (3N, 3N).
+        index: Node -> its block in `joint` (the anchor has none: it is fixed).
     """
 
     poses: dict[str, Pose2D]
@@ -131,6 +133,35 @@ class PoseGraphSolution:
     residual_norm: float
     anchor: str | None
     converged: bool
+    joint: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
+    index: dict[str, int] = field(default_factory=dict, repr=False)
+
+    def relative(self, parent: str, child: str) -> tuple[Pose2D, np.ndarray]:
+        """The fused pose of `child` in the frame of `parent` (``parent⁻¹ ∘ child``) and its
+        covariance, shape (3, 3), to first order from the joint covariance (the two
+        estimates are correlated through the observations they share).
+
+        Raises:
+            InputError: A node not in the graph.
+        """
+        for node in (parent, child):
+            if node not in self.poses:
+                raise InputError(f"unknown pose-graph node {node!r}")
+        pp, pc = self.poses[parent].as_array(), self.poses[child].as_array()
+        c, s = math.cos(pp[2]), math.sin(pp[2])
+        dx, dy = pc[0] - pp[0], pc[1] - pp[1]
+        rel = Pose2D(c * dx + s * dy, -s * dx + c * dy, wrap_angle(pc[2] - pp[2]))
+        d_child = np.eye(3)
+        d_child[:2, :2] = [[c, s], [-s, c]]
+        d_parent = -np.eye(3)
+        d_parent[:2, :2] = [[-c, -s], [s, -c]]
+        d_parent[:2, 2] = [-s * dx + c * dy, -c * dx - s * dy]
+        jac = np.zeros((3, self.joint.shape[0]))
+        for node, d in ((parent, d_parent), (child, d_child)):
+            if node in self.index:
+                i = self.index[node]
+                jac[:, 3 * i : 3 * i + 3] += d
+        return rel, jac @ self.joint @ jac.T
 
 
 def _nodes(observations: Sequence[PoseObservation]) -> list[str]:
@@ -281,6 +312,8 @@ def fuse_poses(
         residual_norm=float(np.linalg.norm(r)),
         anchor=anchor,
         converged=bool(result.success),
+        joint=cov,
+        index=dict(index),
     )
 
 
@@ -307,6 +340,22 @@ class PoseGraph:
             raise InputError(f"expected a PoseObservation, got {type(obs).__name__}")
         self._observations.append(obs)
         self._solution = None
+
+    def put(self, obs: PoseObservation) -> None:
+        """Add `obs` in place of the earlier observation of the same source, subject and
+        frame, if any (a graph of current estimates, not of a trajectory)."""
+        key = (obs.source, obs.subject, obs.relative_to)
+        self.drop(lambda o: (o.source, o.subject, o.relative_to) == key)
+        self.add(obs)
+
+    def drop(self, which) -> int:
+        """Remove the observations for which ``which(obs)`` is true; how many."""
+        kept = [o for o in self._observations if not which(o)]
+        dropped = len(self._observations) - len(kept)
+        if dropped:
+            self._observations = kept
+            self._solution = None
+        return dropped
 
     def solve(self, anchor: str | None = None) -> dict[str, Pose2D]:
         """Fuse all observations; see `fuse_poses`. Returns node -> pose."""

@@ -12,54 +12,22 @@ from pathlib import Path
 
 import pytest
 
-from tests.integration.cps._cli import run_main, tt
+from tests.integration.cps._cli import run_main, tt, two_module_floor
 
 #: A floor of 8 processes and a dozen orders (~100 s): slow, run by .ci/run on its own.
 pytestmark = pytest.mark.slow
 
-FLOOR = """
-name = "operations"
-size_m = [12.0, 8.0]
-logical = ["KG", "TMS", "EM"]
-
-[[station]]
-name = "A"
-x_m = 2.6
-y_m = 6.6
-yaw_deg = 90.0
-mount = "left"
-
-[[station]]
-name = "B"
-x_m = 7.6
-y_m = 6.6
-yaw_deg = 90.0
-mount = "right"
-
+# stations A and B, two modules (both running), o1 on TU_A and o2 on TU_B; a third station C
+# across the floor, the Experiment Manager, and the predictive policy
+FLOOR = two_module_floor("operations", {"o1": "TU_A", "o2": "TU_B"}).replace(
+    "standby = true", "standby = false").replace('logical = ["KG", "TMS"]',
+                                                 'logical = ["KG", "TMS", "EM"]') + """
 [[station]]
 name = "C"
 x_m = 10.0
 y_m = 1.4
 yaw_deg = -90.0
 mount = "left"
-
-[[module]]
-id = "TM_1"
-x_m = 6.0
-y_m = 5.2
-
-[[module]]
-id = "TM_2"
-x_m = 6.0
-y_m = 3.0
-
-[[object]]
-id = "o1"
-at = "TU_A"
-
-[[object]]
-id = "o2"
-at = "TU_B"
 
 [operation]
 policy = "predictive"

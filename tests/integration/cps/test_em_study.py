@@ -65,7 +65,8 @@ def test_the_em_node_runs_stops_and_resumes_a_study_over_opc_ua(tmp_path):
     plan = json.dumps(TINY | {"runs": 12})  # 24 experiments
 
     async def session(node, body):
-        async with connect(node.server.endpoint, "EM", insecure=True, credentials=None, timeout_s=30) as em:
+        async with connect(node.server.endpoint, "EM", insecure=True, credentials=None,
+                           timeout_s=30) as em:
             return await body(em)
 
     async def until(em, check, timeout_s: float = 60.0) -> dict:

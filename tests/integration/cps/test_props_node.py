@@ -59,3 +59,63 @@ def test_props_fuses_a_modules_fix_and_a_camera_observation_into_the_docking_err
     assert set(fused) == {"TU_A", "TM_1"} and fused["TM_1"]["sd_x"] < 0.0025
     assert stale["sources"] == ["TM_1"] and stale["sd_x_m"] > 0.01  # the fix alone
     assert math.hypot(stale["x_m"], stale["y_m"]) > 1.0
+
+
+PROPS_FLOOR = """
+name = "props-loop"
+size_m = [12.0, 8.0]
+logical = ["KG", "TMS", "PropS"]
+
+[[station]]
+name = "A"
+x_m = 2.6
+y_m = 6.6
+yaw_deg = 90.0
+mount = "left"
+
+[[station]]
+name = "B"
+x_m = 7.6
+y_m = 6.6
+yaw_deg = 90.0
+mount = "right"
+
+[[module]]
+id = "TM_1"
+x_m = 6.0
+y_m = 5.2
+
+[[object]]
+id = "o1"
+at = "TU_A"
+"""
+
+
+@pytest.mark.slow
+def test_an_order_on_a_floor_docks_with_the_fused_estimate(tmp_path):
+    from pathlib import Path
+
+    from tests.integration.cps._cli import tt
+    from transfertwin.cli._cps_floor import _call, _info
+
+    (tmp_path / "floor.toml").write_text(PROPS_FLOOR)
+    wd = tmp_path / "w"
+    up = tt("cps", "up", "--floor", str(tmp_path / "floor.toml"), "--workdir", str(wd),
+            "--detach", "--time-scale", "0", "--lease", "3", "--start-timeout", "150",
+            timeout=200)  # fmt: skip
+    assert up.returncode == 0, up.stderr
+    try:
+        order = tt("cps", "order", "--workdir", str(wd), "--object", "o1", "--to", "TU_B")
+        assert order.returncode in (0, 3), order.stderr  # delivered, or failed as a transfer may
+        info, creds = _info(Path(wd))
+        op = json.loads(asyncio.run(_call(info, creds, "TMS", "OperationStatus", "op1")))
+    finally:
+        tt("cps", "down", "--workdir", str(wd))
+    docked = [leg["docking"]["props"] for leg in op["result"]["legs"] if "docking" in leg]
+    assert docked, op["result"]
+    for props in docked:
+        assert props["used"] == "fused" and props["camera"], props
+        true, fused = props["true"], props["fused"]
+        assert abs(fused["x_mm"] - true["x_mm"]) < 3 * max(fused["sd_x_mm"], 0.1)
+        assert abs(fused["y_mm"] - true["y_mm"]) < 3 * max(fused["sd_y_mm"], 0.1)
+        assert abs(fused["theta_deg"] - true["theta_deg"]) < 3 * max(fused["sd_theta_deg"], 0.03)

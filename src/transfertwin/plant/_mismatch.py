@@ -24,7 +24,7 @@ streams (so the in-class draws do not move):
   condim 4 (torsional friction), impratio 1.5–5 and a softer, wider impedance (solimp
   width 2–5 mm), against the twin's Newton solver, elliptic cone, condim 3, impratio 1.
 
-Not modelled (missed, see docs/explanation/rehearsal.md): compliant or loose parts as extra
+Not modelled (missed, see docs/fidelity.md): compliant or loose parts as extra
 bodies with joints (a flexible joint needs a second body in the object), belt compliance
 and sag, and a second physics engine.
 """

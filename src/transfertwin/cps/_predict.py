@@ -84,10 +84,12 @@ def study_predictions(store: str | Path, obj: str) -> list[StatePrediction]:
         db.close()
 
 
-def virtual_predictions(obj: str, runs: int, seed: int, scene=None) -> list[StatePrediction]:
+def virtual_predictions(obj: str, runs: int, seed: int, scene=None,
+                        workers: int = 1) -> list[StatePrediction]:  # fmt: skip
     """Run the study's procedure for `obj` now (every state of the `ON_THE_FLY_THETA_STEP`
-    grid, `runs` runs each, docking errors from the fitted generator, in this process);
-    best first. Deterministic in `seed`."""
+    grid, `runs` runs each, docking errors from the fitted generator; in this process, or
+    on `workers` worker processes); best first. Deterministic in `seed` (the same rows
+    whatever `workers`)."""
     from transfertwin.cps._runtime import _docking_model
     from transfertwin.store import MemoryResultStore
     from transfertwin.study.experiment import StudyPlan, run_study
@@ -95,5 +97,5 @@ def virtual_predictions(obj: str, runs: int, seed: int, scene=None) -> list[Stat
     kwargs = {} if scene is None else {"scene": scene}
     plan = StudyPlan((obj,), ON_THE_FLY_THETA_STEP, runs, seed, _docking_model(), **kwargs)
     store = MemoryResultStore()
-    run_study(plan, store, workers=1)
+    run_study(plan, store, workers=workers)
     return rank_states(store.rows(), obj, f"virtual experiments ({runs} runs per state)")

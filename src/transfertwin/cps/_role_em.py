@@ -22,6 +22,9 @@ from transfertwin.cps._roles import Role
 
 __all__ = ["ExperimentRole"]
 
+#: Worker processes of the on-the-fly predictions (`Predict`).
+PREDICT_WORKERS = 2
+
 log = logging.getLogger("transfertwin.cps")
 
 #: Seconds `StopStudy` waits for the batch in flight before it answers.
@@ -75,7 +78,10 @@ class ExperimentRole(Role):
 
         await self.set("State", "predicting")
         try:
-            preds = await asyncio.to_thread(virtual_predictions, obj, runs, seed, load_scene())
+            # on worker processes: never beside another experiment in this process's threads
+            # (two threads on one object's compiled model crash MuJoCo)
+            preds = await asyncio.to_thread(virtual_predictions, obj, runs, seed, load_scene(),
+                                            PREDICT_WORKERS)  # fmt: skip
         finally:
             await self.set("State", "idle")
         return json.dumps([p.as_dict() for p in preds])

@@ -63,7 +63,7 @@ def test_the_folder_is_chosen_on_training_rows_and_blind_to_the_rest() -> None:
 
 
 def test_nested_cv_scores_every_predictor_on_the_same_folds_and_is_deterministic() -> None:
-    rows, truth = _rows()
+    rows, truth = _rows(n_per_cell=12)
     y = np.array([int(r["success"]) for r in rows])
     ho = held_out(rows, _variants(rows, truth), seeds=2, penalties=(0.0,))
     assert set(ho.p) == set(PREDICTORS) and ho.p["twin"].shape == (2, len(y))
@@ -99,7 +99,7 @@ def test_report_names_the_raw_share_outside_the_real_interval_and_what_was_chose
     objects = np.array([str(r["object_id"]) for r in rows])
     raw = np.where(objects == "o2", 1.0, truth)  # o2 always succeeds in 'simulation'
     variants = [Variant("one", {o: raw[None, :] for o in ("o1", "o2")}, objects)]
-    report = fidelity_report(rows, variants, seeds=1, penalties=(0.0,), n_resamples=50)
+    report = fidelity_report(rows, variants, seeds=1, penalties=(0.0,), n_resamples=30)
     cores = report["raw_shares"]["cores"]
     assert cores["o2"]["held_out_raw"] == 1.0 and not cores["o2"]["held_out_inside"]
     assert cores["o2"]["real_ci"][1] < 1.0

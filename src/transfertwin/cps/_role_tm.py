@@ -215,7 +215,8 @@ class ModuleRole(Role):
         if target not in self.node.floor.units:
             raise OperationRefused(f"no transfer unit {target!r}", argument="target")
         if source == self.aid and obj not in self.state.data["possesses"]:
-            raise OperationRefused(f"{obj} is not on {self.aid}", status="BadInvalidState",
+            # BadNotFound: the TMS tells this from 'busy' (the argument is not sent back)
+            raise OperationRefused(f"{obj} is not on {self.aid}", status="BadNotFound",
                                    argument="object")  # fmt: skip
         try:
             load = json.loads(plan or "{}").get("state")

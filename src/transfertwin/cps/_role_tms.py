@@ -220,7 +220,7 @@ class TmsRole(Role):
             raise ValueError(f"{obj} is being moved by {self.ledger.moving()[obj]}")
         self._move(obj, holder)
         log.info("TMS: an operator located %s at %s", obj, holder)
-        return True
+        return True  # a module told so by the publisher carries it from now on
 
     def _move(self, obj: str, holder: str) -> None:
         previous = self.ledger.move(obj, holder)
@@ -399,8 +399,7 @@ class TmsRole(Role):
                     module, "AssignOperation", op_id, op["source"], target, op["object"],
                     json.dumps(op["plan"])), 15)  # fmt: skip
             except OperationRefused as exc:
-                if module == op["source"] and exc.status == "BadInvalidState" and (
-                        exc.argument == "object"):  # fmt: skip
+                if module == op["source"] and exc.status == "BadNotFound":
                     # the ledger says the module carries it, the module says it does not
                     self._claimed.pop(module, None)
                     self._finish(op_id, {"status": "failed at delivery", "failed_step": "assigned",
@@ -532,10 +531,18 @@ class TmsRole(Role):
         """Bring the units' possessions and the objects' PossessedBy in line with the
         ledger, retrying whatever could not be written (an asset that is away)."""
         units = set(self.node.floor.units)
+        modules = {m.asset_id for m in self.node.floor.modules}
         while True:
             for aid in sorted(self._pending):
                 try:
-                    if aid in units:
+                    if aid in modules:  # an operator located an object on it (Locate)
+                        if aid in self._claimed:
+                            continue  # its own reports rule while it runs an operation
+                        objs = [o for o in self.ledger.objects_at(aid)
+                                if o not in self.state.data["unknown"]]  # fmt: skip
+                        await asyncio.wait_for(self.node.peers.call(
+                            aid, "SetPossessedObjects", ",".join(objs)), 5)  # fmt: skip
+                    elif aid in units:
                         objs = [o for o in self.ledger.objects_at(aid)
                                 if o not in self.state.data["unknown"]]  # fmt: skip
                         await asyncio.wait_for(self.node.peers.call(

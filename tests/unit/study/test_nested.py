@@ -107,7 +107,7 @@ def test_report_names_the_raw_share_outside_the_real_interval_and_what_was_chose
     assert set(report["scores"]) == set(PREDICTORS)
     assert {"twin - table_object_face", "twin - always_success"} <= set(report["paired"])
     assert set(report["leave_cell_out"]) == {"object_face_conveyor", "object_face"}
-    assert "1 folder(s) given" in report["made_on_all_rows"][0]
+    assert "1 scene variant(s) given" in report["made_on_all_rows"][0]
     assert report["chosen_in_folds"] == {"one penalty 0": 5}
     text = "\n".join(report_lines(report))
     assert "o2: real" in text and "OUTSIDE" in text and "made on all rows" in text

@@ -121,10 +121,11 @@ def _raw_shares(rows, variants, ho: HeldOut, y: np.ndarray, settings) -> dict[st
 
 def _on_all_rows(variants: Sequence[Variant], settings: Mapping[str, object]) -> list[str]:
     notes = [
-        "the candidate folders themselves: each folder's scene (pulley shape and radius, runs "
-        "per row R, contact settings) and its depth/shift/position grids were made before this "
-        f"evaluation, looking at these rows; the folds choose among the {len(variants)} "
-        "folder(s) given, not among folders that could have been made",
+        "the scene variants themselves: each candidate folder's (or the simulated "
+        "profile's) scene — pulley shape and radius, runs per row R, contact settings — and "
+        "its depth/shift/position grids were made before this evaluation, looking at these "
+        f"rows; the folds choose among the {len(variants)} scene variant(s) given, not among "
+        "variants that could have been made",
         f"the grids searched inside the folds: depth penalty {list(settings['penalties'])}, "
         "shrinkage weight 0..0.6, logistic L2 strength C "
         f"{list(HYBRID_CS)}, {settings['inner_folds']} inner folds, selection by inner Brier",

@@ -153,16 +153,13 @@ def test_the_controls_play_scrub_speed_and_hulls(browser, gap_server):
     assert errors == []
 
 
-def _best_load(browser, url: str, n: int = 5) -> tuple[float, float]:
-    """(best navigation-to-first-frame time in ms over n fresh pages, the replay's length)."""
-    loads, duration = [], 0.0
-    for _ in range(n):  # the best of n: the machine is shared
-        page, errors = _open(browser, url)
-        load_ms, duration = page.evaluate("[window.__replay.loadMs, window.__replay.duration]")
-        assert errors == []
-        loads.append(load_ms)
-        page.close()
-    return min(loads), duration
+def _load(browser, url: str) -> tuple[float, float]:
+    """(navigation-to-first-frame time in ms of a fresh page, the replay's length in s)."""
+    page, errors = _open(browser, url)
+    load_ms, duration = page.evaluate("[window.__replay.loadMs, window.__replay.duration]")
+    assert errors == []
+    page.close()
+    return load_ms, duration
 
 
 def test_a_30_s_transfer_replay_loads_in_under_2_s(browser, gap_server, tmp_path):
@@ -173,19 +170,22 @@ def test_a_30_s_transfer_replay_loads_in_under_2_s(browser, gap_server, tmp_path
                            SceneConfig().with_overrides(stall_time_s=None))  # fmt: skip
     server = ReplayServer("--object", "o1", "--face", "front", "--conveyor", "both", "--theta",
                           "0", "--seed", "3", "--profile", str(profile))  # fmt: skip
+    long, short = [], []
     try:
         assert "t_end 30.030 s" in server.summary, server.summary
-        long_ms, long_s = _best_load(browser, server.url)
+        for _ in range(5):  # interleaved, best of five each: the machine is shared
+            long.append(_load(browser, server.url))
+            short.append(_load(browser, gap_server.url))
     finally:
         server.stop()
-    short_ms, short_s = _best_load(browser, gap_server.url)
+    (long_ms, long_s), (short_ms, short_s) = min(long), min(short)
     load = os.getloadavg()[0] / (os.cpu_count() or 1)
     print(f"first frame after navigation, best of 5: {long_ms:.0f} ms for the {long_s:.2f} s "
           f"replay, {short_ms:.0f} ms for the {short_s:.2f} s one; load {load:.1f} per core")
-    assert long_s > 30.0
+    assert long_s > 30.0 and short_s < 5.0
     # The replay's length costs little: three.js, the WebGL context and the first frame
     # dominate (holds however busy the machine is).
-    assert long_ms < 1.5 * short_ms + 300, (long_ms, short_ms)
+    assert long_ms < 1.5 * short_ms + 500, (long_ms, short_ms)
     if load > MAX_LOAD_PER_CORE:  # other jobs hold the cores: the absolute figure means little
         pytest.skip(f"load {load:.1f} per core: {long_ms:.0f} ms not held to {LOAD_LIMIT_MS:g}")
     assert long_ms < LOAD_LIMIT_MS, (long_ms, short_ms)

@@ -39,6 +39,8 @@ policy = "predictive"                     # or "nearest-idle" (the default)
 study = "out/quick.sqlite"                # a study store with the twin's per-state shares
 runs = 4                                  # runs per state of on-the-fly virtual experiments
 capacity = 1                              # objects a unit may hold (0, the default: no limit)
+sensor = "camera"                         # the module's depth camera forms the OTS and feeds
+                                          # the delivery's controller ("truth": the default)
 
 [operation.groups]                        # destinations with a choice of unit
 inspection = ["TU_C", "TU_D"]
@@ -90,6 +92,8 @@ LOGICAL_ASSETS = {
 
 #: The TMS's scheduling policies (docs/architecture.md, "Operation").
 POLICIES = ("nearest-idle", "predictive")
+#: What the transport modules see objects with: the simulation's truth, or their camera.
+SENSORS = ("truth", "camera")
 
 _TU_CAPS = (Capability.TRANSFER, Capability.SENSE)
 _TM_CAPS = (Capability.TRANSPORT, Capability.TRANSFER, Capability.SENSE)
@@ -140,6 +144,7 @@ class OperationSpec:
     runs: int = 4
     groups: tuple[tuple[str, tuple[str, ...]], ...] = ()
     capacity: int = 0
+    sensor: str = "truth"
 
     def group(self, name: str) -> tuple[str, ...] | None:
         """The units of destination group `name` (None: no such group)."""
@@ -303,6 +308,9 @@ def _check(floor: FloorSpec) -> None:
         raise InputError(f"{where}: operation.runs must be 1..1000, got {op.runs}")
     if op.capacity < 0:
         raise InputError(f"{where}: operation.capacity must be >= 0, got {op.capacity}")
+    if op.sensor not in SENSORS:
+        raise InputError(f"{where}: operation.sensor must be one of {', '.join(SENSORS)}, "
+                         f"got {op.sensor!r}")  # fmt: skip
     for group, units in op.groups:
         if group in floor.units or group in seen:
             raise InputError(f"{where}: destination group {group!r} is also an asset id")
@@ -387,7 +395,7 @@ def _operation(table: object, name: str) -> OperationSpec:
     where = f"floor {name}: [operation]"
     if not isinstance(table, dict):
         raise InputError(f"{where} must be a table")
-    known = {"policy", "study", "runs", "groups", "capacity"}
+    known = {"policy", "study", "runs", "groups", "capacity", "sensor"}
     if unknown := sorted(set(table) - known):
         raise InputError(f"{where}: unknown key {unknown[0]!r}; known: {', '.join(sorted(known))}")
     study = table.get("study")
@@ -402,7 +410,8 @@ def _operation(table: object, name: str) -> OperationSpec:
             isinstance(v, list) and all(isinstance(u, str) for u in v) for v in groups.values()):
         raise InputError(f"{where}: groups must map a name to a list of unit ids")  # fmt: skip
     return OperationSpec(str(table.get("policy", "nearest-idle")), study, runs,
-                         tuple((g, tuple(u)) for g, u in groups.items()), capacity)  # fmt: skip
+                         tuple((g, tuple(u)) for g, u in groups.items()), capacity,
+                         str(table.get("sensor", "truth")))  # fmt: skip
 
 
 def load_floor(path: Path | str, *, check_cores: bool = True) -> FloorSpec:
@@ -459,7 +468,7 @@ def floor_toml(floor: FloorSpec) -> str:
         lines += ["", "[[object]]", f"id = {json.dumps(obj)}", f"at = {json.dumps(at)}"]
     op = floor.operation
     lines += ["", "[operation]", f"policy = {json.dumps(op.policy)}", f"runs = {op.runs}",
-              f"capacity = {op.capacity}"]
+              f"capacity = {op.capacity}", f"sensor = {json.dumps(op.sensor)}"]
     if op.study is not None:
         lines.append(f"study = {json.dumps(op.study)}")
     if op.groups:

@@ -22,6 +22,7 @@ import json
 import logging
 import math
 import time
+import zlib
 from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
@@ -249,11 +250,13 @@ class ModuleRole(Role):
 
         skills = _ModuleTransport(self, self.aid, op["source"], op["target"], obj)
         skills.load_state = op.get("load")
+        skills.camera = self.node.floor.operation.sensor == "camera"
         faces = self.state.data.setdefault("faces", {})  # of the objects on board
         if op["source"] == self.aid:  # on board already: it lies as it was loaded
             self._face = faces.get(obj, "front")
         else:
             self._face = faces[obj] = (op.get("load") or {}).get("face", "front")
+        skills.face = self._face
         self._op_id = op_id
         self._lost_in_gap = False
         self._attempt = 0
@@ -380,12 +383,37 @@ class ModuleRole(Role):
 
         hal = await self._unit_hal(unit)
         system = self.env.system
-        ctl = scene_controller(self.env.scene, system.tm, hal, system, self.env.clock)
+        camera = self.node.floor.operation.sensor == "camera" and direction.name == "TM_TO_TU"
+
+        def run():  # one thread: the camera's GL context is current in the thread that made it
+            vision = self._open_camera() if camera else None
+            try:
+                ctl = scene_controller(self.env.scene, system.tm, hal, vision or system,
+                                       self.env.clock)  # fmt: skip
+                return ctl.transfer(direction, self._face, None)
+            finally:
+                if vision is not None:
+                    vision.close()
+
         try:
-            return await asyncio.to_thread(ctl.transfer, direction, self._face, None)
+            return await asyncio.to_thread(run)
         except Exception:
             await self.node.peers.drop(unit)
             raise
+
+    def _open_camera(self):
+        """The delivery's controller sees the object through the module's depth camera
+        (`perception.open_sensor`, the study's sensor="perception" path), aimed at where its
+        load plan put it."""
+        from transfertwin.ots import POSITIONS
+        from transfertwin.perception import open_sensor
+
+        load = (self.op or {}).get("load") or {}
+        xy = POSITIONS[str(load.get("conveyor", "both"))]
+        seed = zlib.crc32(f"{self._op_id}:{self._attempt}".encode())
+        return open_sensor(self.env.system, expected_xy=xy,
+                           theta_rad=math.radians(float(load.get("theta_deg", 0.0))),
+                           seed=seed)  # fmt: skip
 
     async def _take_back(self, unit: str) -> bool:
         """Reverse both belt pairs (the unit's through its interface) until the object is

@@ -22,19 +22,20 @@ def _with(tmp_path, table: str):
 def test_operation_round_trips_and_a_relative_study_is_the_floor_files(tmp_path):
     (tmp_path / "s.sqlite").write_bytes(b"")
     path = _with(tmp_path, '[operation]\npolicy = "predictive"\nstudy = "s.sqlite"\nruns = 3\n'
-                           'capacity = 1\n'
+                           'capacity = 1\nsensor = "camera"\n'
                            '[operation.groups]\nout = ["TU_C", "TU_D"]\n')
     spec = load_floor(path)
     op = spec.operation
     assert (op.policy, op.runs, op.capacity, op.group("out"), op.group("TU_C")) == (
         "predictive", 3, 1, ("TU_C", "TU_D"), None)
-    assert op.study == str((tmp_path / "s.sqlite").resolve())
+    assert op.study == str((tmp_path / "s.sqlite").resolve()) and op.sensor == "camera"
     (tmp_path / "again.toml").write_text(floor_toml(spec))
     assert load_floor(tmp_path / "again.toml") == spec
 
 
 def test_the_default_is_nearest_idle_without_a_study():
-    assert default_floor_spec().operation == OperationSpec("nearest-idle", None, 4, (), 0)
+    assert default_floor_spec().operation == OperationSpec("nearest-idle", None, 4, (), 0,
+                                                           "truth")
 
 
 @pytest.mark.parametrize(("table", "message"), [
@@ -43,6 +44,7 @@ def test_the_default_is_nearest_idle_without_a_study():
     ('[operation]\nruns = "4"\n', "runs must be an integer"),
     ('[operation]\nspeed = 1\n', "unknown key 'speed'"),
     ('[operation]\ncapacity = -1\n', "capacity must be >= 0"),
+    ('[operation]\nsensor = "lidar"\n', "operation.sensor must be one of truth, camera"),
     ('[operation.groups]\nout = ["TU_Z"]\n', "must list transfer units"),
     ('[operation.groups]\nTU_A = ["TU_B"]\n', "is also an asset id"),
 ])

@@ -359,6 +359,10 @@ class VirtualTransport:
     #: The pre-transfer state the object is loaded in at the source ({face, conveyor,
     #: theta_deg}; None: front face, θ = 0, centred, as the demo always did).
     load_state: dict[str, object] | None = None
+    #: The module's depth camera forms the OTS and checks the ledger (floor: sensor =
+    #: "camera"); the face the object lies on, for that check.
+    camera: bool = False
+    face: str = "front"
 
     def __init__(self, cps: AssetApplications, tm: str, source: str, target: str, obj: str):
         self.cps, self.tm, self.obj = cps, tm, obj
@@ -423,10 +427,22 @@ class VirtualTransport:
 
     async def form_ots(self, leg: Leg) -> StepResult:
         cps = self.cps
-        if self.navigated:
+        seeing = self.navigated or self.camera
+        if seeing:
             boxes = await asyncio.to_thread(cps._locked, self._scan, self._seed(leg))
         else:
             boxes = [cps._locked(ground_truth_aabb, cps.env.system)]
+        info = {"source": "depth camera" if seeing else "ground truth",
+                "boxes": [b.as_dict() for b in boxes]}  # fmt: skip
+        if self.camera:  # what it sees against what the ledger says (Sec. 5.5)
+            from transfertwin.cps.apps._camera import scan_check
+
+            ok, why, info["possessions"] = scan_check(
+                boxes, self.obj, self.face, self.tm, leg.unit,
+                leg.direction is TransferDirection.TU_TO_TM, cps.config.scene.gap_m)
+            if not ok:
+                log.info("%s: scanned %s and itself: %s", self.tm, leg.unit, why)
+                return StepResult(False, why, info)
         # The transport module carries objects only on its belts; a unit's representation
         # also lists what its station holds off the belts, so for a unit the scan decides.
         pickup = leg.direction is TransferDirection.TU_TO_TM
@@ -435,8 +451,6 @@ class VirtualTransport:
             boxes, leg.direction, BeltThresholds(t_max=cps.config.scene.t_max_s),
             obj=self.obj, tm=self.tm, unit=leg.unit, receiver_holds=holds,
         )  # fmt: skip
-        info = {"source": "depth camera" if self.navigated else "ground truth",
-                "boxes": [b.as_dict() for b in boxes]}  # fmt: skip
         log.info("%s: scanned %s and itself: %d object(s) seen%s", self.tm, leg.unit,
                  len(boxes), "" if check.ok else f"; no OTS: {check.reason}")  # fmt: skip
         return StepResult(check.ok, check.reason, info)

@@ -19,7 +19,9 @@ operations per hour of modelled floor time (each operation's ``floor_s``: drivin
 planner, docking, the transfers' simulated time; the work divided among the modules) with a
 bootstrap 95 % interval; then predictive minus nearest-idle: the success-share difference
 with its Newcombe interval and the operations-per-hour difference with a bootstrap interval.
-Writes ``benchmarks/results/operations.json``.
+``--camera`` runs the predictive policy a second time with the modules' depth cameras in
+the loop (floor ``sensor = "camera"``) and says whether its success share lies inside the
+ground-truth run's interval. Writes ``benchmarks/results/operations.json``.
 """
 
 from __future__ import annotations
@@ -182,6 +184,8 @@ def main() -> int:
     ap.add_argument("--study", help="an existing study store of the floor's cores")
     ap.add_argument("--workdir", help="where floors and the study go (default: a temp dir)")
     ap.add_argument("--timeout", type=float, default=3600.0, help="per policy, seconds")
+    ap.add_argument("--camera", action="store_true",
+                    help="also run predictive with the modules' cameras in the loop")
     ap.add_argument("--lease", type=float, default=30.0,
                     help="the floor's lease, s (default 30: a 35-process floor on a loaded "
                          "2-core host misses 5 s heartbeats)")  # fmt: skip
@@ -196,10 +200,18 @@ def main() -> int:
     orders = order_sequence(floor, args.orders, args.seed)
     rng = np.random.default_rng(args.seed)
     out: dict[str, dict] = {}
-    for policy in ("nearest-idle", "predictive"):
-        pwd = wd / policy
-        print(f"{policy}: starting {floor.name} on plant seed {args.plant_seed}", flush=True)
-        up = tt("cps", "up", "--floor", args.floor, "--workdir", str(pwd), "--detach",
+    runs = [("nearest-idle", "nearest-idle", args.floor), ("predictive", "predictive", args.floor)]
+    if args.camera:  # the same floor with the modules' cameras in the loop
+        camera_floor = wd / "floor-camera.toml"
+        text = Path(args.floor).read_text()
+        if "[operation]" in text:
+            raise SystemExit("--camera: the floor file has an [operation] table already")
+        camera_floor.write_text(text + '\n[operation]\nsensor = "camera"\n')
+        runs.append(("predictive+camera", "predictive", str(camera_floor)))
+    for name, policy, floor_file in runs:
+        pwd = wd / name
+        print(f"{name}: starting {floor.name} on plant seed {args.plant_seed}", flush=True)
+        up = tt("cps", "up", "--floor", floor_file, "--workdir", str(pwd), "--detach",
                 "--time-scale", "0", "--seed", str(args.seed), "--plant-seed",
                 str(args.plant_seed), "--policy", policy, "--study", str(study),
                 "--lease", str(args.lease), "--start-timeout", "600", timeout=900)  # fmt: skip
@@ -210,12 +222,14 @@ def main() -> int:
             run = drive(pwd, orders, len(floor.modules), args.timeout)
         finally:
             tt("cps", "down", "--workdir", str(pwd))
-        out[policy] = {**summarise(run["operations"], len(floor.modules), rng),
+        out[name] = {**summarise(run["operations"], len(floor.modules), rng),
                        "refused": run["refused"], "located": run["located"],
                        "retried": run["retried"], "wall_s": run["wall_s"]}  # fmt: skip
     a, b = out["nearest-idle"], out["predictive"]
     diff = newcombe_difference(b["delivered"], b["n"], a["delivered"], a["n"])
-    dboot = b.pop("boot") - a.pop("boot")
+    dboot = b["boot"] - a["boot"]
+    for r in out.values():
+        r.pop("boot")
     ops_diff = [float(np.percentile(dboot, 2.5)), float(np.percentile(dboot, 97.5))]
     print(f"\n{args.orders} orders on {floor.name}, plant seed {args.plant_seed}")
     print(f"{'policy':<14}{'n':>5}{'deliv.':>8}{'success share [95% CP]':>30}"
@@ -231,6 +245,12 @@ def main() -> int:
           f"[{diff.low:+.3f}, {diff.high:+.3f}] (Newcombe); ops/floor-hour "
           f"{b['ops_per_floor_hour'] - a['ops_per_floor_hour']:+.1f} "
           f"[{ops_diff[0]:+.1f}, {ops_diff[1]:+.1f}] (bootstrap)")
+    if "predictive+camera" in out:
+        c = out["predictive+camera"]
+        inside = b["share_ci95"][0] <= c["share"] <= b["share_ci95"][1]
+        print(f"camera in the loop: success share {c['share']:.3f}, "
+              f"{'inside' if inside else 'OUTSIDE'} the ground-truth run's interval "
+              f"[{b['share_ci95'][0]:.3f}, {b['share_ci95'][1]:.3f}]")
     for policy, r in out.items():
         print(f"{policy}: failures {r['failed_by_reason'] or 'none'}; objects located by an "
               f"operator {r['located']}; refused {[x['reason'] for x in r['refused']]}")

@@ -6,10 +6,13 @@ from __future__ import annotations
 import asyncio
 import json
 
+import pytest
+
 from transfertwin.cps import Cps, CpsConfig
 from transfertwin.study import ExperimentSpec, run_experiment
 
 
+@pytest.mark.slow  # ~15-30 s (CI: the CPS slow group)
 def test_demo_cps_end_to_end(tmp_path, cps_certs):
     async def scenario():
         # quiet gossip: the leave below is noticed in rounds the test runs itself

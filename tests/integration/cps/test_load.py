@@ -55,7 +55,7 @@ def test_thirty_seconds_at_a_thousand_writes_per_second(tu_a, pki):
 @pytest.mark.parametrize(
     "n_subs",
     # 100 subscriptions at 50 ms are 2,000 publish cycles/s on top of the writes: ~20 s here
-    [10, pytest.param(100, marks=pytest.mark.slow)],
+    [pytest.param(10, marks=pytest.mark.slow), pytest.param(100, marks=pytest.mark.slow)],
 )
 def test_thousand_writes_and_many_subscriptions_lose_nothing(tu_a, pki, n_subs):
     async def scenario():

@@ -9,6 +9,7 @@ import asyncio
 import math
 
 import numpy as np
+import pytest
 
 from transfertwin.cps import Cps, CpsConfig
 from transfertwin.cps.apps import HOME_POSE, STEPS, Environment, form_ots
@@ -22,6 +23,7 @@ def _dedup(states: list[str]) -> list[str]:
     return [s for i, s in enumerate(states) if i == 0 or s != states[i - 1]]
 
 
+@pytest.mark.slow  # ~20-40 s (CI: the CPS slow group)
 def test_a_navigated_order_runs_navigate_dock_scan_transfer_in_order(tmp_path, cps_certs):
     async def scenario():
         cfg = CpsConfig(cps_certs(tmp_path), gossip_period_s=10.0, docking="navigated")  # quiet

@@ -35,6 +35,7 @@ def test_copy_on_access_behaves_like_a_dict_and_never_writes_the_template():
         del nodes[ua.NodeId(99, 7)]
 
 
+@pytest.mark.slow  # ~13 s alone (CI: the CPS slow group)
 def test_servers_from_the_shared_space_match_asyncua_and_keep_their_writes_apart():
     async def scenario():
         plain = Server()

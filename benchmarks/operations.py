@@ -161,6 +161,21 @@ def summarise(ops: list[dict], modules: int, rng: np.random.Generator) -> dict:
             "boot": boot, "failed_by_reason": _reasons(finished)}  # fmt: skip
 
 
+def _by_leg(ops: list[dict]) -> dict[str, int]:
+    """Finished operations by outcome and the leg it came from (delivered, failed at
+    pick-up / delivery, and of those the ones that failed before any transfer)."""
+    out: dict[str, int] = {}
+    for o in ops:
+        if o["state"] != "finished":
+            continue
+        r = o["result"]
+        key = r.get("status", "?")
+        if r.get("failed_step") not in (None, "transferring"):
+            key += f" ({r['failed_step']})"
+        out[key] = out.get(key, 0) + 1
+    return dict(sorted(out.items()))
+
+
 def _reasons(finished: list[dict]) -> dict[str, int]:
     out: dict[str, int] = {}
     for o in finished:
@@ -224,7 +239,11 @@ def main() -> int:
             tt("cps", "down", "--workdir", str(pwd))
         out[name] = {**summarise(run["operations"], len(floor.modules), rng),
                        "refused": run["refused"], "located": run["located"],
-                       "retried": run["retried"], "wall_s": run["wall_s"]}  # fmt: skip
+                       "retried": run["retried"], "wall_s": run["wall_s"],
+                       "by_leg": _by_leg(run["operations"])}  # fmt: skip
+        r = out[name]
+        print(f"{name}: {r['delivered']}/{r['n']} delivered, share {r['share']:.3f} "
+              f"{[round(v, 3) for v in r['share_ci95']]}; {r['by_leg']}", flush=True)
     a, b = out["nearest-idle"], out["predictive"]
     diff = newcombe_difference(b["delivered"], b["n"], a["delivered"], a["n"])
     dboot = b["boot"] - a["boot"]

@@ -220,7 +220,17 @@ class TmsRole(Role):
             raise ValueError(f"{obj} is being moved by {self.ledger.moving()[obj]}")
         self._move(obj, holder)
         log.info("TMS: an operator located %s at %s", obj, holder)
-        return True  # a module told so by the publisher carries it from now on
+        if holder in {m.asset_id for m in self.node.floor.modules}:
+            # the module carries it from now on: told before the answer, so that an order
+            # placed right after finds the module agreeing (else the publisher retries)
+            lost = self.state.data["unknown"]
+            objs = [o for o in self.ledger.objects_at(holder) if o not in lost]
+            try:
+                await asyncio.wait_for(self.node.peers.call(
+                    holder, "SetPossessedObjects", ",".join(objs)), 5)  # fmt: skip
+            except Exception as exc:
+                log.info("TMS: %s not told of %s yet: %s", holder, obj, exc)
+        return True
 
     def _move(self, obj: str, holder: str) -> None:
         previous = self.ledger.move(obj, holder)

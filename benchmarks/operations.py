@@ -8,11 +8,11 @@ transport modules, 20 cores) as asset processes on the emulated plant (``--plant
 plant's hidden physics, not the twin's, decide every transfer), sends the same seeded
 sequence of orders by destination (each object's next destination differs from its last
 two), at most one order per object and one per module in flight, and reads every finished
-operation back from the TMS. An object lost in the gap is put back where it was last seen
-by an operator (`Locate`) before its next order. ``predictive`` loads each object in the
-twin's best state from a study store of the floor's cores (made first, ``--runs`` runs per
-state of the 28-state grid, docking errors from the fitted generator), ``nearest-idle`` in
-the default state.
+operation back from the TMS. An object lost in the gap is freed by an operator and put on
+the unit of the leg that lost it (`Locate`) before its next order. ``predictive`` loads each
+object in the twin's best state from a study store of the floor's cores (made first,
+``--runs`` runs per state of the 28-state grid, docking errors from the fitted generator),
+``nearest-idle`` in the default state.
 
 Prints, per policy: orders, delivered, success share with its Clopper–Pearson 95 % interval,
 operations per hour of modelled floor time (each operation's ``floor_s``: driving from the
@@ -100,6 +100,7 @@ def drive(wd: Path, orders: list[tuple[str, str]], inflight: int, timeout_s: flo
     from transfertwin.cps.opcua import OperationRefused
 
     tms = Tms(wd)
+    units = {a["id"] for a in tms.info["assets"] if a["class"] == "transfer_unit"}
     pending = list(orders)
     running: dict[str, str] = {}  # object -> operation
     refused, located, retried = [], 0, 0
@@ -118,8 +119,13 @@ def drive(wd: Path, orders: list[tuple[str, str]], inflight: int, timeout_s: flo
                 break
             obj, dest = pending.pop(nxt)
             ledger = ledger or json.loads(tms("Ledger"))
-            if obj in ledger["unknown"]:  # an operator takes it out of the gap
-                tms("Locate", obj, ledger["unknown"][obj]["last_seen"])
+            if obj in ledger["unknown"]:  # an operator frees it and puts it on the unit
+                lost = json.loads(tms("OperationStatus", ledger["unknown"][obj]["operation"]))
+                leg = lost["result"].get("status", "")  # of the failed leg (pick-up: source)
+                unit = lost["source"] if "pick-up" in leg else lost["target"]
+                if unit not in units:
+                    unit = lost["target"]
+                tms("Locate", obj, unit)
                 located += 1
                 ledger = json.loads(tms("Ledger"))
             try:

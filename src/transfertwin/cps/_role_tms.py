@@ -216,20 +216,13 @@ class TmsRole(Role):
             raise ValueError(f"{obj!r} is not an object of this floor")
         if holder not in self.ledger.holders:
             raise ValueError(f"{holder!r} is no transfer unit or transport module of this floor")
+        if holder not in self.node.floor.units:  # type E keeps its own state (Table 3.1)
+            raise ValueError(f"{holder} is a transport module: it says itself what it carries; "
+                             "put the object on a transfer unit and locate it there")
         if obj in self.ledger.moving():
             raise ValueError(f"{obj} is being moved by {self.ledger.moving()[obj]}")
         self._move(obj, holder)
         log.info("TMS: an operator located %s at %s", obj, holder)
-        if holder in {m.asset_id for m in self.node.floor.modules}:
-            # the module carries it from now on: told before the answer, so that an order
-            # placed right after finds the module agreeing (else the publisher retries)
-            lost = self.state.data["unknown"]
-            objs = [o for o in self.ledger.objects_at(holder) if o not in lost]
-            try:
-                await asyncio.wait_for(self.node.peers.call(
-                    holder, "SetPossessedObjects", ",".join(objs)), 5)  # fmt: skip
-            except Exception as exc:
-                log.info("TMS: %s not told of %s yet: %s", holder, obj, exc)
         return True
 
     def _move(self, obj: str, holder: str) -> None:
@@ -541,18 +534,10 @@ class TmsRole(Role):
         """Bring the units' possessions and the objects' PossessedBy in line with the
         ledger, retrying whatever could not be written (an asset that is away)."""
         units = set(self.node.floor.units)
-        modules = {m.asset_id for m in self.node.floor.modules}
         while True:
             for aid in sorted(self._pending):
                 try:
-                    if aid in modules:  # an operator located an object on it (Locate)
-                        if aid in self._claimed:
-                            continue  # its own reports rule while it runs an operation
-                        objs = [o for o in self.ledger.objects_at(aid)
-                                if o not in self.state.data["unknown"]]  # fmt: skip
-                        await asyncio.wait_for(self.node.peers.call(
-                            aid, "SetPossessedObjects", ",".join(objs)), 5)  # fmt: skip
-                    elif aid in units:
+                    if aid in units:
                         objs = [o for o in self.ledger.objects_at(aid)
                                 if o not in self.state.data["unknown"]]  # fmt: skip
                         await asyncio.wait_for(self.node.peers.call(

@@ -142,7 +142,8 @@ def test_orders_for_one_object_chain_and_what_cannot_start_is_refused(floor, cap
 def test_an_object_the_store_lacks_is_predicted_by_the_experiment_manager(floor):
     ledger = json.loads(_tms(floor, "Ledger"))
     assert "o2" not in ledger["unknown"]
-    status = _wait_finished(floor, _tms(floor, "OrderTo", "o2", "out"), timeout_s=300)
+    # 28 states run by the EM first (a minute on a quiet machine, minutes on a loaded one)
+    status = _wait_finished(floor, _tms(floor, "OrderTo", "o2", "out"), timeout_s=900)
     plan = status["plan"]
     assert "prediction" in plan, status["history"]
     assert plan["prediction"]["source"] == "virtual experiments (1 runs per state)"

@@ -148,7 +148,10 @@ class TmsRole(Role):
             raise OperationRefused(f"every transport module carries an object ({held}): order "
                                    "those onward first", status="BadResourceUnavailable",
                                    argument="object")  # fmt: skip
-        free = [t for t in targets if t == where or not self._occupied(t)]
+        if after is None and where in targets:
+            raise OperationRefused(f"{obj} is at {where} already, a unit of {destination}",
+                                   argument="target")  # fmt: skip
+        free = [t for t in targets if not self._occupied(t)]
         if not free:
             held = "; ".join(f"{t} holds {', '.join(self.ledger.objects_at(t))}" for t in targets)
             raise OperationRefused(f"the destination is occupied ({held}): order that away "
@@ -157,8 +160,7 @@ class TmsRole(Role):
         data = self.state.data
         op_id = f"op{data['next_op']}"
         if after is None:
-            first = next((t for t in targets if t != where), targets[0])
-            self.ledger.reserve(op_id, where, first, obj)
+            self.ledger.reserve(op_id, where, free[0], obj)
         data["next_op"] += 1
         single = len(targets) == 1
         self.ops[op_id] = {"operation": op_id, "object": obj,

@@ -142,8 +142,10 @@ def test_orders_for_one_object_chain_and_what_cannot_start_is_refused(floor, cap
 def test_an_object_the_store_lacks_is_predicted_by_the_experiment_manager(floor):
     ledger = json.loads(_tms(floor, "Ledger"))
     assert "o2" not in ledger["unknown"]
+    held = set(ledger["locations"].values())  # capacity 1: to a unit that holds nothing
+    free = next(u for u in ("TU_A", "TU_C") if u not in held)
     # 28 states run by the EM first (a minute on a quiet machine, minutes on a loaded one)
-    status = _wait_finished(floor, _tms(floor, "OrderTo", "o2", "out"), timeout_s=900)
+    status = _wait_finished(floor, _tms(floor, "OrderTo", "o2", free), timeout_s=900)
     plan = status["plan"]
     assert "prediction" in plan, status["history"]
     assert plan["prediction"]["source"] == "virtual experiments (1 runs per state)"

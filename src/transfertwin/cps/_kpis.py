@@ -53,6 +53,7 @@ def kpis(ops: Iterable[Mapping[str, Any]], modules: Iterable[str], units: Iterab
     ops = list(ops)
     finished = [o for o in ops if o["state"] == "finished"]
     delivered = [o for o in finished if o["result"].get("status") == "delivered"]
+    failed = [o for o in finished if o["result"].get("status") != "delivered"]
     start = min((o["submitted"] for o in ops), default=now)
     end = max((o.get("finished", now) for o in finished), default=now)
     end = now if len(finished) < len(ops) else end
@@ -75,7 +76,7 @@ def kpis(ops: Iterable[Mapping[str, Any]], modules: Iterable[str], units: Iterab
     per_floor_hour = round(3600.0 * len(delivered) / makespan, 3) if makespan > 0 else None
     reasons = Counter(o["result"].get("status", "failed") if not o["result"].get("failed_step")
                       else f"failed while {o['result']['failed_step']}"
-                      for o in finished if o not in delivered)  # fmt: skip
+                      for o in failed)  # fmt: skip
     lead = [o["finished"] - o["submitted"] for o in finished if "finished" in o]
     return {
         "orders": len(ops),

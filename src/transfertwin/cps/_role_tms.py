@@ -305,8 +305,8 @@ class TmsRole(Role):
         if op.get("after") is None or op["source"] is not None:
             return True
         prev = op["after"]
-        await self._done.setdefault(prev, asyncio.Event()).wait() if self.ops[prev][
-            "state"] != "finished" else None  # fmt: skip
+        if self.ops[prev]["state"] != "finished":
+            await self._done.setdefault(prev, asyncio.Event()).wait()
         obj = op["object"]
         if obj in self.state.data["unknown"]:
             self._finish(op_id, {"status": "failed before start", "failed_step": "queued",

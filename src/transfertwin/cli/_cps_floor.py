@@ -212,7 +212,7 @@ def _serve_asset(cfg) -> None:
 
         def on_signal(signum: int, frame: object) -> None:
             # a leave that hangs (a peer that never answers) must not keep the process
-            timer = threading.Timer(30.0, lambda: (pid_file.unlink(missing_ok=True),
+            timer = threading.Timer(15.0, lambda: (pid_file.unlink(missing_ok=True),
                                                    os._exit(0)))  # fmt: skip
             timer.daemon = True
             timer.start()
@@ -231,8 +231,12 @@ def _serve_asset(cfg) -> None:
             pid_file.unlink(missing_ok=True)
         print(f"{cfg.asset_id} left", flush=True)
 
+    # Not asyncio.run: at its end it joins the default executor's threads, and a warm-up or
+    # a simulation step still running there (tens of seconds on a loaded host) would hold
+    # the process past `cps down`'s limit after its leave was announced.
+    loop = asyncio.new_event_loop()
     try:
-        asyncio.run(serve())
+        loop.run_until_complete(serve())
     except InputError as exc:  # e.g. a plant seed file that cannot be read
         print(f"transfertwin: error: {exc}", file=sys.stderr, flush=True)
         logging.shutdown()

@@ -12,7 +12,10 @@ operation back from the TMS. An object lost in the gap is freed by an operator a
 the unit of the leg that lost it (`Locate`) before its next order. ``predictive`` loads each
 object in the twin's best state from a study store of the floor's cores (made first,
 ``--runs`` runs per state of the 28-state grid, docking errors from the fitted generator),
-``nearest-idle`` in the default state.
+``nearest-idle`` in the default state. ``predictive`` also learns from the floor's own
+transfers (`cps._learn`: each finished transfer updates the twin's per-state shares of its
+object, pick-up and delivery); ``twin-only`` is the same policy with ``learn = false``, the
+ablation that shows what the twin's study alone is worth on this plant.
 
 Prints, per policy: orders, delivered, success share with its Clopper–Pearson 95 % interval,
 operations per hour of modelled floor time (each operation's ``floor_s``: driving from the
@@ -221,14 +224,20 @@ def main() -> int:
     orders = order_sequence(floor, args.orders, args.seed)
     rng = np.random.default_rng(args.seed)
     out: dict[str, dict] = {}
-    runs = [("nearest-idle", "nearest-idle", args.floor), ("predictive", "predictive", args.floor)]
+    text = Path(args.floor).read_text()
+    if "[operation]" in text:
+        raise SystemExit("the floor file has an [operation] table already")
+
+    def variant(name: str, table: str) -> str:
+        path = wd / f"floor-{name}.toml"
+        path.write_text(text + f"\n[operation]\n{table}\n")
+        return str(path)
+
+    runs = [("nearest-idle", "nearest-idle", args.floor),
+            ("twin-only", "predictive", variant("twin-only", "learn = false")),
+            ("predictive", "predictive", args.floor)]  # fmt: skip
     if args.camera:  # the same floor with the modules' cameras in the loop
-        camera_floor = wd / "floor-camera.toml"
-        text = Path(args.floor).read_text()
-        if "[operation]" in text:
-            raise SystemExit("--camera: the floor file has an [operation] table already")
-        camera_floor.write_text(text + '\n[operation]\nsensor = "camera"\n')
-        runs.append(("predictive+camera", "predictive", str(camera_floor)))
+        runs.append(("predictive+camera", "predictive", variant("camera", 'sensor = "camera"')))
     for name, policy, floor_file in runs:
         pwd = wd / name
         print(f"{name}: starting {floor.name} on plant seed {args.plant_seed}", flush=True)
@@ -251,25 +260,32 @@ def main() -> int:
         print(f"{name}: {r['delivered']}/{r['n']} delivered, share {r['share']:.3f} "
               f"{[round(v, 3) for v in r['share_ci95']]}; {r['by_leg']}", flush=True)
     a, b = out["nearest-idle"], out["predictive"]
-    diff = newcombe_difference(b["delivered"], b["n"], a["delivered"], a["n"])
-    dboot = b["boot"] - a["boot"]
+    diffs = {}
+    for name in ("twin-only", "predictive"):
+        r = out[name]
+        d = newcombe_difference(r["delivered"], r["n"], a["delivered"], a["n"])
+        dboot = r["boot"] - a["boot"]
+        diffs[name] = {"share": d, "ops": r["ops_per_floor_hour"] - a["ops_per_floor_hour"],
+                       "ops_ci95": [float(np.percentile(dboot, 2.5)),
+                                    float(np.percentile(dboot, 97.5))]}  # fmt: skip
     for r in out.values():
         r.pop("boot")
-    ops_diff = [float(np.percentile(dboot, 2.5)), float(np.percentile(dboot, 97.5))]
     print(f"\n{args.orders} orders on {floor.name}, plant seed {args.plant_seed}")
-    print(f"{'policy':<14}{'n':>5}{'deliv.':>8}{'success share [95% CP]':>30}"
+    print(f"{'policy':<18}{'n':>5}{'deliv.':>8}{'success share [95% CP]':>30}"
           f"{'ops/floor-hour [95% boot.]':>32}{'refused':>9}")
     for policy, r in out.items():
         lo, hi = r["share_ci95"]
         olo, ohi = r["ops_ci95"]
         share = f"{r['share']:.3f} [{lo:.3f}, {hi:.3f}]"
         ops = f"{r['ops_per_floor_hour']:.1f} [{olo:.1f}, {ohi:.1f}]"
-        print(f"{policy:<14}{r['n']:>5}{r['delivered']:>8}{share:>30}{ops:>32}"
+        print(f"{policy:<18}{r['n']:>5}{r['delivered']:>8}{share:>30}{ops:>32}"
               f"{len(r['refused']):>9}")
-    print(f"predictive - nearest-idle: success share {diff.estimate:+.3f} "
-          f"[{diff.low:+.3f}, {diff.high:+.3f}] (Newcombe); ops/floor-hour "
-          f"{b['ops_per_floor_hour'] - a['ops_per_floor_hour']:+.1f} "
-          f"[{ops_diff[0]:+.1f}, {ops_diff[1]:+.1f}] (bootstrap)")
+    for name, d in diffs.items():
+        sd, (olo, ohi) = d["share"], d["ops_ci95"]
+        print(f"{name} - nearest-idle: success share {sd.estimate:+.3f} "
+              f"[{sd.low:+.3f}, {sd.high:+.3f}] (Newcombe"
+              f"{', significant' if sd.low > 0 or sd.high < 0 else ', not significant'}); "
+              f"ops/floor-hour {d['ops']:+.1f} [{olo:+.1f}, {ohi:+.1f}] (bootstrap)")
     if "predictive+camera" in out:
         c = out["predictive+camera"]
         inside = b["share_ci95"][0] <= c["share"] <= b["share_ci95"][1]
@@ -281,8 +297,11 @@ def main() -> int:
               f"operator {r['located']}; refused {[x['reason'] for x in r['refused']]}")
     result = {"orders": args.orders, "floor": floor.name, "plant_seed": args.plant_seed,
               "seed": args.seed, "runs": args.runs, "policies": out,
-              "share_difference": {"diff": diff.estimate, "ci95": [diff.low, diff.high]},
-              "ops_per_floor_hour_difference_ci95": ops_diff}  # fmt: skip
+              "differences": {name: {
+                  "share": d["share"].estimate,
+                  "share_ci95": [d["share"].low, d["share"].high],
+                  "ops_per_floor_hour": d["ops"],
+                  "ops_per_floor_hour_ci95": d["ops_ci95"]} for name, d in diffs.items()}}
     res = ROOT / "benchmarks" / "results" / "operations.json"
     res.write_text(json.dumps(result, indent=2) + "\n")
     print(f"wrote {res}")

@@ -41,6 +41,8 @@ runs = 4                                  # runs per state of on-the-fly virtual
 capacity = 1                              # objects a unit may hold (0, the default: no limit)
 sensor = "camera"                         # the module's depth camera forms the OTS and feeds
                                           # the delivery's controller ("truth": the default)
+learn = true                              # predictive: the floor's own outcomes update the
+                                          # twin's shares (the default; false: the twin alone)
 
 [operation.groups]                        # destinations with a choice of unit
 inspection = ["TU_C", "TU_D"]
@@ -145,6 +147,7 @@ class OperationSpec:
     groups: tuple[tuple[str, tuple[str, ...]], ...] = ()
     capacity: int = 0
     sensor: str = "truth"
+    learn: bool = True
 
     def group(self, name: str) -> tuple[str, ...] | None:
         """The units of destination group `name` (None: no such group)."""
@@ -395,7 +398,7 @@ def _operation(table: object, name: str) -> OperationSpec:
     where = f"floor {name}: [operation]"
     if not isinstance(table, dict):
         raise InputError(f"{where} must be a table")
-    known = {"policy", "study", "runs", "groups", "capacity", "sensor"}
+    known = {"policy", "study", "runs", "groups", "capacity", "sensor", "learn"}
     if unknown := sorted(set(table) - known):
         raise InputError(f"{where}: unknown key {unknown[0]!r}; known: {', '.join(sorted(known))}")
     study = table.get("study")
@@ -409,9 +412,12 @@ def _operation(table: object, name: str) -> OperationSpec:
     if not isinstance(groups, dict) or not all(
             isinstance(v, list) and all(isinstance(u, str) for u in v) for v in groups.values()):
         raise InputError(f"{where}: groups must map a name to a list of unit ids")  # fmt: skip
+    learn = table.get("learn", True)
+    if not isinstance(learn, bool):
+        raise InputError(f"{where}: learn must be true or false, got {learn!r}")
     return OperationSpec(str(table.get("policy", "nearest-idle")), study, runs,
                          tuple((g, tuple(u)) for g, u in groups.items()), capacity,
-                         str(table.get("sensor", "truth")))  # fmt: skip
+                         str(table.get("sensor", "truth")), learn)  # fmt: skip
 
 
 def load_floor(path: Path | str, *, check_cores: bool = True) -> FloorSpec:
@@ -468,7 +474,8 @@ def floor_toml(floor: FloorSpec) -> str:
         lines += ["", "[[object]]", f"id = {json.dumps(obj)}", f"at = {json.dumps(at)}"]
     op = floor.operation
     lines += ["", "[operation]", f"policy = {json.dumps(op.policy)}", f"runs = {op.runs}",
-              f"capacity = {op.capacity}", f"sensor = {json.dumps(op.sensor)}"]
+              f"capacity = {op.capacity}", f"sensor = {json.dumps(op.sensor)}",
+              f"learn = {'true' if op.learn else 'false'}"]
     if op.study is not None:
         lines.append(f"study = {json.dumps(op.study)}")
     if op.groups:

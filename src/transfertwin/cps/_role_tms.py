@@ -58,7 +58,7 @@ class TmsRole(Role):
 
     def initial(self) -> dict[str, Any]:
         return {"next_op": 1, "locations": self.node.floor.placement(), "unknown": {},
-                "operations": {}, "predictions": {}}  # fmt: skip
+                "operations": {}, "predictions": {}, "evidence": {}}  # fmt: skip
 
     def handlers(self) -> dict[str, Any]:
         return {"SubmitTransportOperation": self._submit, "OrderTo": self._order_to,
@@ -291,7 +291,7 @@ class TmsRole(Role):
             bids = [b for b in await asyncio.gather(*(ask(m) for m in eligible)) if b]
             bids = [b for b in bids if b.module not in self._claimed]
             if bids:
-                module, target, cost = choose(bids, self.policy, p.get("share"))
+                module, target, cost = choose(bids, self.policy, p.get("p", p.get("share")))
                 self._claimed[module] = op_id
                 record = {"bids": {b.module: dict(b.eta_s) for b in bids},
                           "winner": module, "target": target, "cost_s": round(cost, 3)}
@@ -325,7 +325,8 @@ class TmsRole(Role):
 
     async def _plan(self, op: dict[str, Any]) -> dict[str, Any]:
         """The state to load the object in: the twin's best for it (predictive; not for
-        an object already on a module), else the default."""
+        an object already on a module), else the default. With `learn` (the default), the
+        twin's shares are updated with the floor's own transfers of the object (`_learn`)."""
         if self.policy != "predictive":
             return {"policy": self.policy, "state": None}
         if op["source"] not in self.node.floor.units:
@@ -335,6 +336,11 @@ class TmsRole(Role):
         if not preds:
             return {"policy": self.policy, "state": None,
                     "note": "no prediction for this object: default state"}  # fmt: skip
+        if self.node.floor.operation.learn:
+            from transfertwin.cps._learn import rerank
+
+            evidence = self.state.data.setdefault("evidence", {}).get(op["object"], {})
+            preds = rerank(preds, evidence)
         best = preds[0]
         return {"policy": self.policy, "state": {k: best[k] for k in
                                                  ("face", "conveyor", "theta_deg")},
@@ -395,7 +401,10 @@ class TmsRole(Role):
                     st, pr = op["plan"]["state"], op["plan"]["prediction"]
                     op["history"].append([time.time(), (
                         f"load {st['face']}/{st['conveyor']}/{st['theta_deg']} deg: twin "
-                        f"{pr['k']}/{pr['n']} ({pr['source']})")])  # fmt: skip
+                        f"{pr['k']}/{pr['n']} ({pr['source']})"
+                        + (f"; with the floor's transfers p = {pr['p']:.2f} (pick-up "
+                           f"{pr['p_pickup']:.2f}, delivery {pr['p_delivery']:.2f})"
+                           if "p" in pr else ""))])  # fmt: skip
                 self._save()
         while op["module"] is None:
             module, target, record = await self._allocate(op_id)
@@ -468,6 +477,10 @@ class TmsRole(Role):
                                                "operation": op_id}  # fmt: skip
             self._pending |= {self.ledger.location(obj), obj}
         self.ledger.release(op_id, obj)
+        from transfertwin.cps._learn import record
+
+        record(self.state.data.setdefault("evidence", {}), obj,
+               (op.get("plan") or {}).get("state"), result)  # fmt: skip
         ok = result.get("status") == "delivered"
         op.update(state="finished", phase="done" if ok else "failed", result=result,
                   location=self._where(obj), finished=time.time())  # fmt: skip

@@ -22,20 +22,21 @@ def _with(tmp_path, table: str):
 def test_operation_round_trips_and_a_relative_study_is_the_floor_files(tmp_path):
     (tmp_path / "s.sqlite").write_bytes(b"")
     path = _with(tmp_path, '[operation]\npolicy = "predictive"\nstudy = "s.sqlite"\nruns = 3\n'
-                           'capacity = 1\nsensor = "camera"\n'
+                           'capacity = 1\nsensor = "camera"\nlearn = false\n'
                            '[operation.groups]\nout = ["TU_C", "TU_D"]\n')
     spec = load_floor(path)
     op = spec.operation
     assert (op.policy, op.runs, op.capacity, op.group("out"), op.group("TU_C")) == (
         "predictive", 3, 1, ("TU_C", "TU_D"), None)
     assert op.study == str((tmp_path / "s.sqlite").resolve()) and op.sensor == "camera"
+    assert op.learn is False
     (tmp_path / "again.toml").write_text(floor_toml(spec))
     assert load_floor(tmp_path / "again.toml") == spec
 
 
 def test_the_default_is_nearest_idle_without_a_study():
     assert default_floor_spec().operation == OperationSpec("nearest-idle", None, 4, (), 0,
-                                                           "truth")
+                                                           "truth", True)
 
 
 @pytest.mark.parametrize(("table", "message"), [
@@ -45,6 +46,7 @@ def test_the_default_is_nearest_idle_without_a_study():
     ('[operation]\nspeed = 1\n', "unknown key 'speed'"),
     ('[operation]\ncapacity = -1\n', "capacity must be >= 0"),
     ('[operation]\nsensor = "lidar"\n', "operation.sensor must be one of truth, camera"),
+    ('[operation]\nlearn = "yes"\n', "learn must be true or false"),
     ('[operation.groups]\nout = ["TU_Z"]\n', "must list transfer units"),
     ('[operation.groups]\nTU_A = ["TU_B"]\n', "is also an asset id"),
 ])

@@ -30,8 +30,8 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-__all__ = ["FACE_POOL", "LEGS", "PRIOR_RUNS", "leg_outcomes", "posterior", "record", "rerank",
-           "state_key"]  # fmt: skip
+__all__ = ["FACE_POOL", "LEGS", "PRIOR_RUNS", "fallback", "leg_outcomes", "posterior", "record",
+           "rerank", "state_key", "tries"]  # fmt: skip
 
 #: How many plant runs the twin's prediction of a state is worth at most.
 PRIOR_RUNS = 4.0
@@ -48,21 +48,38 @@ def state_key(state: Mapping[str, Any]) -> str:
     return f"{state['face']}/{state['conveyor']}/{int(state['theta_deg'])}"
 
 
-def leg_outcomes(result: Mapping[str, Any]) -> dict[str, tuple[int, int]]:
-    """(successes, tries) per leg whose transfer ran, from a finished operation's result.
+def tries(result: Mapping[str, Any],
+          state: Mapping[str, Any] | None) -> list[tuple[str, Mapping[str, Any], int]]:  # fmt: skip
+    """Every transfer that ran in a finished operation: (leg, state, y), in order.
 
-    A delivery taken back and tried again counts every try: each entry of its
-    ``retries`` is a failed try, and the last try is a success when y = 1."""
-    out: dict[str, tuple[int, int]] = {}
+    `state` is the state the object was loaded in (the plan's). A hand-over tried again
+    lists each failed try in its ``retries`` (with the state it was in, where the station
+    put the object down anew after a failed pick-up); the last try is the record itself,
+    in the state the object was finally loaded in (``loaded_state``)."""
+    out: list[tuple[str, Mapping[str, Any], int]] = []
+    final = result.get("loaded_state") or state
     for leg in result.get("legs") or []:
         tr = leg.get("transferring")
-        if not isinstance(tr, Mapping) or leg.get("leg") not in LEGS:
+        name = leg.get("leg")
+        if not isinstance(tr, Mapping) or name not in LEGS:
             continue
-        failed = len(tr.get("retries") or [])
-        y = int(tr.get("y") or 0) if tr.get("valid") else 0
-        tries = failed + (1 if tr.get("valid") and (y or not failed) else 0)
-        if tries:
-            out[str(leg["leg"])] = (y, tries)
+        retries = tr.get("retries") or []
+        for r in retries:
+            s = r.get("state") or final
+            if s:
+                out.append((name, s, 0))
+        last_failed_in_retries = bool(retries) and not tr.get("y")
+        if tr.get("valid") and final and not last_failed_in_retries:
+            out.append((name, final, int(tr.get("y") or 0)))
+    return out
+
+
+def leg_outcomes(result: Mapping[str, Any]) -> dict[str, tuple[int, int]]:
+    """(successes, tries) per leg whose transfer ran (`tries`, all states together)."""
+    out: dict[str, tuple[int, int]] = {}
+    for leg, _, y in tries(result, {"face": "?", "conveyor": "?", "theta_deg": 0}):
+        k, n = out.get(leg, (0, 0))
+        out[leg] = (k + y, n + 1)
     return out
 
 
@@ -72,13 +89,12 @@ def record(evidence: dict[str, Any], obj: str, state: Mapping[str, Any] | None,
     key -> [k, n]); False when it holds none (no known state, no transfer ran)."""
     if not state:
         return False
-    outcomes = leg_outcomes(result)
-    key = state_key(state)
-    for leg, (k, n) in outcomes.items():
-        cell = evidence.setdefault(obj, {}).setdefault(leg, {}).setdefault(key, [0, 0])
-        cell[0] += k
-        cell[1] += n
-    return bool(outcomes)
+    found = tries(result, state)
+    for leg, s, y in found:
+        cell = evidence.setdefault(obj, {}).setdefault(leg, {}).setdefault(state_key(s), [0, 0])
+        cell[0] += y
+        cell[1] += 1
+    return bool(found)
 
 
 def _pooled(cells: Mapping[str, Sequence[int]], key: str) -> tuple[float, float]:
@@ -112,3 +128,19 @@ def rerank(preds: Sequence[Mapping[str, Any]],
     scored = [{**p, **{k: round(v, 6) for k, v in posterior(p, evidence).items()}}
               for p in preds]  # fmt: skip
     return sorted(scored, key=lambda p: -p["p"])
+
+
+def fallback(preds: Sequence[Mapping[str, Any]], evidence: Mapping[str, Any],
+             best: Mapping[str, Any]) -> dict[str, Any] | None:  # fmt: skip
+    """The state to put the object down in after a failed pick-up in `best`: the best
+    state once that failure is counted (`rerank` with one more failed pick-up in `best`);
+    None when no other state is ranked."""
+    key = state_key(best)
+    hypo = {leg: {k: list(v) for k, v in cells.items()} for leg, cells in evidence.items()}
+    cell = hypo.setdefault("pick-up", {}).setdefault(key, [0, 0])
+    cell[1] += 1
+    other = next((p for p in rerank(preds, hypo) if state_key(p) != key), None)
+    if other is None:
+        return None
+    return {"face": other["face"], "conveyor": other["conveyor"],
+            "theta_deg": other["theta_deg"]}  # fmt: skip

@@ -220,12 +220,13 @@ class ModuleRole(Role):
             raise OperationRefused(f"{obj} is not on {self.aid}", status="BadNotFound",
                                    argument="object")  # fmt: skip
         try:
-            load = json.loads(plan or "{}").get("state")
+            doc = json.loads(plan or "{}")
+            load, fallback = doc.get("state"), doc.get("fallback")
         except (ValueError, AttributeError):
             raise OperationRefused(f"plan is not a JSON object: {plan!r}",
                                    argument="plan") from None  # fmt: skip
         self.op = {"operation": op_id, "source": source, "target": target, "object": obj,
-                   "state": "assigned", "load": load,
+                   "state": "assigned", "load": load, "fallback": fallback,
                    "start_pose": [float(v) for v in self.robot.pose]}  # fmt: skip
         self.state.data["current"] = dict(self.op)
         self.state.save()
@@ -248,8 +249,9 @@ class ModuleRole(Role):
                                  "leg": None if leg is None else leg.name,
                                  "unit": None if leg is None else leg.unit})  # fmt: skip
 
-        skills = _ModuleTransport(self, self.aid, op["source"], op["target"], obj)
+        skills = self._transport(op["source"], op["target"], obj)
         skills.load_state = op.get("load")
+        skills.fallback = op.get("fallback")
         skills.camera = self.node.floor.operation.sensor == "camera"
         faces = self.state.data.setdefault("faces", {})  # of the objects on board
         if op["source"] == self.aid:  # on board already: it lies as it was loaded
@@ -282,7 +284,7 @@ class ModuleRole(Role):
             result["location_unknown"] = True
             self.state.data["possesses"] = [o for o in self.state.data["possesses"] if o != obj]
         result["docking"] = self.node.cfg.docking
-        result["loaded_state"] = op.get("load")
+        result["loaded_state"] = skills.load_state  # a retried pick-up may have changed it
         with contextlib.suppress(Exception):  # modelled floor time, for the KPIs
             from transfertwin.cps._dispatch import floor_seconds
 
@@ -293,6 +295,10 @@ class ModuleRole(Role):
         self.state.data["current"] = None
         self._report(op_id, {"event": "result", "result": result})
         await self.set("CurrentTask", "")
+
+    def _transport(self, source: str, target: str, obj: str):
+        """The skills a leg runs with (`TransportSkills`): the simulation's here."""
+        return _ModuleTransport(self, self.aid, source, target, obj)
 
     def _report(self, op_id: str, event: dict[str, Any]) -> None:
         """Queue a report to the TMS (persisted; sent in order until acknowledged)."""
@@ -415,25 +421,30 @@ class ModuleRole(Role):
                            theta_rad=math.radians(float(load.get("theta_deg", 0.0))),
                            seed=seed)  # fmt: skip
 
-    async def _take_back(self, unit: str) -> bool:
+    async def _take_back(self, unit: str, to_unit: bool = False) -> bool:
         """Reverse both belt pairs (the unit's through its interface) until the object is
-        wholly on the module, clear of its tip (True), or `TAKE_BACK_S` of simulated time
-        passed (False: it is caught in the gap); belts stopped either way."""
+        wholly on the module, clear of its tip (True) — with `to_unit`, after a failed
+        pick-up, wholly back on the unit, clear of its tip — or `TAKE_BACK_S` of simulated
+        time passed (False: it is caught in the gap); belts stopped either way."""
         hal = await self._unit_hal(unit)
         system = self.env.system
-        speed = self.env.scene.layout.belt_speed_m_s
+        speed = self.env.scene.layout.belt_speed_m_s * (-1.0 if not to_unit else 1.0)
+        gap = self.env.scene.gap_m  # the twin's: what the module knows of the docked pair
 
         def reverse() -> bool:
             with self.env.lock:
                 for belt in ("left", "right"):
-                    system.tm.set_belt_speed(belt, -speed)
-                    hal.set_belt_speed(belt, -speed)
+                    system.tm.set_belt_speed(belt, speed)
+                    hal.set_belt_speed(belt, speed)
                 clear = False
                 for _ in range(round(TAKE_BACK_S / TAKE_BACK_STEP_S)):
                     self.env.clock.wait(TAKE_BACK_STEP_S)
                     state = system.observe()  # (a, x, y, z, s_x, s_y, s_z, θ), Eq. 5.4
-                    if state[1] + state[4] < -TAKE_BACK_CLEARANCE_M:  # s_x: half extent
-                        clear = True  # wholly on the module's belts, clear of its tip
+                    if to_unit:  # wholly on the unit's belts (they start at x = gap)
+                        clear = state[1] - state[4] > gap + TAKE_BACK_CLEARANCE_M
+                    else:  # wholly on the module's belts, clear of its tip (x = 0)
+                        clear = state[1] + state[4] < -TAKE_BACK_CLEARANCE_M
+                    if clear:
                         break
                 for belt in ("left", "right"):
                     system.tm.set_belt_speed(belt, 0.0)
@@ -534,6 +545,9 @@ def _warm_up() -> None:
 #: the operation with the object on the module; an object that does not come back lies
 #: in the gap, and its place is unknown.
 DELIVERY_RETRIES = 1
+#: A failed pick-up is tried again this many times: the object taken back onto the unit,
+#: put down in the plan's fallback state by the station, the module docked anew.
+PICKUP_RETRIES = 1
 TAKE_BACK_S = 6.0
 TAKE_BACK_STEP_S = 0.1
 #: How far behind the module's tip (x = 0 of F_T) the object's near edge must be.
@@ -549,6 +563,7 @@ def _make_transport():
         before docking to deliver it."""
 
         attempt = 0
+        fallback = None  # the state a failed pick-up is tried again in (the TMS's plan)
 
         def _seed(self, leg):
             return super()._seed(leg) + 7919 * self.attempt
@@ -561,6 +576,8 @@ def _make_transport():
 
         async def transfer(self, leg):
             result = await super().transfer(leg)
+            if leg.name == "pick-up":
+                return await self._retry_pick_up(leg, result)
             tries = []
             while not result.ok and leg.name == "delivery" and result.info.get("valid"):
                 back = await self.cps._take_back(leg.unit)
@@ -589,7 +606,52 @@ def _make_transport():
                 return StepResult(result.ok, result.reason, {**result.info, "retries": tries})
             return result
 
+        async def _retry_pick_up(self, leg, result):
+            """A failed pick-up: take the object back onto the unit (belts reversed), let
+            the station put it in the plan's fallback state (the twin's next-best; the
+            same state without one), dock anew and try once more, `PICKUP_RETRIES` times."""
+            tries = []
+            while not result.ok and result.info.get("valid"):
+                back = await self.cps._take_back(leg.unit, to_unit=True)
+                tries.append({"attempt": self.attempt + 1, "taken_back": back,
+                              "reason": result.reason, "state": self.load_state})  # fmt: skip
+                if not back:
+                    self.cps._lost_in_gap = True
+                    return StepResult(False, f"{result.reason}; the object did not come back "
+                                             "onto the unit: it lies in the gap",
+                                      {**result.info, "retries": tries})  # fmt: skip
+                if self.attempt >= PICKUP_RETRIES:
+                    return StepResult(False, f"{result.reason}; taken back onto the unit "
+                                             f"after {self.attempt + 1} attempt(s)",
+                                      {**result.info, "retries": tries})  # fmt: skip
+                self.attempt += 1
+                self.cps._attempt = self.attempt
+                if self.fallback:  # the station re-places it in the next-best state
+                    self.load_state = dict(self.fallback)
+                    self.face = self.cps._face = str(self.fallback["face"])
+                    self.cps.state.data.setdefault("faces", {})[self.obj] = self.face
+                    if self.cps.op is not None:
+                        self.cps.op["load"] = self.load_state
+                log.info("%s: pick-up of %s failed; took it back onto %s, loading it %s and "
+                         "docking again", self.cps.aid, self.obj, leg.unit,
+                         _state_text(self.load_state))  # fmt: skip
+                await self.cps._undock(self.cps.aid)
+                for step in (self.dock, self.form_ots):
+                    pre = await step(leg)
+                    if not pre.ok:
+                        return StepResult(False, pre.reason, {**pre.info, "retries": tries})
+                result = await super().transfer(leg)
+            if tries:
+                return StepResult(result.ok, result.reason, {**result.info, "retries": tries})
+            return result
+
     return ModuleTransport
+
+
+def _state_text(state) -> str:
+    if not state:
+        return "as before (front/both/0 deg)"
+    return f"{state['face']}/{state['conveyor']}/{state['theta_deg']} deg"
 
 
 def _ModuleTransport(*args):

@@ -336,15 +336,21 @@ class TmsRole(Role):
         if not preds:
             return {"policy": self.policy, "state": None,
                     "note": "no prediction for this object: default state"}  # fmt: skip
+        keys = ("face", "conveyor", "theta_deg")
         if self.node.floor.operation.learn:
-            from transfertwin.cps._learn import rerank
+            from transfertwin.cps._learn import fallback, rerank
 
             evidence = self.state.data.setdefault("evidence", {}).get(op["object"], {})
-            preds = rerank(preds, evidence)
-        best = preds[0]
-        return {"policy": self.policy, "state": {k: best[k] for k in
-                                                 ("face", "conveyor", "theta_deg")},
-                "prediction": best, "next_best": preds[1] if len(preds) > 1 else None}
+            ranked = rerank(preds, evidence)
+            after = fallback(preds, evidence, ranked[0])
+        else:
+            ranked = preds
+            after = {k: preds[1][k] for k in keys} if len(preds) > 1 else None
+        best = ranked[0]
+        # a failed pick-up is tried again in `fallback` (the module puts the object down anew)
+        return {"policy": self.policy, "state": {k: best[k] for k in keys},
+                "prediction": best, "next_best": ranked[1] if len(ranked) > 1 else None,
+                "fallback": after}  # fmt: skip
 
     async def _predictions(self, obj: str, op_id: str) -> list[dict[str, Any]]:
         """The twin's ranked states for `obj`: cached; else the study store; else the

@@ -7,10 +7,12 @@ import pytest
 from transfertwin.cps._learn import (
     FACE_POOL,
     PRIOR_RUNS,
+    fallback,
     leg_outcomes,
     posterior,
     record,
     rerank,
+    tries,
 )
 
 
@@ -87,3 +89,32 @@ def test_without_a_state_or_a_transfer_nothing_is_recorded_and_ties_keep_the_twi
     assert ev == {}
     preds = [_pred("back", "right", 30, 2, 4), _pred("front", "left", -30, 2, 4)]
     assert [p["face"] for p in rerank(preds, ev)] == ["back", "front"]
+
+
+def test_a_pick_up_tried_again_in_the_fallback_state_counts_each_try_in_its_own_state():
+    front = {"face": "front", "conveyor": "both", "theta_deg": 0}
+    back = {"face": "back", "conveyor": "both", "theta_deg": 0}
+    result = {"loaded_state": back, "legs": [
+        {"leg": "pick-up", "transferring": {"y": 1, "valid": True, "retries": [
+            {"attempt": 1, "taken_back": True, "state": front}]}},
+        {"leg": "delivery", "transferring": {"y": 1, "valid": True}}]}  # fmt: skip
+    assert tries(result, front) == [("pick-up", front, 0), ("pick-up", back, 1),
+                                    ("delivery", back, 1)]  # fmt: skip
+    ev: dict = {}
+    record(ev, "o6", front, result)
+    assert ev == {"o6": {"pick-up": {"front/both/0": [0, 1], "back/both/0": [1, 1]},
+                         "delivery": {"back/both/0": [1, 1]}}}  # fmt: skip
+
+
+def test_the_fallback_is_the_best_state_once_the_planned_pick_up_has_failed():
+    preds = [_pred("front", "both", 0, 4, 4), _pred("front", "left", 90, 4, 4),
+             _pred("back", "both", 0, 3, 4)]  # fmt: skip
+    # one failure on the front face at half weight leaves front/left ahead of the back face
+    assert fallback(preds, {}, preds[0]) == {"face": "front", "conveyor": "left",
+                                            "theta_deg": 90}  # fmt: skip
+    # with a front pick-up failed already, the second one turns it to the back face
+    ev = {"pick-up": {"front/left/90": [0, 1]}}
+    best = rerank(preds, ev)[0]
+    assert best["face"] == "front" and best["conveyor"] == "both"
+    assert fallback(preds, ev, best)["face"] == "back"
+    assert fallback(preds[:1], {}, preds[0]) is None

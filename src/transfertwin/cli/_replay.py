@@ -17,9 +17,29 @@ _TRANSFER_ONLY = ("seed", "dock_error", "profile", "mu", "gap_mm")
 _STATE = ("object", "face", "conveyor", "theta")
 
 
+_PLANT_ONLY = ("plant_seed", "plant_seed_file", "plant_kind")
+
+
+def _plant_row(args: argparse.Namespace):  # -> PlantRow
+    from transfertwin.replay import plant_row
+
+    given = [f"--{k.replace('_', '-')}" for k in (*_TRANSFER_ONLY, *_STATE, "db", "calibration",
+                                                  "run") if getattr(args, k) is not None]
+    if given:
+        raise InputError(f"{', '.join(given)}: a plant row's experiment comes from its table "
+                         "and its plant (give --row, and the plant)")  # fmt: skip
+    if args.row is None:
+        raise InputError("--plant-rows needs --row (the row's index in the table)")
+    return plant_row(args.plant_rows, args.row, plant_seed=args.plant_seed,
+                     plant_seed_file=args.plant_seed_file, plant_kind=args.plant_kind)
+
+
 def _spec(args: argparse.Namespace):  # -> (ExperimentSpec, StudyRow | CalibrationRow | None)
     from transfertwin.replay import calibration_spec, study_spec, transfer_spec
 
+    plant_given = [f"--{k.replace('_', '-')}" for k in _PLANT_ONLY if getattr(args, k) is not None]
+    if plant_given:
+        raise InputError(f"{', '.join(plant_given)}: only with --plant-rows (a plant's table)")
     if args.calibration is not None:
         given = [f"--{k.replace('_', '-')}" for k in (*_TRANSFER_ONLY, *_STATE, "db")
                  if getattr(args, k) is not None]  # fmt: skip
@@ -69,9 +89,17 @@ def cmd_replay(args: argparse.Namespace) -> int:
         "json": out_file(args.json, (".json",)) if args.json else None,
         "glb": out_file(args.glb, (".glb",)) if args.glb else None,
         "gif": out_file(args.gif, (".gif",)) if args.gif else None,
+        "mp4": out_file(args.mp4, (".mp4",)) if args.mp4 else None,
     }
     if args.port is not None and not 0 <= args.port <= 65535:
         raise InputError(f"--port must be in 0..65535, got {args.port}")
+    if args.gif or args.mp4:
+        from transfertwin.replay import gif_frame_times
+
+        gif_frame_times(1.0, args.fps, args.speed)  # bad --fps or --speed: before the run
+    if args.plant_rows is not None:
+        doc, replay = _plant_replay(args)
+        return _write(args, outputs, doc, replay)
     spec, found = _spec(args)
     notice = hull_notice(spec.object_ref, spec.units)
     if notice:
@@ -100,6 +128,30 @@ def cmd_replay(args: argparse.Namespace) -> int:
           + ("; same bits as the stored row" if source.get("check", {}) and
              source["check"]["same"] else ""), flush=True)  # fmt: skip
     doc = replay_payload(replay, source=source)
+    return _write(args, outputs, doc, replay)
+
+
+def _plant_replay(args: argparse.Namespace):  # -> (document, Replay)
+    """A plant row's replay: its recording, drawn in the twin's scene (no hidden value)."""
+    from transfertwin.replay import plant_source, record_plant, replay_payload
+
+    found = _plant_row(args)
+    replay = record_plant(found)
+    row = replay.logged or {}
+    outcome = "success" if row.get("success") == 1 else "failure"
+    took = row.get("transfer_time_s")
+    took_txt = f", transfer time {took:.3f} s" if isinstance(took, float) and took == took else ""
+    title = (f"plant experiment {row.get('experiment_id')}: {row.get('object_id')} "
+             f"{row.get('face')}, {row.get('conveyor')}, θ = {row.get('theta_deg')}°, "
+             f"{row.get('transfer_unit')}")  # fmt: skip
+    print(f"{found.table} row {found.index}, {title}: logged {outcome}{took_txt}; "
+          f"{len(replay.t_s)} camera samples over {replay.duration_s:.2f} s ({found.note})",
+          flush=True)  # fmt: skip
+    return replay_payload(replay, source=plant_source(found, replay), title=title), replay
+
+
+def _write(args: argparse.Namespace, outputs: dict, doc: dict[str, object], replay) -> int:
+    """Write the files asked for; serve the view unless only files were asked for."""
     if outputs["json"] is not None:
         from transfertwin._atomic import write_atomic
 
@@ -115,6 +167,11 @@ def cmd_replay(args: argparse.Namespace) -> int:
 
         write_gif(replay, outputs["gif"], fps=args.fps, speed=args.speed)
         print(outputs["gif"])
+    if outputs["mp4"] is not None:
+        from transfertwin.replay import write_mp4
+
+        write_mp4(replay, outputs["mp4"], fps=args.fps, speed=args.speed)
+        print(outputs["mp4"])
     if any(outputs.values()) and not args.serve:
         return 0
     return _serve(args, doc)
@@ -146,15 +203,29 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "replay", help="re-simulate one experiment and show it in 3-D in the browser",
         description="Re-simulate one experiment deterministically (a study store's row with "
-        "--db/--run, or a transfer's arguments) and show it in 3-D in the browser (three.js, "
-        "served locally), or write it as JSON, glTF (.glb, animated) or GIF.",
+        "--db/--run, a calibration's row, or a transfer's arguments), or replay a plant "
+        "experiment from its recording (--plant-rows/--row), and show it in 3-D in the "
+        "browser (three.js, served locally), or write it as JSON, glTF (.glb, animated), GIF "
+        "or MP4.",
     )  # fmt: skip
     p.add_argument("--db", help="study store (SQLite): replay its row (object, state, --run)")
     p.add_argument("--run", type=int, help="with --db: the row's repetition index r; with "
                    "--calibration: the calibration's run (default 0)")  # fmt: skip
     p.add_argument("--calibration", metavar="DIR",
                    help="a 'calibrate run' output folder: replay its real row --row")  # fmt: skip
-    p.add_argument("--row", type=int, help="with --calibration: the real row's index")
+    p.add_argument("--row", type=int, help="with --calibration: the real row's index; with "
+                   "--plant-rows: the row's index in the table")  # fmt: skip
+    p.add_argument("--plant-rows", metavar="CSV",
+                   help="a plant's table (a rehearsal's plant_calibration.csv, plant_test.csv "
+                   "or plant_validation.csv): replay its row --row from the plant's "
+                   "recording")  # fmt: skip
+    p.add_argument("--plant-seed", type=int, metavar="N",
+                   help="with --plant-rows: the plant's seed (default: the rehearsal's)")
+    p.add_argument("--plant-seed-file", metavar="FILE",
+                   help="with --plant-rows: a file holding the plant's seed (a plant floor's "
+                   "plant.secret)")  # fmt: skip
+    p.add_argument("--plant-kind", metavar="KIND",
+                   help="with --plant-rows: in-class or mismatch (default: the rehearsal's)")
     p.add_argument("--object", help="object id (o1..o37) or a mesh path")
     p.add_argument("--units", default="m", help="length unit of a mesh file: m, cm, mm, in")
     p.add_argument("--face", help="front or back")
@@ -168,9 +239,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--json", help="write the replay document (what the page draws) here")
     p.add_argument("--glb", help="write an animated glTF binary (.glb) here")
     p.add_argument("--gif", help="write an animated GIF (MuJoCo's offscreen renderer) here")
-    p.add_argument("--fps", type=int, default=10, help="GIF frames per second (default 10)")
+    p.add_argument("--mp4", help="write an H.264 MP4 clip (the GIF's frames) here")
+    p.add_argument("--fps", type=int, default=10,
+                   help="GIF and MP4 frames per second (default 10)")  # fmt: skip
     p.add_argument("--speed", type=float, default=2.0,
-                   help="GIF playback speed, simulated s per second (default 2)")  # fmt: skip
+                   help="GIF and MP4 playback speed, simulated s per second (default 2)")
     p.add_argument("--serve", action="store_true", help="serve the 3-D view after writing files")
     p.add_argument("--no-browser", action="store_true", help="print the URL, open no browser")
     p.add_argument("--host", default="127.0.0.1", help="interface to serve on (loopback)")

@@ -9,12 +9,15 @@ calibration, study or validation code can import it; `transfertwin.rehearsal` dr
 from transfertwin.plant._mismatch import PLANT_KINDS
 from transfertwin.plant._physics import PlantPhysics
 from transfertwin.plant._plant import PLANT_COLUMNS, EmulatedPlant, MassReading, PlantRequest
+from transfertwin.plant._recording import CAMERA_RESOLUTION, PlantRecording
 
 __all__ = [
+    "CAMERA_RESOLUTION",
     "PLANT_COLUMNS",
     "PLANT_KINDS",
     "EmulatedPlant",
     "MassReading",
     "PlantPhysics",
+    "PlantRecording",
     "PlantRequest",
 ]

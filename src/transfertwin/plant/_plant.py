@@ -15,12 +15,13 @@ same rows, bit for bit, with any number of workers.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import hashlib
 import math
 import multiprocessing as mp
 import zlib
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
 
@@ -40,6 +41,7 @@ from transfertwin.plant._mismatch import (
     mismatched_inertia,
     without_parts,
 )
+from transfertwin.plant._recording import PlantRecording, _CameraTrack
 from transfertwin.plant._truth import (
     PLANT_TAG,
     DockingTruth,
@@ -236,15 +238,20 @@ _SYSTEMS: dict[tuple[object, ...], _PlantSystem] = {}
 _REFINE = 2
 
 
+def _fresh_system(obj: ObjectTruth, scene: SceneTruth, refine: int = 0,
+                  mismatch: _Mismatch | None = None) -> _PlantSystem:  # fmt: skip
+    """A newly compiled plant system (not shared with the cache)."""
+    ms = None if mismatch is None else mismatch[1]
+    return _PlantSystem(obj, scene, _scene_config(scene, obj, refine, ms), mismatch)
+
+
 def _system(obj: ObjectTruth, scene: SceneTruth, refine: int = 0,
             mismatch: _Mismatch | None = None) -> _PlantSystem:  # fmt: skip
     key = (obj, scene, refine, mismatch)
     if key not in _SYSTEMS:
         if len(_SYSTEMS) >= 4:
             _SYSTEMS.clear()
-        ms = None if mismatch is None else mismatch[1]
-        _SYSTEMS[key] = _PlantSystem(obj, scene, _scene_config(scene, obj, refine, ms),
-                                     mismatch)  # fmt: skip
+        _SYSTEMS[key] = _fresh_system(obj, scene, refine, mismatch)
     return _SYSTEMS[key]
 
 
@@ -255,9 +262,12 @@ def _mismatch_object(seed: int, object_id: str) -> MismatchObject:
                                 len(model.hulls) - model.feature_hulls)  # fmt: skip
 
 
-def _run_job(job: _Job) -> tuple[dict[str, object], float]:
+def _run_job(
+    job: _Job, systems: Callable[..., VirtualTransferSystem] = _system
+) -> tuple[dict[str, object], float]:
     """One E^P: simulate in the hidden scene (at finer steps after an implausible event,
-    placing again if needed), record, maybe flip."""
+    placing again if needed), record, maybe flip. `systems` hands out the plant system of
+    each run (`_system`'s cache, or a camera's recording ones)."""
     req = job.request
     error = DockingError.from_mm_deg(*job.error_mm_deg)
     success, t_end = 0, math.nan
@@ -268,7 +278,7 @@ def _run_job(job: _Job) -> tuple[dict[str, object], float]:
                                   docking_error=error,
                                   scene=_scene_config(job.scene, job.obj, refine, ms),
                                   seed=seed)  # fmt: skip
-            result = run_experiment(spec, system=_system(job.obj, job.scene, refine,
+            result = run_experiment(spec, system=systems(job.obj, job.scene, refine,
                                                          job.mismatch))  # fmt: skip
             if result.status != "unstable":
                 break
@@ -290,9 +300,9 @@ def _run_job(job: _Job) -> tuple[dict[str, object], float]:
 class EmulatedPlant:
     """A transfer system with hidden ground truth, drawn from `seed`.
 
-    Only `seed`, `kind`, `stations`, `experiments_run`, `fingerprint`, `run` and `weigh` (a
-    noisy measurement, like a scale's) are public; the hidden parameters cannot be read
-    through them.
+    Only `seed`, `kind`, `stations`, `experiments_run`, `fingerprint`, `run`, `operate`,
+    `weigh` (a noisy measurement, like a scale's) and `observe` (a camera's recording of an
+    experiment) are public; the hidden parameters cannot be read through them.
 
     Args:
         seed: Plant seed (non-negative integer): draws every hidden parameter.
@@ -385,32 +395,83 @@ class EmulatedPlant:
         bad = sorted({r.object_id for r in requests} - known)
         if bad:
             raise InputError(f"the plant has no object {', '.join(bad)} (it holds o1..o37)")
-        copula, dock = real_copula(), self.__docking
         jobs = []
         for req in requests:
             eid = self.__next_id
             self.__next_id += 1
-            ss = np.random.SeedSequence([PLANT_TAG, self.__seed, 4, eid])
-            words = [int(w) for w in ss.generate_state(2 + _ATTEMPTS)]
-            if req.station is None:
-                raw, units = copula.sample_with_units(1, words[0])
-            elif req.station in dock.stations:
-                raw, units = copula.by_unit[req.station].sample_n(1, words[0]), (req.station,)
-            else:
-                raise InputError(f"the plant has no station {req.station!r} "
-                                 f"({', '.join(dock.stations)})")  # fmt: skip
-            k = dock.stations.index(units[0])
-            err = np.asarray(dock.shift[k]) + np.asarray(dock.scale[k]) * raw[0]
-            err = np.clip(err, [-150.0, -150.0, -25.0], [150.0, 150.0, 25.0])
-            flip_u = float(np.random.default_rng(words[1]).random())
-            mismatch = None
-            if self.__mismatch is not None:
-                mismatch = self.__mismatch_of(req.object_id)
-            jobs.append(_Job(
-                eid, req, draw_object(self.__seed, req.object_id), self.__scene, units[0],
-                tuple(round(float(v), 2) for v in err), tuple(words[2:]), flip_u, mismatch,
-            ))  # fmt: skip
+            jobs.append(self.__job(eid, req))
         return jobs
+
+    def __job(self, eid: int, req: PlantRequest) -> _Job:
+        """Experiment `eid` for `req`: its draws follow from the plant seed and `eid`."""
+        copula, dock = real_copula(), self.__docking
+        ss = np.random.SeedSequence([PLANT_TAG, self.__seed, 4, eid])
+        words = [int(w) for w in ss.generate_state(2 + _ATTEMPTS)]
+        if req.station is None:
+            raw, units = copula.sample_with_units(1, words[0])
+        elif req.station in dock.stations:
+            raw, units = copula.by_unit[req.station].sample_n(1, words[0]), (req.station,)
+        else:
+            raise InputError(f"the plant has no station {req.station!r} "
+                             f"({', '.join(dock.stations)})")  # fmt: skip
+        k = dock.stations.index(units[0])
+        err = np.asarray(dock.shift[k]) + np.asarray(dock.scale[k]) * raw[0]
+        err = np.clip(err, [-150.0, -150.0, -25.0], [150.0, 150.0, 25.0])
+        flip_u = float(np.random.default_rng(words[1]).random())
+        mismatch = None
+        if self.__mismatch is not None:
+            mismatch = self.__mismatch_of(req.object_id)
+        return _Job(
+            eid, req, draw_object(self.__seed, req.object_id), self.__scene, units[0],
+            tuple(round(float(v), 2) for v in err), tuple(words[2:]), flip_u, mismatch,
+        )  # fmt: skip
+
+    def observe(self, row: Mapping[str, object]) -> PlantRecording:
+        """Run again the experiment that made `row` (a row of this plant's `run` or
+        `operate`, as returned or as read back from a CSV) and record it as a camera over
+        the plant and its controller would have (`PlantRecording`: the object's pose at a
+        camera's resolution, the barriers, the commanded belt speeds, the controller's clock
+        starts and the logged row; no hidden parameter).
+
+        The experiment is the one of the row's ``experiment_id`` (its draws follow from the
+        plant seed and that id), for the row's object and state, with the transfer unit as
+        the plant's schedule drew it or as the request named it. Does not count as an
+        experiment (`experiments_run` is unchanged).
+
+        Raises:
+            InputError: The row lacks a column or does not come from this plant (its
+                transfer unit, docking error or outcome differ from this plant's
+                experiment of that id: another plant seed or kind).
+        """
+        try:
+            eid = int(str(row["experiment_id"]))
+            req = PlantRequest(str(row["object_id"]), str(row["face"]), str(row["conveyor"]),
+                               int(str(row["theta_deg"])))  # fmt: skip
+            station = str(row["transfer_unit"])
+            error = tuple(float(str(row[c])) for c in ("dock_err_x_mm", "dock_err_y_mm",
+                                                        "dock_err_theta_deg"))  # fmt: skip
+            logged = int(str(row["success"]))
+        except KeyError as exc:
+            raise InputError(f"a plant row needs the column {exc.args[0]!r} "
+                             f"({', '.join(PLANT_COLUMNS)})") from None  # fmt: skip
+        except ValueError as exc:
+            raise InputError(f"not a plant row ({exc})") from None
+        if eid < 0 or req.object_id not in set(builtin_ids()):
+            raise InputError(f"not a plant row: experiment {eid}, object {req.object_id}")
+        other = (f"experiment {eid} was not made by this plant (another plant seed or "
+                 "kind?)")  # fmt: skip
+        if station not in self.__docking.stations:
+            raise InputError(f"{other}: it has no transfer unit {station!r}")
+        job = next((j for j in (self.__job(eid, req),
+                                self.__job(eid, dataclasses.replace(req, station=station)))
+                    if j.station == station and j.error_mm_deg == error), None)  # fmt: skip
+        if job is None:
+            raise InputError(f"{other}: its transfer unit and docking error differ")
+        track = _CameraTrack(_fresh_system)
+        out, t_end = _run_job(job, systems=track.systems)
+        if int(out["success"]) != logged:
+            raise InputError(f"{other}: its logged outcome differs")
+        return track.recording(out, t_end)
 
     def run(
         self,

@@ -1,15 +1,18 @@
-"""Replays of virtual experiments: re-simulate one E^V deterministically, record it, and show
-it in 3-D (the console's three.js view), or export it (glTF with animation, GIF).
+"""Replays of experiments: re-simulate one E^V deterministically, or take a plant experiment
+E^P's recording (a camera's, the barriers', the log's), and show it in 3-D (the console's
+three.js view), or export it (glTF with animation, GIF, MP4).
 """
 
-from transfertwin.replay._gif import MAX_GIF_FRAMES, gif_frame_times, write_gif
+from transfertwin.replay._gif import MAX_GIF_FRAMES, gif_frame_times, render_frames, write_gif
 from transfertwin.replay._gltf import glb_bytes, write_glb
+from transfertwin.replay._mp4 import write_mp4
 from transfertwin.replay._payload import (
     PAYLOAD_VERSION,
     belt_travel,
     replay_geometry,
     replay_payload,
 )
+from transfertwin.replay._plant import PlantRow, plant_row, plant_source, record_plant
 from transfertwin.replay._record import (
     BARRIER_NAMES,
     BELT_NAMES,
@@ -45,6 +48,7 @@ __all__ = [
     "GeomPart",
     "Marker",
     "MeshData",
+    "PlantRow",
     "Replay",
     "SceneGeometry",
     "StudyRow",
@@ -56,7 +60,11 @@ __all__ = [
     "gif_frame_times",
     "glb_bytes",
     "parse_dock_error",
+    "plant_row",
+    "plant_source",
     "record_experiment",
+    "record_plant",
+    "render_frames",
     "replay_geometry",
     "replay_payload",
     "scene_geometry",
@@ -64,4 +72,5 @@ __all__ = [
     "transfer_spec",
     "write_gif",
     "write_glb",
+    "write_mp4",
 ]

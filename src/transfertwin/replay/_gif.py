@@ -1,4 +1,5 @@
 """A replay as a short animated GIF for reports: MuJoCo's offscreen renderer, Pillow.
+(`render_frames` makes the frames; `transfertwin.replay._mp4` writes the same as MP4.)
 
 Frames are rendered in a freshly compiled system with the TU docked as in the replay, from
 the strip camera of `transfertwin.sim.strip_camera`, at `fps` frames per second of the GIF
@@ -8,6 +9,7 @@ and a caption: the time, the OTS state and the light barriers.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
 
 import mujoco
@@ -18,7 +20,7 @@ from transfertwin._errors import InputError
 from transfertwin.replay._record import BARRIER_NAMES, OTS_CODES, Replay, compile_system
 from transfertwin.sim import strip_camera
 
-__all__ = ["MAX_GIF_FRAMES", "gif_frame_times", "write_gif"]
+__all__ = ["MAX_GIF_FRAMES", "gif_frame_times", "render_frames", "write_gif"]
 
 #: At most this many frames (a longer replay plays faster than asked).
 MAX_GIF_FRAMES = 600
@@ -43,26 +45,36 @@ def write_gif(
     """Render `replay` into an animated GIF at `path` (written whole, then renamed)."""
     path = Path(path)
     times = gif_frame_times(replay.duration_s, fps, speed)
-    system = compile_system(replay.spec)
-    system.reset(replay.spec.docking_error)
-    option = mujoco.MjvOption()
-    option.flags[mujoco.mjtVisFlag.mjVIS_RANGEFINDER] = True
-    font = _font()
-    frames: list[Image.Image] = []
-    with mujoco.Renderer(system.model, height, width) as renderer:
-        cam = strip_camera(system)
-        for t in times:
-            i = max(0, int(np.searchsorted(replay.t_s, t + 1e-9, side="right")) - 1)
-            system.set_object_qpos(replay.qpos[i])
-            renderer.update_scene(system.data, camera=cam, scene_option=option)
-            image = Image.fromarray(renderer.render())
-            _caption(image, replay, i, float(t), font)
-            frames.append(image.convert("P", palette=Image.Palette.ADAPTIVE, colors=128))
+    frames = [image.convert("P", palette=Image.Palette.ADAPTIVE, colors=128)
+              for image in render_frames(replay, times, width=width, height=height)]  # fmt: skip
     tmp = path.with_name(path.name + ".tmp")
     frames[0].save(tmp, format="GIF", save_all=True, append_images=frames[1:],
                    duration=round(1000 / fps), loop=0)  # fmt: skip
     tmp.replace(path)
     return path
+
+
+def render_frames(
+    replay: Replay, times: np.ndarray, *, width: int = 640, height: int = 360
+) -> Iterator[Image.Image]:
+    """RGB frames of `replay` at simulated `times`, one by one (see the module doc): the
+    sample at or before each time, from the strip camera, with the caption."""
+    system = compile_system(replay.spec)
+    system.reset(replay.spec.docking_error)
+    option = mujoco.MjvOption()
+    option.flags[mujoco.mjtVisFlag.mjVIS_RANGEFINDER] = True
+    font = _font()
+    with mujoco.Renderer(system.model, height, width) as renderer:
+        cam = strip_camera(system)
+        for t in times:
+            i = max(0, int(np.searchsorted(replay.t_s, t + 1e-9, side="right")) - 1)
+            qpos = np.array(replay.qpos[i], dtype=float)
+            qpos[3:] /= np.linalg.norm(qpos[3:])  # a camera's quaternion is rounded
+            system.set_object_qpos(qpos)
+            renderer.update_scene(system.data, camera=cam, scene_option=option)
+            image = Image.fromarray(renderer.render())
+            _caption(image, replay, i, float(t), font)
+            yield image
 
 
 def _font() -> ImageFont.ImageFont | ImageFont.FreeTypeFont:

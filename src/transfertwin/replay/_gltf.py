@@ -128,7 +128,8 @@ def glb_bytes(replay: Replay, geometry: SceneGeometry | None = None) -> bytes:
 
     _to_trs(gltf.nodes[index["object"]])
     animate("object", "translation", replay.qpos[:, :3], g.VEC3)
-    animate("object", "rotation", replay.qpos[:, [4, 5, 6, 3]], g.VEC4)  # glTF: x, y, z, w
+    quat = replay.qpos[:, [4, 5, 6, 3]]  # glTF: x, y, z, w, unit (a camera's are rounded)
+    animate("object", "rotation", quat / np.linalg.norm(quat, axis=1, keepdims=True), g.VEC4)
     for k, name in enumerate(BARRIER_NAMES):
         node = f"{name}_cut"
         if node not in index:

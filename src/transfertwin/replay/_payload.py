@@ -3,7 +3,8 @@
 The console's 3-D view (`web/static/replay.js`) draws it; the same document is what
 `transfertwin replay --json` writes. Meshes travel as base64 of little-endian float32
 vertices and uint32 triangle indices (a tenth of the size of number lists); the motion as
-lists rounded to 0.01 mm and 1e-6 of a quaternion.
+lists rounded to 0.01 mm and 1e-6 of a quaternion (a plant experiment's as its camera saw it,
+1 mm and 1e-3, and the belts' travel to 1 mm).
 """
 
 from __future__ import annotations
@@ -70,17 +71,20 @@ def replay_payload(
     """The JSON-able document of `replay` (see the module doc)."""
     geo = geometry if geometry is not None else replay_geometry(replay)
     spec, result = replay.spec, replay.result
-    row = {k: _num(v) for k, v in result.row().items()}
+    virtual = result is not None
+    row = {k: _num(v) for k, v in (result.row() if virtual else replay.logged or {}).items()}
     bits = replay.barriers.astype(np.int64) @ (1 << np.arange(len(BARRIER_NAMES)))
     return {
         "version": PAYLOAD_VERSION,
-        "title": title or (f"{result.object_id}: {spec.face}, {spec.conveyor}, "
+        "title": title or (f"{row.get('object_id')}: {spec.face}, {spec.conveyor}, "
                            f"θ = {spec.theta_deg}°, run {spec.run}, seed {spec.seed}"),
         "source": source or {},
         "result": row,
         "spec": {"object": spec.object_ref, "face": spec.face, "conveyor": spec.conveyor,
-                 "theta_deg": spec.theta_deg, "run": spec.run, "seed": spec.seed,
-                 "docking_error_mm_deg": list(spec.docking_error.as_mm_deg()),
+                 "theta_deg": spec.theta_deg, "run": spec.run if virtual else None,
+                 "seed": spec.seed if virtual else None,
+                 "docking_error_mm_deg": list(spec.docking_error.as_mm_deg()) if virtual else
+                 [row.get(c) for c in ("dock_err_x_mm", "dock_err_y_mm", "dock_err_theta_deg")],
                  "gap_m": spec.scene.gap_m, "t_max_s": spec.scene.t_max_s},
         "scene": {
             "parts": [
@@ -109,7 +113,7 @@ def replay_payload(
             "barriers": bits.tolist(),
             "barrier_names": list(BARRIER_NAMES),
             "belts": _round(replay.belts, 4),
-            "travel": _round(belt_travel(replay), 5),
+            "travel": _round(belt_travel(replay), 5 if virtual else 3),
             "belt_names": list(BELT_NAMES),
             "ots": replay.ots.tolist(),
         },

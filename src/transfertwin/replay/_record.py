@@ -76,8 +76,10 @@ class Replay:
     """One recorded E^V.
 
     Attributes:
-        spec: The experiment as run (`record` on).
-        result: Its result (the same as the study's or `transfer`'s for this spec).
+        spec: The experiment as run (`record` on); for a plant experiment, the twin's
+            setting of it (its nominal scene and the measured docking error), which draws it.
+        result: Its result (the same as the study's or `transfer`'s for this spec); None
+            for a plant experiment, whose outcome is the plant's logged row (`logged`).
         t_s: Simulation time of each sample since the object was placed, (n,).
         qpos: The object's free-joint pose at each sample, (n, 7): position (m) and
             quaternion (w, x, y, z) in F_T.
@@ -87,10 +89,12 @@ class Replay:
         markers: The OTS transitions on the time line.
         tu_pose: The docked TU's (x, y, yaw) in F_T: the docking error made visible.
         nominal_tu_pose: Where the TU lies without a docking error.
+        logged: A plant experiment's logged row (`transfertwin.plant.PLANT_COLUMNS` and
+            ``transfer_time_s``); None for a virtual one.
     """
 
     spec: ExperimentSpec
-    result: ExperimentResult
+    result: ExperimentResult | None
     t_s: np.ndarray
     qpos: np.ndarray
     barriers: np.ndarray
@@ -99,6 +103,7 @@ class Replay:
     markers: tuple[Marker, ...]
     tu_pose: tuple[float, float, float]
     nominal_tu_pose: tuple[float, float, float]
+    logged: dict[str, object] | None = None
 
     @property
     def duration_s(self) -> float:

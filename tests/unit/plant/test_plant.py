@@ -61,7 +61,7 @@ def test_the_plant_exposes_no_hidden_parameter() -> None:
     plant = EmulatedPlant(3)
     public = {n for n in dir(plant) if not n.startswith("_")}
     assert public == {"seed", "kind", "stations", "experiments_run", "fingerprint", "run",
-                      "operate", "weigh"}  # fmt: skip
+                      "operate", "weigh", "observe"}  # fmt: skip
     assert not hasattr(plant, "__dict__")  # slots only: no stray attributes
     assert repr(plant) == "EmulatedPlant(seed=3)"
     with pytest.raises(TypeError):

@@ -37,7 +37,7 @@ function meshGeometry(mesh) {
 
 function setPose(obj, pos, quatWxyz) {
   obj.position.set(pos[0], pos[1], pos[2]);
-  obj.quaternion.set(quatWxyz[1], quatWxyz[2], quatWxyz[3], quatWxyz[0]);
+  obj.quaternion.set(quatWxyz[1], quatWxyz[2], quatWxyz[3], quatWxyz[0]).normalize();
 }
 
 function colour(rgba) { return new THREE.Color(rgba[0], rgba[1], rgba[2]); }
@@ -199,15 +199,25 @@ function describe(doc) {
   const s = doc.spec;
   $('title').textContent = doc.title;
   const y2 = r.y2 === null ? 'not attempted' : r.y2;
-  $('result').textContent = r.status !== 'ok' ? `${r.status}: ${r.message || ''}` :
-    `y1 = ${r.y1}, y2 = ${y2}, ${r.success ? 'success' : 'failure'}, t_end = ${fmt(r.t_end_s)} s`;
+  const src = doc.source || {};
+  if (src.kind === 'plant') {  // a plant experiment's log: no y1, y2 or status
+    $('result').textContent = `the plant's log: ${r.success ? 'success' : 'failure'}, ` +
+      `transfer time ${fmt(r.transfer_time_s)} s, experiment ${r.experiment_id} at ` +
+      `${r.transfer_unit}`;
+  } else {
+    $('result').textContent = r.status !== 'ok' ? `${r.status}: ${r.message || ''}` :
+      `y1 = ${r.y1}, y2 = ${y2}, ${r.success ? 'success' : 'failure'}, t_end = ${fmt(r.t_end_s)} s`;
+  }
   const d = s.docking_error_mm_deg;
   const tu = doc.scene.tu_pose;
   $('dock').textContent = `x ${fmt(d[0])} mm, y ${fmt(d[1])} mm, θ ${fmt(d[2])}°; TU at ` +
     `(${fmt(tu[0] * 1000, 1)}, ${fmt(tu[1] * 1000, 1)}) mm, ${fmt(tu[2] * 180 / Math.PI)}° ` +
     `(nominal gap ${fmt(s.gap_m * 1000)} mm)`;
-  const src = doc.source || {};
-  if (src.check) {
+  if (src.kind === 'plant') {
+    $('check').textContent = `recorded on the plant (${src.table} row ${src.row}; camera: ` +
+      `${src.camera}); drawn with ${src.drawn}`;
+    $('check').title = src.note || '';
+  } else if (src.check) {
     $('check').textContent = src.check.same ? `same bits as the stored row of ${src.study}` :
       `differs from the stored row: ${src.check.differences.join('; ')}`;
   } else if (src.kind === 'study') {
@@ -322,7 +332,7 @@ async function main() {
     obj.group.position.set(p[0] + a * (q[0] - p[0]), p[1] + a * (q[1] - p[1]),
       p[2] + a * (q[2] - p[2]));
     const u = f.quat[i], w = f.quat[j];
-    qa.set(u[1], u[2], u[3], u[0]); qb.set(w[1], w[2], w[3], w[0]);
+    qa.set(u[1], u[2], u[3], u[0]).normalize(); qb.set(w[1], w[2], w[3], w[0]).normalize();
     obj.group.quaternion.slerpQuaternions(qa, qb, a);
     f.belt_names.forEach((name, k) => {
       const belt = belts[name];

@@ -42,6 +42,17 @@ def test_replay_writes_its_document_and_glb(tmp_path, capsys):
         (["replay", "--calibration", "nowhere", "--row", "0"], "no metrics.json"),
         (["replay", "--calibration", "nowhere"], "--calibration needs --row"),
         ([*R, "--calibration", "nowhere", "--row", "0"], "comes from its folder"),
+        ([*R, "--mp4", "x.gif"], "expected a file ending in .mp4"),
+        ([*R, "--mp4", "x.mp4", "--fps", "0"], "--fps must be in 1..50"),
+        ([*R, "--plant-seed", "3"], "only with --plant-rows"),
+        (["replay", "--plant-rows", "s.csv"], "--plant-rows needs --row"),
+        (["replay", "--plant-rows", "s.csv", "--row", "0", "--object", "o1"],
+         "comes from its table"),
+        (["replay", "--plant-rows", "s.csv", "--row", "0", "--plant-seed", "1"],
+         "not a plant table"),
+        (["replay", "--plant-rows", "no.csv", "--row", "0", "--plant-seed", "1"], "no such file"),
+        (["replay", "--plant-rows", "s.csv", "--row", "0", "--plant-seed", "1",
+          "--plant-seed-file", "s.csv"], "give one of them"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(tmp_path, monkeypatch, capsys, args, words):
@@ -52,3 +63,30 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, monkeypatch, capsys, args, w
     assert code == 2
     assert len(err) == 1 and err[0].startswith("transfertwin: error:") and words in err[0]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.csv"]
+
+
+def test_replay_of_a_plant_row_writes_its_document(tmp_path, capsys):
+    """A plant table's row, its plant named by a seed file (as a plant floor keeps it)."""
+    import csv
+
+    from transfertwin.plant import PLANT_COLUMNS, EmulatedPlant, PlantRequest
+
+    seed = 918273
+    rows = EmulatedPlant(seed).run([PlantRequest("o3", "back", "both", 45, "TU_B")])
+    table = tmp_path / "plant_test.csv"
+    with table.open("w", newline="") as fh:
+        writer = csv.DictWriter(fh, PLANT_COLUMNS, lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(rows)
+    secret = tmp_path / "plant.secret"
+    secret.write_text(f"{seed}\n")
+    doc = tmp_path / "p.json"
+    code = main(["replay", "--plant-rows", str(table), "--row", "0", "--plant-seed-file",
+                 str(secret), "--json", str(doc)])  # fmt: skip
+    out = capsys.readouterr().out
+    assert code == 0, out
+    assert "plant experiment 0: o3 back, both, θ = 45°, TU_B: logged " in out
+    assert str(seed) not in out + doc.read_text()
+    data = json.loads(doc.read_text())
+    assert data["source"]["kind"] == "plant"
+    assert data["result"] == {**rows[0], "transfer_time_s": data["result"]["transfer_time_s"]}

@@ -76,7 +76,7 @@ def test_the_document_holds_no_hidden_value(replayed):
     written in the document; the object is the twin's mesh; the motion is on the camera's
     grid (1 mm, 1e-3, 1 ms), so a truth value rounded to 3 decimals (a feature's place in
     x_frac, y_frac) can show up there only by coincidence, and is left out of the search."""
-    _, replay, doc = replayed
+    doc = replayed[2]
     text = json.dumps(doc)
     hidden = [v for v in _hidden_numbers(SEED, ["o3"]) if len(repr(v).split(".")[-1]) > 3]
     assert len(hidden) > 30
@@ -103,8 +103,7 @@ def test_the_document_holds_no_hidden_value(replayed):
 
 
 def test_the_same_plant_and_row_give_the_same_bits(table, replayed):
-    path, rows = table
-    found, _, doc = replayed
+    path, doc = table[0], replayed[2]
     again = plant_row(path, 1, plant_seed=SEED)
     assert again.plant.experiments_run == 0
     replay = record_plant(again)

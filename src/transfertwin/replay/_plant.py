@@ -9,10 +9,11 @@ the controller's clock starts and the logged row, and no hidden parameter. The s
 twin's: its nominal units and gap, the TU docked with the row's *measured* docking error,
 and the object drawn with the twin's mesh of the core (not the plant's hidden one).
 
-The rows come from a rehearsal's tables (``plant_calibration.csv``, ``plant_test.csv``,
-``plant_validation.csv`` and those of its ``ablate-*`` folders: `PLANT_COLUMNS`); the plant
-is the one of ``--plant-seed`` or ``--plant-seed-file``, else the one the rehearsal beside
-the table names in its ``rehearsal.json``.
+The rows come from a plant's log (`PLANT_COLUMNS`): a rehearsal's ``plant_calibration.csv``,
+``plant_test.csv``, ``plant_validation.csv`` (and those of its ``ablate-*`` folders), or a
+CPS's ``plant_experiments.csv``. The plant is the one of ``--plant-seed`` or
+``--plant-seed-file``, else the one beside the table: a plant floor's ``plant.secret``, or
+the plant a rehearsal's ``rehearsal.json`` names.
 """
 
 from __future__ import annotations
@@ -62,8 +63,12 @@ def _read_seed(path: Path) -> int:
     return int(text)
 
 
-def _rehearsal_plant(table: Path) -> tuple[int, str, str] | None:
-    """(seed, kind, where) from the ``rehearsal.json`` beside `table` or one folder up."""
+def _plant_beside(table: Path) -> tuple[int, str, str] | None:
+    """(seed, kind, where) of the plant that wrote `table`: a plant floor's ``plant.secret``
+    beside it, else the ``rehearsal.json`` beside it or one folder up."""
+    secret = table.parent / "plant.secret"
+    if secret.is_file():
+        return _read_seed(secret), "in-class", f"the plant of {table.parent.name}/plant.secret"
     for folder in (table.parent, table.parent.parent):
         path = folder / "rehearsal.json"
         if not path.is_file():
@@ -90,8 +95,9 @@ def plant_row(
     plant_kind: str | None = None,
 ) -> PlantRow:
     """Row `index` of the plant table `table` and the plant that made it: the plant of
-    `plant_seed` or of the seed in `plant_seed_file`, else the rehearsal's beside the table;
-    of kind `plant_kind` (default: the rehearsal's, else 'in-class')."""
+    `plant_seed` or of the seed in `plant_seed_file`, else the one beside the table (a plant
+    floor's ``plant.secret``, or a rehearsal's ``rehearsal.json`` beside it or one folder
+    up); of kind `plant_kind` (default: the rehearsal's, else 'in-class')."""
     path = Path(table)
     if plant_seed is not None and plant_seed_file is not None:
         raise InputError("--plant-seed and --plant-seed-file: give one of them")
@@ -109,7 +115,7 @@ def plant_row(
                          f"{', '.join(missing)})")  # fmt: skip
     if isinstance(index, bool) or not 0 <= index < len(rows):
         raise InputError(f"--row must be in 0..{len(rows) - 1} ({path.name}), got {index}")
-    found = _rehearsal_plant(path.resolve())
+    found = _plant_beside(path.resolve())
     if plant_seed is not None:
         seed, note = plant_seed, "the plant of --plant-seed"
     elif plant_seed_file is not None:
@@ -118,7 +124,8 @@ def plant_row(
         seed, note = found[0], found[2]
     else:
         raise InputError(f"--plant-rows {path.name}: which plant made it? Give --plant-seed "
-                         "or --plant-seed-file (no rehearsal.json beside it)")  # fmt: skip
+                         "or --plant-seed-file (no plant.secret or rehearsal.json beside "
+                         "it)")  # fmt: skip
     kind = plant_kind or (found[1] if found is not None else "in-class")
     if kind not in PLANT_KINDS:
         raise InputError(f"--plant-kind must be one of {', '.join(PLANT_KINDS)}, got {kind!r}")

@@ -231,3 +231,36 @@ def test_the_calibration_page_links_each_row_to_its_replay(browser, console_fact
     replay.wait_for_function(READY)
     assert replay.evaluate("window.__replay.error") is None
     assert "cal2 row 1" in replay.inner_text("#check") and "(agrees)" in replay.inner_text("#check")
+
+
+def test_a_plant_experiment_replays_from_its_recording(browser, tmp_path):
+    """A plant table's row (`replay --plant-rows`): the page draws the recording, the picture
+    changes, and it says where the outcome comes from (the plant's log)."""
+    import csv
+
+    from transfertwin.plant import PLANT_COLUMNS, EmulatedPlant, PlantRequest
+
+    rows = EmulatedPlant(918273).run([PlantRequest("o3", "back", "both", 45, "TU_B")])
+    table = tmp_path / "plant_calibration.csv"
+    with table.open("w", newline="") as fh:
+        writer = csv.DictWriter(fh, PLANT_COLUMNS, lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(rows)
+    server = ReplayServer("--plant-rows", str(table), "--row", "0", "--plant-seed", "918273")
+    try:
+        page, errors = _open(browser, server.url)
+        state = page.evaluate("({d: window.__replay.duration, m: window.__replay.markers})")
+        assert [m["kind"] for m in state["m"]] == ["none", "pre", "success", "pre", "success"]
+        _seek(page, 0.0)
+        start, centre0 = _canvas(page), page.evaluate("window.__replay.objectCentre")
+        assert len(np.unique(start.reshape(-1, 3), axis=0)) > 200 and start.std() > 10
+        _seek(page, state["m"][2]["t"])  # the end of the transfer there: on the TU
+        later, centre1 = _canvas(page), page.evaluate("window.__replay.objectCentre")
+        assert centre1[0] - centre0[0] > 0.1  # it went over to the TU
+        assert (np.abs(later - start).sum(axis=2) > 30).mean() > 0.002
+        assert "the plant's log: success" in page.inner_text("#result")
+        assert "recorded on the plant" in page.inner_text("#check")
+        save_screenshot(page, tmp_path, "replay-plant")
+        assert errors == []
+    finally:
+        server.stop()

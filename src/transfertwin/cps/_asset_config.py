@@ -31,12 +31,15 @@ kind = "virtual"             # virtual | plant | remote
 plant_seed_file = "../../plant.secret"
 # remote: real hardware behind a HAL gateway (OPC UA): belt speeds written, barriers read
 endpoint = "opc.tcp://192.168.10.21:4840"
-insecure = false             # NoSecurity at the gateway: loopback only
-poll_s = 0.05                # how often the barriers are read
+insecure = false             # NoSecurity at the gateway: explicit, loopback only
+trust_dir = "certs/gateways" # the gateway certificates trusted (the default)
+poll_s = 0.05                # how often the barriers (a module: also its pose) are read
 belt_left = "ns=2;s=TU_A.BeltSpeedLeft"      # the gateway's nodes (these are the defaults)
 belt_right = "ns=2;s=TU_A.BeltSpeedRight"
 barrier_near = "ns=2;s=TU_A.BarrierNear"
 barrier_far = "ns=2;s=TU_A.BarrierFar"
+# a transport module also: pose_x, pose_y, pose_theta, command, command_state, object_state
+# (ns=2;s=<id>.PoseX, .PoseY, .PoseTheta, .Command, .CommandState, .ObjectState)
 ```
 
 Relative paths are resolved against the file's folder.
@@ -60,17 +63,27 @@ __all__ = ["HAL_KINDS", "AssetConfig", "HalConfig", "load_asset_config", "write_
 HAL_KINDS = ("virtual", "plant", "remote")
 
 #: The HAL gateway's nodes a remote asset uses, and their default NodeIds ({id}: asset id).
+#: A unit uses the belts and barriers; a transport module also its pose (localisation,
+#: floor frame), its drive commands and their state, and its object sensor
+#: (docs/architecture.md, "Deployment").
 GATEWAY_NODES = {"belt_left": "ns=2;s={id}.BeltSpeedLeft",
                  "belt_right": "ns=2;s={id}.BeltSpeedRight",
                  "barrier_near": "ns=2;s={id}.BarrierNear",
-                 "barrier_far": "ns=2;s={id}.BarrierFar"}  # fmt: skip
+                 "barrier_far": "ns=2;s={id}.BarrierFar",
+                 "pose_x": "ns=2;s={id}.PoseX",
+                 "pose_y": "ns=2;s={id}.PoseY",
+                 "pose_theta": "ns=2;s={id}.PoseTheta",
+                 "command": "ns=2;s={id}.Command",
+                 "command_state": "ns=2;s={id}.CommandState",
+                 "object_state": "ns=2;s={id}.ObjectState"}  # fmt: skip
 
 
 @dataclass(frozen=True)
 class HalConfig:
     """An asset's HAL: ``virtual`` (simulated by the twin), ``plant`` (the emulated plant's
     hidden physics, seed in `plant_seed_file`) or ``remote`` (a HAL gateway at `endpoint`;
-    `nodes`: its belt and barrier NodeIds, `GATEWAY_NODES` filled in where left out)."""
+    `nodes`: its NodeIds, `GATEWAY_NODES` filled in where left out; `trust_dir`: the
+    gateway certificates trusted, None: ``cert_dir/gateways``)."""
 
     kind: str = "virtual"
     plant_seed_file: Path | None = None
@@ -78,6 +91,7 @@ class HalConfig:
     insecure: bool = False
     poll_s: float = 0.05
     nodes: tuple[tuple[str, str], ...] = ()
+    trust_dir: Path | None = None
 
     def check(self, where: str) -> None:
         """InputError naming `where` for a HAL that cannot work."""
@@ -103,7 +117,7 @@ class HalConfig:
             raise InputError(f"{where}: [hal] unknown key {unknown[0]!r}")
 
     def node_ids(self, asset_id: str) -> dict[str, str]:
-        """The gateway's NodeIds of belt_left, belt_right, barrier_near, barrier_far."""
+        """The gateway's NodeIds by key (`GATEWAY_NODES`)."""
         given = dict(self.nodes)
         return {k: given.get(k, v.format(id=asset_id)) for k, v in GATEWAY_NODES.items()}
 
@@ -212,18 +226,21 @@ def load_asset_config(path: Path | str) -> AssetConfig:
 
 
 def _hal(table: dict, rel, path: Path) -> HalConfig:
-    known = {"kind", "plant_seed_file", "endpoint", "insecure", "poll_s", *GATEWAY_NODES}
+    known = {"kind", "plant_seed_file", "endpoint", "insecure", "poll_s", "trust_dir",
+             *GATEWAY_NODES}
     if unknown := sorted(set(table) - known):
         raise InputError(f"{path}: [hal] unknown key {unknown[0]!r}; known: "
                          f"{', '.join(sorted(known))}")  # fmt: skip
     seed_file = table.get("plant_seed_file")
     endpoint = table.get("endpoint")
+    trust = table.get("trust_dir")
     return HalConfig(
         kind=str(table.get("kind", "virtual")),
         plant_seed_file=None if seed_file is None else rel(seed_file, "[hal] plant_seed_file"),
         endpoint=None if endpoint is None else str(endpoint),
         insecure=bool(table.get("insecure", False)), poll_s=float(table.get("poll_s", 0.05)),
         nodes=tuple((k, str(table[k])) for k in GATEWAY_NODES if k in table),
+        trust_dir=None if trust is None else rel(trust, "[hal] trust_dir"),
     )  # fmt: skip
 
 
@@ -257,6 +274,8 @@ def write_asset_config(path: Path, cfg: AssetConfig) -> Path:
     if hal.kind == "remote":
         tables["hal"] |= {"endpoint": hal.endpoint, "insecure": hal.insecure,
                           "poll_s": hal.poll_s, **dict(hal.nodes)}  # fmt: skip
+        if hal.trust_dir is not None:
+            tables["hal"]["trust_dir"] = str(hal.trust_dir)
     lines = [f"# transfertwin asset process: transfertwin cps asset --config {path.name}"]
     for name, table in tables.items():
         lines += ["", f"[{name}]", *(f"{k} = {_toml(v)}" for k, v in table.items())]

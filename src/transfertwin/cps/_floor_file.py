@@ -26,7 +26,8 @@ x_m = 6.0
 y_m = 5.2
 theta_deg = 0
 standby = false                           # true: prepared, started later by hand
-hal = "plant"                             # optional: virtual | plant (not remote)
+hal = "plant"                             # optional: virtual | plant | remote
+# gateway = "opc.tcp://192.168.10.31:4840"  # remote: its HAL gateway (OPC UA)
 
 [[object]]                                # a built-in core id, and the unit it lies on
 id = "o5"
@@ -129,6 +130,7 @@ class ModuleSpec:
     theta_deg: float = 0.0
     standby: bool = False
     hal: str = "virtual"
+    gateway: str | None = None
 
     @property
     def home(self) -> tuple[float, float, float]:
@@ -210,15 +212,15 @@ class FloorSpec:
                 return s.hal, s.gateway
         for m in self.modules:
             if m.asset_id == asset_id:
-                return m.hal, None
+                return m.hal, m.gateway
         return "virtual", None
 
     def with_hal(self, kind: str) -> FloorSpec:
-        """This floor with every virtual unit and module on HAL `kind` (remote units keep
-        theirs)."""
+        """This floor with every virtual unit and module on HAL `kind` (remote units and
+        modules keep theirs)."""
 
         stations = tuple(s if s.hal == "remote" else replace(s, hal=kind) for s in self.stations)
-        modules = tuple(replace(m, hal=kind) for m in self.modules)
+        modules = tuple(m if m.hal == "remote" else replace(m, hal=kind) for m in self.modules)
         return replace(self, stations=stations, modules=modules)
 
     def uses_plant(self) -> bool:
@@ -285,9 +287,13 @@ def _check(floor: FloorSpec) -> None:
         if s.gateway is not None and not s.gateway.startswith("opc.tcp://"):
             raise InputError(f"{where}: station {s.name}: gateway must be an opc.tcp:// URL")
     for m in floor.modules:
-        if m.hal not in ("virtual", "plant"):
-            raise InputError(f"{where}: module {m.asset_id}: hal must be virtual or plant, "
-                             f"got {m.hal!r} (a remote module is not supported yet)")  # fmt: skip
+        if m.hal not in ("virtual", "plant", "remote"):
+            raise InputError(f"{where}: module {m.asset_id}: hal must be virtual, plant or "
+                             f"remote, got {m.hal!r}")  # fmt: skip
+        if (m.hal == "remote") != (m.gateway is not None) or not \
+                (m.gateway or "opc.tcp://").startswith("opc.tcp://"):
+            raise InputError(f"{where}: module {m.asset_id}: a remote HAL needs gateway = "
+                             "\"opc.tcp://HOST:PORT\" (and only a remote one has it)")  # fmt: skip
     for obj, at in floor.objects:
         if at not in floor.units:
             raise InputError(f"{where}: object {obj} lies on {at!r}, which is no transfer unit "
@@ -379,10 +385,11 @@ def parse_floor(doc: dict, name: str) -> FloorSpec:
     modules = []
     for i, t in enumerate(doc.get("module", [])):
         where = f"floor {name}: module {i + 1}"
+        gateway = t.get("gateway")
         modules.append(ModuleSpec(_str(t, "id", where), _float(t, "x_m", where),
                                   _float(t, "y_m", where), float(t.get("theta_deg", 0.0)),
-                                  bool(t.get("standby", False)),
-                                  str(t.get("hal", hal))))  # fmt: skip
+                                  bool(t.get("standby", False)), str(t.get("hal", hal)),
+                                  None if gateway is None else str(gateway)))  # fmt: skip
     objects = []
     for i, t in enumerate(doc.get("object", [])):
         where = f"floor {name}: object {i + 1}"
@@ -470,6 +477,8 @@ def floor_toml(floor: FloorSpec) -> str:
                   f"standby = {'true' if m.standby else 'false'}"]  # fmt: skip
         if m.hal != "virtual":
             lines.append(f"hal = {json.dumps(m.hal)}")
+        if m.gateway is not None:
+            lines.append(f"gateway = {json.dumps(m.gateway)}")
     for obj, at in floor.objects:
         lines += ["", "[[object]]", f"id = {json.dumps(obj)}", f"at = {json.dumps(at)}"]
     op = floor.operation

@@ -9,13 +9,13 @@ gateway (docs/architecture.md, "Deployment"; the ``[hal]`` table of ``ASSET.toml
   file, nor a status, nor a log holds it or anything drawn from it.
 - ``remote``: real hardware. The asset writes belt speeds to and reads its light barriers
   from a HAL gateway, an OPC UA server next to the machine (a PLC's, or a small bridge),
-  at ``endpoint`` (`GatewayHAL`).
+  at ``endpoint`` (`GatewayHAL`; the session, secure by default: `cps._gateway`). A
+  transport module also drives, localises and senses the object there
+  (`cps._role_tm_remote`).
 """
 
 from __future__ import annotations
 
-import asyncio
-import contextlib
 import logging
 import os
 import stat
@@ -59,17 +59,18 @@ def read_plant_seed(path: Path) -> int:
 
 def environment_for(cfg: AssetConfig, scene: SceneConfig):
     """The simulated world of a transport module's process: the virtual scene's, or, with
-    ``[hal] kind = "plant"``, the plant's hidden physics. Its `scene` stays the twin's
+    ``[hal] kind = "plant"``, the plant's hidden physics; with ``"remote"`` none (a
+    `GatewayWorld`: the hardware behind the gateway is the world). Its `scene` stays the twin's
     (what the module's controller knows: belt speed, thresholds, timing); only the systems
     it steps are the plant's."""
     from transfertwin.cps.apps import Environment
 
     if cfg.hal.kind == "virtual":
         return Environment(scene, cfg.time_scale)
-    if cfg.hal.kind == "remote":
-        raise InputError(f"asset {cfg.asset_id}: a transport module's HAL is virtual or plant "
-                         "(a remote module needs an object sensor at the gateway, not "
-                         "supported yet)")  # fmt: skip
+    if cfg.hal.kind == "remote":  # the hardware is the world: nothing is simulated
+        from transfertwin.cps._role_tm_remote import GatewayWorld
+
+        return GatewayWorld(scene)
     from transfertwin.plant import PlantPhysics
 
     physics = PlantPhysics(read_plant_seed(cfg.hal.plant_seed_file))
@@ -89,54 +90,24 @@ def environment_for(cfg: AssetConfig, scene: SceneConfig):
 
 
 class GatewayHAL:
-    """A remote asset's belts and light barriers at its HAL gateway (an OPC UA server).
+    """A remote transfer unit's belts and light barriers at its HAL gateway (an OPC UA
+    server; the session: `cps._gateway`).
 
     Belt speeds (m/s, Double) are written to the gateway's belt nodes; the barriers
-    (Boolean, True: interrupted) are read from its barrier nodes. The session is opened on
-    first use and again after a failure; a secure gateway sees the asset's own application
-    certificate (Basic256Sha256, SignAndEncrypt) and must trust it.
+    (Boolean, True: interrupted) are read from its barrier nodes. Failures raise
+    `ConnectionError` (`GatewayError`), one line saying why.
 
     Args:
         cfg: The asset's configuration (its ``[hal]`` table says where and which nodes).
     """
 
     def __init__(self, cfg: AssetConfig) -> None:
+        from transfertwin.cps._gateway import GatewayLink
+
         self.cfg = cfg
-        self.endpoint = cfg.hal.endpoint
-        self.nodes = cfg.hal.node_ids(cfg.asset_id)
-        self._client = None
-        self._lock = asyncio.Lock()
-
-    async def _session(self):
-        if self._client is not None:
-            return self._client
-        from asyncua import Client
-
-        client = Client(self.endpoint, timeout=5)
-        if not self.cfg.hal.insecure:
-            from asyncua import ua
-            from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
-
-            from transfertwin.cps.opcua import ensure_certificate
-
-            cert, key = await ensure_certificate(self.cfg.cert_dir, "client-operator")
-            await client.set_security(SecurityPolicyBasic256Sha256, str(cert), str(key),
-                                      mode=ua.MessageSecurityMode.SignAndEncrypt)  # fmt: skip
-        try:
-            await asyncio.wait_for(client.connect(), 10.0)
-        except BaseException:
-            with contextlib.suppress(Exception):
-                await client.disconnect()
-            raise
-        self._client = client
-        log.info("%s: HAL gateway %s connected", self.cfg.asset_id, self.endpoint)
-        return client
-
-    async def _drop(self) -> None:
-        client, self._client = self._client, None
-        if client is not None:
-            with contextlib.suppress(Exception):
-                await asyncio.wait_for(client.disconnect(), 2.0)
+        self.link = GatewayLink(cfg)
+        self.endpoint = self.link.endpoint
+        self.nodes = self.link.nodes
 
     async def set_belt(self, belt: str, speed_m_s: float) -> None:
         """Command `belt` ('left' or 'right') at the gateway."""
@@ -144,31 +115,13 @@ class GatewayHAL:
 
         if belt not in ("left", "right"):
             raise ValueError(f"unknown belt {belt!r}")
-        async with self._lock:
-            try:
-                node = (await self._session()).get_node(self.nodes[f"belt_{belt}"])
-                await node.write_value(ua.DataValue(ua.Variant(float(speed_m_s),
-                                                               ua.VariantType.Double)))
-            except Exception as exc:
-                await self._drop()
-                raise ConnectionError(f"HAL gateway {self.endpoint}: belt {belt} not "
-                                      f"written ({type(exc).__name__}: {exc})") from None
+        await self.link.write(f"belt_{belt}", float(speed_m_s), ua.VariantType.Double)
 
     async def barriers(self) -> dict[str, bool]:
         """The light barriers as the gateway reads them."""
-        async with self._lock:
-            try:
-                client = await self._session()
-                near, far = await client.read_values(
-                    [client.get_node(self.nodes["barrier_near"]),
-                     client.get_node(self.nodes["barrier_far"])])  # fmt: skip
-            except Exception as exc:
-                await self._drop()
-                raise ConnectionError(f"HAL gateway {self.endpoint}: barriers not read "
-                                      f"({type(exc).__name__}: {exc})") from None
+        near, far = await self.link.read("barrier_near", "barrier_far")
         return {"near": bool(near), "far": bool(far)}
 
     async def close(self) -> None:
         """Close the gateway session."""
-        async with self._lock:
-            await self._drop()
+        await self.link.close()

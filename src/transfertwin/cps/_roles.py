@@ -323,6 +323,10 @@ def role_for(node: AssetNode) -> Role:
     """The role of the node's asset class."""
     cls = node.desc.asset_class
     if cls == "transport_module":
+        if node.cfg.hal.kind == "remote":  # on real hardware, behind its HAL gateway
+            from transfertwin.cps._role_tm_remote import RemoteModuleRole
+
+            return RemoteModuleRole(node)
         from transfertwin.cps._role_tm import ModuleRole
 
         return ModuleRole(node)

@@ -122,7 +122,29 @@ def test_hal_kinds_round_trip_through_the_floor_and_asset_files(tmp_path):
     assert hal.node_ids("TU_B") == {"belt_left": "ns=2;s=TU_B.BeltSpeedLeft",
                                     "belt_right": "ns=2;s=TU_B.BeltSpeedRight",
                                     "barrier_near": "ns=2;s=TU_B.BarrierNear",
-                                    "barrier_far": "ns=3;i=7"}  # fmt: skip
+                                    "barrier_far": "ns=3;i=7",
+                                    "pose_x": "ns=2;s=TU_B.PoseX",
+                                    "pose_y": "ns=2;s=TU_B.PoseY",
+                                    "pose_theta": "ns=2;s=TU_B.PoseTheta",
+                                    "command": "ns=2;s=TU_B.Command",
+                                    "command_state": "ns=2;s=TU_B.CommandState",
+                                    "object_state": "ns=2;s=TU_B.ObjectState"}  # fmt: skip
+    # a remote module: its gateway in the floor file, a gateway trust folder of its own
+    text = floor_toml(default_floor_spec()).replace(
+        'standby = false', 'standby = false\nhal = "remote"\n'
+        'gateway = "opc.tcp://127.0.0.1:4841"', 1)  # fmt: skip
+    (tmp_path / "m.toml").write_text(text)
+    spec = load_floor(tmp_path / "m.toml")
+    assert spec.hal_of("TM_1") == ("remote", "opc.tcp://127.0.0.1:4841")
+    assert spec.with_hal("plant").hal_of("TM_1") == ("remote", "opc.tcp://127.0.0.1:4841")
+    (tmp_path / "m2.toml").write_text(floor_toml(spec))
+    assert load_floor(tmp_path / "m2.toml") == spec
+    hal = HalConfig("remote", endpoint="opc.tcp://127.0.0.1:4841", trust_dir=tmp_path / "gw",
+                    nodes=(("object_state", "ns=4;s=Vision.Box"),))  # fmt: skip
+    cfg = _config(tmp_path, hal=hal)
+    path = write_asset_config(tmp_path / "assets" / "TM_1.toml", cfg)
+    assert load_asset_config(path) == cfg
+    assert hal.node_ids("TM_1")["object_state"] == "ns=4;s=Vision.Box"
     seeded = _config(tmp_path, hal=HalConfig("plant", plant_seed_file=tmp_path / "plant.secret"))
     path = write_asset_config(tmp_path / "assets" / "TM_1.toml", seeded)
     assert load_asset_config(path) == seeded
@@ -132,7 +154,11 @@ def test_hal_kinds_round_trip_through_the_floor_and_asset_files(tmp_path):
     (lambda t: t.replace('mount = "right"', 'mount = "right"\nhal = "remote"', 1),
      "remote HAL needs gateway"),
     (lambda t: t.replace('standby = false', 'standby = false\nhal = "remote"', 1),
-     "module TM_1: hal must be virtual or plant"),
+     "module TM_1: a remote HAL needs gateway"),
+    (lambda t: t.replace('standby = false', 'standby = false\ngateway = "opc.tcp://h:1"', 1),
+     "module TM_1: a remote HAL needs gateway"),
+    (lambda t: t.replace('standby = false', 'standby = false\nhal = "real"', 1),
+     "module TM_1: hal must be virtual, plant or remote"),
     (lambda t: 'hal = "remote"\n' + t, "hal must be virtual or plant"),
     (lambda t: t.replace('mount = "right"', 'mount = "right"\nhal = "real"', 1),
      "hal must be virtual, plant or remote"),

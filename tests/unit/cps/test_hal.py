@@ -49,6 +49,24 @@ def test_the_seed_file_and_hal_kinds_refuse_what_cannot_work(tmp_path):
         read_plant_seed(bad)
     with pytest.raises(InputError, match="cannot read the plant seed file"):
         read_plant_seed(tmp_path / "missing.secret")
+
+
+def test_a_remote_module_simulates_nothing_its_world_is_at_the_gateway(tmp_path):
+    from transfertwin.cps._role_tm import load_scene
+    from transfertwin.cps._role_tm_remote import GatewayWorld, WallClock
+
     remote = HalConfig("remote", endpoint="opc.tcp://127.0.0.1:4840", insecure=True)
-    with pytest.raises(InputError, match="a transport module's HAL is virtual or plant"):
-        environment_for(_cfg(tmp_path, remote), None)
+    scene = load_scene()
+    world = environment_for(_cfg(tmp_path, remote), scene)
+    assert isinstance(world, GatewayWorld) and world.scene is scene
+    assert world.object_ref is None  # no simulated system to load an object into
+    world.docked_unit = "TU_A"
+    world.undock()
+    assert world.docked_unit is None
+    # the wall clock: t0 is the first wait (the belts start), waits keep a fixed grid
+    clock = WallClock()
+    clock.start()
+    assert clock.now() == 0.0
+    for _ in range(3):
+        clock.wait(0.02)
+    assert 0.06 <= clock.now() < 0.2

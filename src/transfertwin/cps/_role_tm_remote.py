@@ -1,0 +1,361 @@
+"""A transport module on real hardware (``[hal] kind = "remote"``): its process runs the
+operation flow of Fig. 5.9a against the module's HAL gateway instead of a simulation
+(docs/architecture.md, "Deployment": the gateway's node set).
+
+- **Drive.** Navigating and docking are the module's own (its navigation and laser docking
+  run on the machine): the asset writes ``Command`` = ``"<seq> navigate <station>"``,
+  ``"<seq> dock <station>"`` or ``"<seq> undock"`` and waits until ``CommandState`` says
+  ``"<seq> done"`` or ``"<seq> failed: <why>"`` (``"<seq> busy"`` meanwhile).
+- **Pose.** ``PoseX``, ``PoseY``, ``PoseTheta`` (m, rad, floor frame: the module's
+  localisation) are read every ``poll_s`` (at most 5 Hz) and published. The docking error
+  is the docked pose relative to the station's goal pose.
+- **Object sensing.** ``ObjectState`` (Double[8]: a, x, y, z, s_x, s_y, s_z, θ in F_T of
+  the docked pair; NaN: nothing seen) is the module's vision system. The OTS is formed from
+  it and the OTS controller observes it.
+- **Belts and barriers.** The module's own belts and barriers are the gateway's
+  (`ModuleGateway`); the docked unit's are the unit's (its OPC UA interface: the unit's
+  process writes them to its own gateway).
+
+The transfer loop runs on the wall clock (`WallClock`), in a worker thread, each HAL call a
+request on the event loop that owns the gateway session.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import math
+import threading
+import time
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from transfertwin.cps._gateway import GatewayError, GatewayLink
+from transfertwin.cps._role_tm import ModuleRole
+
+if TYPE_CHECKING:
+    from transfertwin.cps._asset_config import AssetConfig
+    from transfertwin.sim import SceneConfig
+
+__all__ = ["GatewayWorld", "ModuleGateway", "RemoteModuleRole", "WallClock"]
+
+log = logging.getLogger("transfertwin.cps")
+
+#: How long a drive command may take at the gateway before the step fails, s.
+COMMAND_TIMEOUT_S = 120.0
+
+
+class ModuleGateway(GatewayLink):
+    """A remote transport module's nodes at its HAL gateway (async)."""
+
+    def __init__(self, cfg: AssetConfig) -> None:
+        super().__init__(cfg)
+        self._seq = time.time_ns() // 1_000_000 % 1_000_000_000  # fresh after a restart
+
+    async def set_belt(self, belt: str, speed_m_s: float) -> None:
+        """Command the module's `belt` ('left' or 'right')."""
+        from asyncua import ua
+
+        if belt not in ("left", "right"):
+            raise ValueError(f"unknown belt {belt!r}")
+        await self.write(f"belt_{belt}", float(speed_m_s), ua.VariantType.Double)
+
+    async def barriers(self) -> dict[str, bool]:
+        """The module's light barriers."""
+        near, far = await self.read("barrier_near", "barrier_far")
+        return {"near": bool(near), "far": bool(far)}
+
+    async def pose(self) -> np.ndarray:
+        """The module's pose (x m, y m, θ rad) as its localisation reports it."""
+        return np.array([float(v) for v in await self.read("pose_x", "pose_y", "pose_theta")])
+
+    async def object_state(self) -> np.ndarray | None:
+        """What the module's object sensor sees: (8,) in F_T, None when nothing."""
+        (value,) = await self.read("object_state")
+        s = np.asarray(value, dtype=float)
+        if s.shape != (8,):
+            raise GatewayError(f"HAL gateway {self.endpoint}: object_state must hold 8 "
+                               f"numbers, got {s.shape}")  # fmt: skip
+        return None if np.isnan(s).all() else s
+
+    async def command(self, verb: str, station: str = "",
+                      timeout_s: float = COMMAND_TIMEOUT_S) -> tuple[bool, str]:  # fmt: skip
+        """Have the module `verb` ('navigate', 'dock', 'undock') `station`; (done, why not)."""
+        from asyncua import ua
+
+        self._seq += 1
+        seq = str(self._seq)
+        await self.write("command", f"{seq} {verb} {station}".strip(), ua.VariantType.String)
+        t0 = time.monotonic()
+        poll = max(self.cfg.hal.poll_s, 0.01)
+        while time.monotonic() - t0 < timeout_s:
+            (state,) = await self.read("command_state")
+            head, _, rest = str(state or "").partition(" ")
+            if head == seq and rest == "done":
+                return True, ""
+            if head == seq and rest.startswith("failed"):
+                return False, f"{verb} {station}: {rest.removeprefix('failed').lstrip(': ')}"
+            await asyncio.sleep(poll)
+        return False, f"{verb} {station}: no answer from the module within {timeout_s:.0f} s"
+
+
+class WallClock:
+    """`transfertwin.control.Clock` of a real machine: wall time, waits on a fixed grid
+    (a late sample does not shift the ones after it). Time starts with the first wait
+    after `start`, when the belts run: what is observed before it (the pre-transfer state
+    of Eq. 5.7, t = 0) is at t0."""
+
+    def __init__(self) -> None:
+        self._t0: float | None = None
+        self._next = 0.0
+
+    def now(self) -> float:
+        return 0.0 if self._t0 is None else time.monotonic() - self._t0
+
+    def start(self) -> None:
+        self._t0 = None
+
+    def wait(self, dt_s: float) -> None:
+        if self._t0 is None:
+            self._t0 = self._next = time.monotonic()
+        self._next += dt_s
+        time.sleep(max(0.0, self._next - time.monotonic()))
+
+
+class _ThreadHAL:
+    """The module's belts and barriers (`UnitHAL`) and its object sensor (`ObjectSensor`)
+    for the controller's thread: each call a request on the loop that owns the session."""
+
+    def __init__(self, name: str, gw: ModuleGateway, loop: asyncio.AbstractEventLoop) -> None:
+        self.name, self._gw, self._loop = name, gw, loop
+        self._speeds = {"left": 0.0, "right": 0.0}
+
+    def _run(self, coro: Any) -> Any:
+        return asyncio.run_coroutine_threadsafe(coro, self._loop).result(10.0)
+
+    def set_belt_speed(self, belt: str, speed_m_s: float) -> None:
+        self._run(self._gw.set_belt(belt, speed_m_s))
+        self._speeds[belt] = float(speed_m_s)
+
+    def belt_speed(self, belt: str) -> float:
+        return self._speeds[belt]
+
+    def barriers(self) -> dict[str, bool]:
+        return self._run(self._gw.barriers())
+
+    def observe(self) -> np.ndarray:
+        s = self._run(self._gw.object_state())
+        if s is None:
+            raise RuntimeError(f"{self.name}'s object sensor lost the object")
+        return s
+
+
+class GatewayWorld:
+    """What a remote module's process knows of its world: the twin's scene (its own
+    configuration: belt speed, thresholds, timing) and the unit it is docked at. Nothing
+    is simulated; `object_ref` stays None."""
+
+    def __init__(self, scene: SceneConfig) -> None:
+        self.scene = scene
+        self.object_ref: str | None = None
+        self.docked_unit: str | None = None
+        self.lock = threading.RLock()
+
+    def undock(self) -> None:
+        """The module left its unit."""
+        self.docked_unit = None
+
+
+def _make_skills():
+    from transfertwin.cps.apps import StepResult, form_ots
+    from transfertwin.navigation import relative
+    from transfertwin.ots import BeltThresholds, TransferDirection
+    from transfertwin.perception import AABB
+    from transfertwin.sim import DockingError
+
+    class GatewayTransport:
+        """The steps of a leg (`TransportSkills`) on the module's hardware."""
+
+        load_state: dict | None = None
+        fallback: dict | None = None
+        camera = False
+        face = "front"
+
+        def __init__(self, role: RemoteModuleRole, source: str, target: str, obj: str):
+            self.role, self.obj = role, obj
+            self.source, self.target = source, target
+
+        def _station(self, leg) -> str:
+            station = self.role.assets[leg.unit].desc.station
+            if station is None:
+                raise ValueError(f"{leg.unit} stands at no station of the shop floor")
+            return station
+
+        async def navigate(self, leg) -> StepResult:
+            station = self._station(leg)
+            t0 = time.monotonic()
+            ok, why = await self.role.gateway.command("navigate", station)
+            await self.role._refresh_pose()
+            return StepResult(ok, why, {"station": station,
+                                        "drive_s": round(time.monotonic() - t0, 2)})
+
+        async def dock(self, leg) -> StepResult:
+            role, station = self.role, self._station(leg)
+            ok, why = await role.gateway.command("dock", station)
+            pose = await role._refresh_pose()
+            goal = role.robot.floor.station(station).goal_pose()
+            xi = tuple(float(v) for v in relative(goal, pose))
+            info = {"station": station, "x_mm": round(xi[0] * 1e3, 3),
+                    "y_mm": round(xi[1] * 1e3, 3), "theta_deg": round(math.degrees(xi[2]), 4),
+                    "source": "the module's localisation at the gateway"}  # fmt: skip
+            if not ok:
+                return StepResult(False, f"docking at {leg.unit}: {why}", info)
+            try:
+                DockingError(*xi)
+            except Exception as exc:  # InputError: an error the pair cannot work with
+                await role._undock(role.aid)
+                return StepResult(False, f"docking at {leg.unit}: {exc}", info)
+            role.robot.docked_at = station
+            role.env.docked_unit = leg.unit
+            await role._dock(role.aid, leg.unit)
+            return StepResult(True, info=info)
+
+        async def form_ots(self, leg) -> StepResult:
+            role = self.role
+            s = await role.gateway.object_state()
+            boxes = [] if s is None else [AABB(tuple(float(v) for v in s[1:4]),
+                                               tuple(float(v) for v in s[4:7]))]  # fmt: skip
+            pickup = leg.direction is TransferDirection.TU_TO_TM
+            check = form_ots(boxes, leg.direction, BeltThresholds(t_max=role.env.scene.t_max_s),
+                             obj=self.obj, tm=role.aid, unit=leg.unit,
+                             receiver_holds=role._objects_at(role.aid) if pickup else [],
+                             face=self.face)  # fmt: skip
+            info = {"source": "object sensor at the gateway",
+                    "boxes": [b.as_dict() for b in boxes]}  # fmt: skip
+            log.info("%s: sensed %s and itself: %d object(s)%s", role.aid, leg.unit,
+                     len(boxes), "" if check.ok else f"; no OTS: {check.reason}")  # fmt: skip
+            return StepResult(check.ok, check.reason, info)
+
+        async def transfer(self, leg) -> StepResult:
+            rec = await self.role._gateway_transfer(leg.unit, leg.direction, self.face)
+            t_end = rec.t_end_s
+            info = {"y": rec.y, "valid": rec.valid, "conveyor": rec.conveyor,
+                    "t_end_s": None if math.isnan(t_end) else round(t_end, 3)}  # fmt: skip
+            log.info("%s: %s %s at %s: y = %d", self.role.aid, leg.name, self.obj, leg.unit,
+                     rec.y)  # fmt: skip
+            if not rec.valid:
+                return StepResult(False, "the controller's observed start state is not in "
+                                         "P_pre (Eq. 5.7)", info)  # fmt: skip
+            if rec.y != 1:
+                return StepResult(False, f"the object did not reach the receiver "
+                                         f"(failure state after {t_end:.2f} s)", info)  # fmt: skip
+            return StepResult(True, info=info)
+
+        async def resolve(self, leg, success: bool) -> None:
+            role = self.role
+            if success:
+                await role._moved(self.obj, role.aid if leg.name == "pick-up" else leg.unit)
+            await role._undock(role.aid)
+
+    return GatewayTransport
+
+
+class RemoteModuleRole(ModuleRole):
+    """A transport module on real hardware behind its HAL gateway (see the module
+    docstring). Everything else (operations, reports, possession, bids) is `ModuleRole`'s."""
+
+    def __init__(self, node) -> None:
+        super().__init__(node)  # its environment is a `GatewayWorld` (`environment_for`)
+        self.gateway = ModuleGateway(node.cfg)
+
+    def _transport(self, source: str, target: str, obj: str):
+        return _make_skills()(self, source, target, obj)
+
+    async def start(self) -> None:
+        with contextlib.suppress(GatewayError):  # where the machine stands, if it answers
+            await self._refresh_pose()
+        await super().start()
+        self.node.spawn(self._poll_pose())
+
+    async def stop(self) -> None:
+        await self.gateway.close()
+
+    async def _refresh_pose(self) -> np.ndarray:
+        pose = await self.gateway.pose()
+        if not np.array_equal(pose, self.robot.pose):
+            self.robot.pose = pose
+            await self._publish_pose(self.aid)
+        return pose
+
+    async def _poll_pose(self) -> None:
+        """Publish the module's pose as the gateway reports it (a gateway away: said once,
+        kept trying)."""
+        away = False
+        while True:
+            try:
+                await self._refresh_pose()
+            except GatewayError as exc:
+                if not away:
+                    log.warning("%s: %s", self.aid, exc)
+                away = True
+            else:
+                if away:
+                    log.info("%s: HAL gateway answering again", self.aid)
+                away = False
+            await asyncio.sleep(max(self.node.cfg.hal.poll_s, 0.2))
+
+    async def _set_belt(self, belt: str, speed: float) -> bool:
+        await self.gateway.set_belt(belt, float(speed))  # the drive first: then publish
+        await self.set(f"BeltSpeed{belt.capitalize()}", float(speed))
+        return True
+
+    async def _dock_op(self, unit: str) -> bool:
+        if unit not in self.node.floor.units:
+            raise ValueError(f"no transfer unit {unit!r}")
+        station = self.assets[unit].desc.station
+        for verb in ("navigate", "dock"):
+            ok, why = await self.gateway.command(verb, station)
+            if not ok:
+                raise RuntimeError(why)
+        await self._refresh_pose()
+        return await self._dock(self.aid, unit)
+
+    async def _undock(self, tm: str) -> bool:
+        """Leave the docked unit (the drive first); the unit's barriers are its hardware's."""
+        unit = await self.get("DockedAt")
+        if unit:
+            try:
+                ok, why = await self.gateway.command("undock")
+            except GatewayError as exc:
+                ok, why = False, str(exc)
+            if not ok:
+                log.warning("%s: %s", self.aid, why)
+        await self.set("DockedAt", "")
+        self.robot.docked_at = None
+        self.env.undock()
+        if unit:
+            try:
+                await self.node.peers.write(unit, "DockedTransportModule", "")
+            except Exception as exc:
+                log.info("%s: %s not answering while undocking: %s", self.aid, unit, exc)
+        return True
+
+    async def _gateway_transfer(self, unit: str, direction, face: str):
+        """One transfer between the module and the docked `unit` on the hardware: the OTS
+        controller with the module's gateway, the unit's OPC UA interface and the wall
+        clock."""
+        from transfertwin.cps.opcua import OpcUaUnitHAL
+        from transfertwin.study.experiment import scene_controller
+
+        loop = asyncio.get_running_loop()
+        session = await self.node.peers.session(unit)
+        tu = OpcUaUnitHAL(session, loop, timeout_s=10)
+        tm = _ThreadHAL(self.aid, self.gateway, loop)
+        ctl = scene_controller(self.env.scene, tm, tu, tm, WallClock())
+        try:
+            return await asyncio.to_thread(ctl.transfer, direction, face, None)
+        except Exception:
+            await self.node.peers.drop(unit)
+            raise

@@ -1,0 +1,236 @@
+"""A HAL gateway as the machines' PLC would serve it, for the remote-HAL tests: a real
+asyncua server on loopback, in a thread of its own, whose nodes a MuJoCo transfer system
+drives in real time (the node set of docs/architecture.md, "Deployment").
+
+The "hardware" is the virtual scene's physics (`cps.apps.Environment`): the belts run at
+the speeds written to the gateway's belt nodes; the light barriers, the module's object
+sensor (the system's observed state in F_T, NaN while it is not docked at the pair that
+holds the object) and the module's pose are written back every tick. The module's drive
+answers the commands ``navigate`` (to the station's coarse pose), ``dock`` (at the goal
+pose composed with a docking error drawn from `seed`; the pair's physics docks with that
+error) and ``undock``. Which unit holds the object afterwards is read off the physics.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import math
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from asyncua import Server, ua
+
+TICK_S = 0.01
+DRIVE_S = 0.15  # how long the drive takes for a command (wall)
+
+
+@dataclass
+class PlantLog:
+    """What the plant saw (for the test's checks)."""
+
+    errors: list[tuple[str, tuple[float, float, float]]] = field(default_factory=list)
+    belts: dict[str, float] = field(default_factory=dict)  # node -> largest |speed|
+    barriers: set[str] = field(default_factory=set)  # barrier nodes that were interrupted
+    commands: list[str] = field(default_factory=list)
+
+
+class PlantGateway:
+    """The gateway and the plant behind it (start with `start`, end with `stop`).
+
+    Args:
+        port: Loopback port.
+        module: The transport module's id; `units`: unit id -> its station.
+        obj: The object; `at`: the unit it lies on.
+        seed: Seed of the docking errors.
+        secure: (gateway cert, key, trust folder) for Basic256Sha256 SignAndEncrypt only;
+            None: NoSecurity.
+    """
+
+    def __init__(self, port: int, module: str, units: dict[str, str], obj: str, at: str,
+                 seed: int, secure: tuple[Path, Path, Path] | None = None) -> None:  # fmt: skip
+        from transfertwin.cps import default_floor_spec
+        from transfertwin.cps._role_tm import load_scene
+        from transfertwin.cps.apps import Environment
+
+        self.url = f"opc.tcp://127.0.0.1:{port}/gateway"
+        self.module, self.units, self.obj = module, units, obj
+        self.holder = at
+        self.docked: str | None = None
+        self.floor = default_floor_spec().shop_floor()
+        self.env = Environment(load_scene(), time_scale=0.0)
+        self.rng = np.random.default_rng(seed)
+        self.pose = np.array([6.0, 5.2, 0.0])
+        self.secure = secure
+        self.log = PlantLog()
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._thread: threading.Thread | None = None
+        self._ready = threading.Event()
+        self._stop: asyncio.Event | None = None
+        self._failed: BaseException | None = None
+
+    # -- life cycle ------------------------------------------------------------------------
+    def start(self) -> PlantGateway:
+        self._thread = threading.Thread(target=self._main, daemon=True)
+        self._thread.start()
+        assert self._ready.wait(30), "the gateway did not start"
+        if self._failed is not None:
+            raise self._failed
+        return self
+
+    def stop(self) -> None:
+        if self._loop is not None and self._stop is not None:
+            self._loop.call_soon_threadsafe(self._stop.set)
+        if self._thread is not None:
+            self._thread.join(20)
+        if self._failed is not None:
+            raise self._failed
+
+    def _main(self) -> None:
+        asyncio.run(self._serve())
+
+    async def _serve(self) -> None:
+        self._loop = asyncio.get_running_loop()
+        self._stop = asyncio.Event()
+        try:
+            server = await self._server()
+        except BaseException as exc:
+            self._failed = exc
+            self._ready.set()
+            return
+        self._ready.set()
+        try:
+            async with server:
+                await self._run()
+        except BaseException as exc:  # a failure of the plant fails the test
+            self._failed = exc
+
+    async def _server(self) -> Server:
+        server = Server()
+        await server.init()
+        server.set_endpoint(self.url)
+        if self.secure is None:
+            server.set_security_policy([ua.SecurityPolicyType.NoSecurity])
+        else:
+            from transfertwin.cps.opcua import TrustList
+
+            cert, key, trust = self.secure
+            await server.load_certificate(str(cert))
+            await server.load_private_key(str(key))
+            server.set_security_policy([ua.SecurityPolicyType.Basic256Sha256_SignAndEncrypt])
+            server.set_certificate_validator(TrustList(trust))
+        ns = await server.register_namespace("urn:example:plc")
+        assert ns == 2  # the asset files' default NodeIds name namespace 2
+        plc = await server.nodes.objects.add_object(ns, "PLC")
+        self.nodes: dict[str, object] = {}
+        names = [(u, n, v) for u in self.units for n, v in
+                 (("BeltSpeedLeft", 0.0), ("BeltSpeedRight", 0.0), ("BarrierNear", False),
+                  ("BarrierFar", False))]  # fmt: skip
+        m = self.module
+        names += [(m, "BeltSpeedLeft", 0.0), (m, "BeltSpeedRight", 0.0), (m, "BarrierNear", False),
+                  (m, "BarrierFar", False), (m, "PoseX", float(self.pose[0])),
+                  (m, "PoseY", float(self.pose[1])), (m, "PoseTheta", float(self.pose[2])),
+                  (m, "Command", ""), (m, "CommandState", ""),
+                  (m, "ObjectState", [math.nan] * 8)]  # fmt: skip
+        for asset, name, value in names:
+            vtype = ua.VariantType.Double if isinstance(value, float | list) else None
+            node = await plc.add_variable(ua.NodeId(f"{asset}.{name}", ns), name,
+                                          ua.Variant(value, vtype) if vtype else value)
+            await node.set_writable()
+            self.nodes[f"{asset}.{name}"] = node
+        return server
+
+    # -- the plant -------------------------------------------------------------------------
+    async def _read(self, key: str):
+        return await self.nodes[key].read_value()
+
+    async def _write(self, key: str, value) -> None:
+        vtype = ua.VariantType.Double if isinstance(value, float | list) else None
+        await self.nodes[key].write_value(ua.Variant(value, vtype) if vtype else value)
+
+    def _in_pair(self) -> bool:
+        return self.docked is not None and self.holder in (self.module, self.docked)
+
+    def _settle_holder(self) -> None:
+        """Who holds the object, read off the physics (the docked pair only)."""
+        if self._in_pair():
+            x = float(self.env.system.observe()[1])
+            self.holder = self.docked if x > self.env.scene.gap_m / 2 else self.module
+
+    async def _command(self, text: str) -> None:
+        from transfertwin.navigation import DockingConfig, compose
+        from transfertwin.sim import DockingError
+
+        seq, verb, *rest = text.split()
+        self.log.commands.append(f"{verb} {' '.join(rest)}".strip())
+        m = self.module
+        await self._write(f"{m}.CommandState", f"{seq} busy")
+        await asyncio.sleep(DRIVE_S)
+        station = rest[0] if rest else None
+        unit = next((u for u, s in self.units.items() if s == station), None)
+        if verb == "navigate":
+            self.pose = self.floor.station(station).coarse_pose(DockingConfig().coarse_distance_m)
+        elif verb == "dock":
+            if unit is None:
+                await self._write(f"{m}.CommandState", f"{seq} failed: no unit at {station}")
+                return
+            xi = (float(self.rng.normal(0, 1e-3)), float(self.rng.normal(0, 1e-3)),
+                  float(self.rng.normal(0, math.radians(0.2))))  # fmt: skip
+            err = DockingError(*xi)
+            self.log.errors.append((station, xi))
+            self.pose = compose(self.floor.station(station).goal_pose(), np.array(xi))
+            if self.holder == unit:
+                self.env.load_object_at_unit(self.obj, unit, err)
+            elif self.holder == m:
+                self.env.dock(unit, err)
+            self.docked = unit
+        elif verb == "undock":
+            self._settle_holder()
+            if self.docked is not None:
+                await self._write(f"{self.docked}.BarrierNear", False)
+                await self._write(f"{self.docked}.BarrierFar", False)
+            self.docked = None
+            self.env.undock()
+        else:
+            await self._write(f"{m}.CommandState", f"{seq} failed: unknown command {verb!r}")
+            return
+        for key, v in zip(("PoseX", "PoseY", "PoseTheta"), self.pose, strict=True):
+            await self._write(f"{m}.{key}", float(v))
+        await self._write(f"{m}.CommandState", f"{seq} done")
+
+    async def _run(self) -> None:
+        m, last = self.module, ""
+        sim_t, wall0 = 0.0, time.monotonic()
+        while not self._stop.is_set():
+            command = str(await self._read(f"{m}.Command") or "")
+            if command and command != last:
+                last = command
+                await self._command(command)
+                sim_t, wall0 = 0.0, time.monotonic()
+            if self._in_pair():
+                system = self.env.system
+                for who, hal in ((m, system.tm), (self.docked, system.tu)):
+                    for belt in ("left", "right"):
+                        key = f"{who}.BeltSpeed{belt.capitalize()}"
+                        speed = float(await self._read(key))
+                        hal.set_belt_speed(belt, speed)
+                        self.log.belts[key] = max(self.log.belts.get(key, 0.0), abs(speed))
+                target = time.monotonic() - wall0  # real time: the physics keeps pace
+                steps = int((target - sim_t) / self.env.scene.physics.timestep_s)
+                if steps > 0:
+                    system.clock.wait(steps * self.env.scene.physics.timestep_s)
+                    sim_t += steps * self.env.scene.physics.timestep_s
+                for who, hal in ((m, system.tm), (self.docked, system.tu)):
+                    for side, on in hal.barriers().items():
+                        key = f"{who}.Barrier{side.capitalize()}"
+                        if on:
+                            self.log.barriers.add(key)
+                        await self._write(key, bool(on))
+                seen = [float(v) for v in system.observe()]
+            else:
+                sim_t, wall0 = 0.0, time.monotonic()
+                seen = [math.nan] * 8
+            await self._write(f"{m}.ObjectState", seen)
+            await asyncio.sleep(TICK_S)

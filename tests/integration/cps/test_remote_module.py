@@ -1,0 +1,134 @@
+"""A transport module on real hardware (``[hal] kind = "remote"``): its drive, pose, belts,
+barriers and object sensor are a HAL gateway's nodes, and so are the two transfer units'
+belts and barriers. The gateway is a real asyncua server whose nodes a MuJoCo transfer
+system drives in real time (`_plant_gateway`); the module, the units and the gateway talk
+OPC UA only. One transport operation runs end to end through it, and one whose object the
+module's sensor does not see where the order says it is fails at forming the OTS."""
+
+from __future__ import annotations
+
+import asyncio
+import dataclasses
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.integration.cps._plant_gateway import PlantGateway
+from transfertwin.cps import (
+    AssetConfig,
+    AssetNode,
+    HalConfig,
+    connect,
+    default_floor_spec,
+    floor_toml,
+)
+from transfertwin.cps.opcua import free_port
+
+UNITS = {"TU_A": "A", "TU_B": "B"}
+
+
+def _configs(tmp_path: Path, gateway: str) -> dict[str, AssetConfig]:
+    spec = default_floor_spec()
+    stations = tuple(dataclasses.replace(s, hal="remote", gateway=gateway)
+                     if s.unit in UNITS else s for s in spec.stations)  # fmt: skip
+    modules = (dataclasses.replace(spec.modules[0], hal="remote", gateway=gateway),)
+    spec = dataclasses.replace(spec, stations=stations, modules=modules)
+    (tmp_path / "floor.toml").write_text(floor_toml(spec))
+    out = {}
+    for aid in (*UNITS, "TM_1"):
+        hal = HalConfig("remote", endpoint=gateway, insecure=True, poll_s=0.02)
+        out[aid] = AssetConfig(asset_id=aid, floor_file=tmp_path / "floor.toml",
+                               host="127.0.0.1", port=free_port(), seeds=(),
+                               cert_dir=tmp_path / aid / "certs",
+                               trust_dir=tmp_path / aid / "trusted", credentials_file=None,
+                               state_dir=tmp_path / aid / "state", insecure=True,
+                               hal=hal)  # fmt: skip
+    return out
+
+
+async def _until(check, timeout_s: float, what: str):
+    t0 = time.monotonic()
+    while True:
+        value = await check()
+        if value:
+            return value
+        assert time.monotonic() - t0 < timeout_s, f"{what}: not within {timeout_s} s"
+        await asyncio.sleep(0.05)
+
+
+def _events(node: AssetNode, op_id: str) -> list[dict]:
+    """The module's reports of `op_id` (no TMS on this floor: they stay in its outbox)."""
+    return [e for o, e in node.role.state.data["outbox"] if o == op_id]
+
+
+@pytest.mark.slow  # real time: two transfers and nine drive commands, ~20 s
+def test_a_remote_module_transfers_through_its_gateway_end_to_end(tmp_path):
+    port = free_port()
+    # o2 lies on TU_B (the demo placement); the plant's physics is the only truth
+    plant = PlantGateway(port, "TM_1", UNITS, "o2", at="TU_B", seed=11).start()
+    cfgs = _configs(tmp_path, plant.url)
+
+    async def scenario() -> dict:
+        async with AssetNode(cfgs["TU_A"]) as tu_a, AssetNode(cfgs["TU_B"]) as tu_b, \
+                AssetNode(cfgs["TM_1"]) as tm:
+            for unit in (tu_a, tu_b):
+                tm.learn(unit.desc.asset_id, unit.server.endpoint)
+            async with connect(tm.server.endpoint, "TM_1", credentials=None,
+                               insecure=True) as client:  # fmt: skip
+                # the pose the module publishes is its machine's
+                assert await client.read("OperationalData", "PoseX") == pytest.approx(6.0)
+                assert await client.call("AssignOperation", "op1", "TU_B", "TU_A", "o2", "{}")
+
+                async def finished(op: str):
+                    done = [e for e in _events(tm, op) if e["event"] == "result"]
+                    return done[0]["result"] if done else None
+
+                result = await _until(lambda: finished("op1"), 90, "op1")
+                pose = [await client.read("OperationalData", k) for k in ("PoseX", "PoseY")]
+                # the module's published pose is the gateway's (docked at A, then undocked)
+                assert pose == pytest.approx(list(plant.pose[:2]), abs=1e-9)
+                possessed = await client.read("OperationalData", "PossessedObjects")
+                # the sensor sees nothing on TU_B now: no OTS, no transfer
+                assert await client.call("AssignOperation", "op2", "TU_B", "TU_A", "o2", "{}")
+                second = await _until(lambda: finished("op2"), 60, "op2")
+                return {"result": result, "possessed": possessed,
+                        "second": second, "moved": [e for e in _events(tm, "op1")
+                                                    if e["event"] == "moved"]}  # fmt: skip
+
+    try:
+        out = asyncio.run(scenario())
+    finally:
+        plant.stop()
+    result = out["result"]
+    assert result["status"] == "delivered", result
+    assert (result["y_pickup"], result["y_delivery"]) == (1, 1)
+    assert [(e["object"], e["holder"]) for e in out["moved"]] == [("o2", "TM_1"), ("o2", "TU_A")]
+    assert out["possessed"] == ""
+    # the physics agrees: the object lies on TU_A's belts
+    assert plant.holder == "TU_A"
+    # the module drove and docked through its gateway, leg by leg
+    assert plant.log.commands == ["navigate B", "dock B", "undock", "navigate A", "dock A",
+                                  "undock", "navigate B", "dock B", "undock"]  # fmt: skip
+    # the docking errors the module recorded are what its localisation at the gateway said
+    for leg, (station, xi) in zip(result["legs"], plant.log.errors, strict=False):
+        assert station == UNITS[leg["unit"]]
+        rec = leg["docking"]
+        assert rec["x_mm"] == pytest.approx(xi[0] * 1e3, abs=2e-3)
+        assert rec["y_mm"] == pytest.approx(xi[1] * 1e3, abs=2e-3)
+        assert rec["theta_deg"] == pytest.approx(np.degrees(xi[2]), abs=2e-4)
+        # the OTS was formed from the gateway's object sensor
+        assert leg["scanning"]["source"] == "object sensor at the gateway"
+        assert len(leg["scanning"]["boxes"]) == 1
+    # all four belt pairs ran at the gateway (the units' through their own processes), and
+    # the receivers' barriers saw the object arrive
+    for asset in ("TM_1", "TU_A", "TU_B"):
+        assert plant.log.belts[f"{asset}.BeltSpeedLeft"] == pytest.approx(0.15)
+    assert "TU_A.BarrierNear" in plant.log.barriers and "TM_1.BarrierNear" in plant.log.barriers
+    second = out["second"]
+    assert second["status"] == "failed at pick-up" and second["failed_step"] == "scanning"
+    assert "o2 not seen on TU_B" in second["reason"]
+    assert plant.holder == "TU_A"
+    json.dumps(result)  # the report is JSON as the TMS gets it

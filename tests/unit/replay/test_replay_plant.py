@@ -142,6 +142,9 @@ def test_the_rehearsal_beside_the_table_names_the_plant(table, tmp_path):
     seed_file = tmp_path / "plant.secret"
     seed_file.write_text(f"{SEED}\n")
     assert plant_row(copy, 1, plant_seed_file=seed_file).note.startswith("the plant of --plant")
+    # A plant floor's work folder: its plant.secret beside the table.
+    (copy.parent / "plant.secret").write_text(f"{SEED}\n")
+    assert plant_row(copy, 1).note == "the plant of K10/plant.secret (in-class)"
 
 
 def test_an_mp4_holds_the_frames(replayed, tmp_path):

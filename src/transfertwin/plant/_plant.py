@@ -439,9 +439,10 @@ class EmulatedPlant:
         experiment (`experiments_run` is unchanged).
 
         Raises:
-            InputError: The row lacks a column or does not come from this plant (its
+            InputError: The row lacks a column or does not come from this plant: its
                 transfer unit, docking error or outcome differ from this plant's
-                experiment of that id: another plant seed or kind).
+                experiment of that id (another plant seed; another kind draws the same
+                unit and error, and shows only where the outcome differs).
         """
         try:
             eid = int(str(row["experiment_id"]))

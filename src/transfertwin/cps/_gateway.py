@@ -29,7 +29,7 @@ if TYPE_CHECKING:
 
     from transfertwin.cps._asset_config import AssetConfig
 
-__all__ = ["GatewayError", "GatewayLink", "gateway_trust_dir", "open_gateway"]
+__all__ = ["GatewayError", "GatewayLink", "gateway_refusal", "gateway_trust_dir", "open_gateway"]
 
 log = logging.getLogger("transfertwin.cps")
 
@@ -39,6 +39,13 @@ GATEWAY_CLIENT_CERT = "client-operator"
 
 class GatewayError(ConnectionError):
     """The HAL gateway cannot be used (not answering, not secure, not trusted, ...)."""
+
+
+def gateway_refusal(exc: GatewayError):
+    """`exc` as the refusal of an operation call (BadCommunicationError, its line)."""
+    from transfertwin.cps.opcua import OperationRefused
+
+    return OperationRefused(str(exc), status="BadCommunicationError")
 
 
 def gateway_trust_dir(cfg: AssetConfig) -> Path:
@@ -84,15 +91,19 @@ async def open_gateway(cfg: AssetConfig) -> Client:
 
     url = cfg.hal.endpoint
     client = Client(url, timeout=5)
-    try:
+    try:  # (its endpoints are read on a connection of their own, closed again)
         if not cfg.hal.insecure:
             await asyncio.wait_for(_secure(client, cfg), 10.0)
+    except GatewayError:
+        raise
+    except Exception as exc:
+        raise GatewayError(f"HAL gateway {url} not answering "
+                           f"({type(exc).__name__}: {exc})") from None  # fmt: skip
+    try:
         await asyncio.wait_for(client.connect(), 10.0)
     except BaseException as exc:
         with contextlib.suppress(Exception):
             await client.disconnect()
-        if isinstance(exc, GatewayError):
-            raise
         if isinstance(exc, ua.UaStatusCodeError) and \
                 exc.code == ua.StatusCodes.BadCertificateUntrusted:
             cert = cfg.cert_dir / f"{GATEWAY_CLIENT_CERT}.der"

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from transfertwin._errors import InputError
+from transfertwin.cps._gateway import GatewayError, GatewayLink, gateway_refusal
 
 if TYPE_CHECKING:
     from transfertwin.cps._asset_config import AssetConfig
@@ -94,16 +95,15 @@ class GatewayHAL:
     server; the session: `cps._gateway`).
 
     Belt speeds (m/s, Double) are written to the gateway's belt nodes; the barriers
-    (Boolean, True: interrupted) are read from its barrier nodes. Failures raise
-    `ConnectionError` (`GatewayError`), one line saying why.
+    (Boolean, True: interrupted) are read from its barrier nodes. A belt command the
+    gateway does not take is refused (`OperationRefused`, BadCommunicationError); a
+    barrier read that fails raises `GatewayError` (a `ConnectionError`); one line each.
 
     Args:
         cfg: The asset's configuration (its ``[hal]`` table says where and which nodes).
     """
 
     def __init__(self, cfg: AssetConfig) -> None:
-        from transfertwin.cps._gateway import GatewayLink
-
         self.cfg = cfg
         self.link = GatewayLink(cfg)
         self.endpoint = self.link.endpoint
@@ -115,7 +115,10 @@ class GatewayHAL:
 
         if belt not in ("left", "right"):
             raise ValueError(f"unknown belt {belt!r}")
-        await self.link.write(f"belt_{belt}", float(speed_m_s), ua.VariantType.Double)
+        try:
+            await self.link.write(f"belt_{belt}", float(speed_m_s), ua.VariantType.Double)
+        except GatewayError as exc:  # the caller is told why, as a refusal (no traceback)
+            raise gateway_refusal(exc) from None
 
     async def barriers(self) -> dict[str, bool]:
         """The light barriers as the gateway reads them."""

@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from transfertwin.cps._gateway import GatewayError, GatewayLink
+from transfertwin.cps._gateway import GatewayError, GatewayLink, gateway_refusal
 from transfertwin.cps._role_tm import ModuleRole
 
 if TYPE_CHECKING:
@@ -307,7 +307,10 @@ class RemoteModuleRole(ModuleRole):
             await asyncio.sleep(max(self.node.cfg.hal.poll_s, 0.2))
 
     async def _set_belt(self, belt: str, speed: float) -> bool:
-        await self.gateway.set_belt(belt, float(speed))  # the drive first: then publish
+        try:  # the drive first: then publish
+            await self.gateway.set_belt(belt, float(speed))
+        except GatewayError as exc:
+            raise gateway_refusal(exc) from None
         await self.set(f"BeltSpeed{belt.capitalize()}", float(speed))
         return True
 

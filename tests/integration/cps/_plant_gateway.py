@@ -14,6 +14,7 @@ error) and ``undock``. Which unit holds the object afterwards is read off the ph
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import math
 import threading
 import time
@@ -52,15 +53,13 @@ class PlantGateway:
     def __init__(self, port: int, module: str, units: dict[str, str], obj: str, at: str,
                  seed: int, secure: tuple[Path, Path, Path] | None = None) -> None:  # fmt: skip
         from transfertwin.cps import default_floor_spec
-        from transfertwin.cps._role_tm import load_scene
-        from transfertwin.cps.apps import Environment
 
         self.url = f"opc.tcp://127.0.0.1:{port}/gateway"
         self.module, self.units, self.obj = module, units, obj
         self.holder = at
         self.docked: str | None = None
         self.floor = default_floor_spec().shop_floor()
-        self.env = Environment(load_scene(), time_scale=0.0)
+        self._env = None
         self.rng = np.random.default_rng(seed)
         self.pose = np.array([6.0, 5.2, 0.0])
         self.secure = secure
@@ -70,6 +69,16 @@ class PlantGateway:
         self._ready = threading.Event()
         self._stop: asyncio.Event | None = None
         self._failed: BaseException | None = None
+
+    @property
+    def env(self):
+        """The machines' physics (made on first use: a gateway that only serves needs none)."""
+        if self._env is None:
+            from transfertwin.cps._role_tm import load_scene
+            from transfertwin.cps.apps import Environment
+
+            self._env = Environment(load_scene(), time_scale=0.0)
+        return self._env
 
     # -- life cycle ------------------------------------------------------------------------
     def start(self) -> PlantGateway:
@@ -88,6 +97,14 @@ class PlantGateway:
         if self._failed is not None:
             raise self._failed
 
+    def value(self, key: str):
+        """The gateway's node `key` ('<asset>.<name>') now (from any thread)."""
+        return asyncio.run_coroutine_threadsafe(self._read(key), self._loop).result(10)
+
+    def set(self, key: str, value) -> None:
+        """Write the gateway's node `key` as the machine would (from any thread)."""
+        asyncio.run_coroutine_threadsafe(self._write(key, value), self._loop).result(10)
+
     def _main(self) -> None:
         asyncio.run(self._serve())
 
@@ -102,13 +119,23 @@ class PlantGateway:
             return
         self._ready.set()
         try:
-            async with server:
-                await self._run()
+            await self._run()
         except BaseException as exc:  # a failure of the plant fails the test
             self._failed = exc
+        finally:
+            iserver = server.iserver
+            if iserver.time_task is not None:  # its 1 s sleep would hold the stop
+                iserver.time_task.cancel()
+                with contextlib.suppress(asyncio.CancelledError):
+                    await iserver.time_task
+                iserver.time_task = None
+            await server.stop()
 
     async def _server(self) -> Server:
+        from transfertwin.cps.opcua._aspace import share_standard_address_space
+
         server = Server()
+        share_standard_address_space(server)  # not built anew: seconds on a busy machine
         await server.init()
         server.set_endpoint(self.url)
         if self.secure is None:
@@ -140,6 +167,7 @@ class PlantGateway:
                                           ua.Variant(value, vtype) if vtype else value)
             await node.set_writable()
             self.nodes[f"{asset}.{name}"] = node
+        await server.start()
         return server
 
     # -- the plant -------------------------------------------------------------------------

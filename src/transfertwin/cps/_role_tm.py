@@ -441,9 +441,9 @@ class ModuleRole(Role):
                     self.env.clock.wait(TAKE_BACK_STEP_S)
                     state = system.observe()  # (a, x, y, z, s_x, s_y, s_z, θ), Eq. 5.4
                     if to_unit:  # wholly on the unit's belts (they start at x = gap)
-                        clear = state[1] - state[4] > gap + TAKE_BACK_CLEARANCE_M
+                        clear = bool(state[1] - state[4] > gap + TAKE_BACK_CLEARANCE_M)
                     else:  # wholly on the module's belts, clear of its tip (x = 0)
-                        clear = state[1] + state[4] < -TAKE_BACK_CLEARANCE_M
+                        clear = bool(state[1] + state[4] < -TAKE_BACK_CLEARANCE_M)
                     if clear:
                         break
                 for belt in ("left", "right"):

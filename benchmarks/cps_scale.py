@@ -5,11 +5,18 @@ one process per asset on its own loopback address.
 
 For each size it prints the start-up time (launch until the knowledge graph lists every
 asset online: discovery convergence through the leases), the memory of one asset process
-(RSS and PSS, median and largest, by class), the traffic on the loopback interface per
-asset per minute while the floor idles (heartbeats, gossip), and the latency of a status
-query (the graph's `Status`, median and 95th percentile of 20). A size whose processes
-would not fit in the memory available is skipped with the reason (its figures are then a
-projection, docs/scaling.md). Ratios against the smallest floor are printed in the same run.
+(RSS and PSS, median and largest, by class), the CPU the processes spend while the floor
+idles (median asset process, the knowledge graph, the whole floor, in % of one core), the
+traffic on the loopback interface per asset per minute while the floor idles (heartbeats,
+gossip), the latency of a status query (the graph's `Status`, median and 95th percentile of
+20) and the time the graph takes to see an object process killed with -9 offline (its lease
+lapsing). A floor that does not converge within `--converge-timeout` is reported with how
+many assets the graph had by then (and measured as it is). A size whose processes would not
+fit in the memory available is skipped with the reason (its figures are then a projection,
+docs/scaling.md). Ratios against the smallest floor are printed in the same run.
+
+`--lease` left out, each floor runs with the launcher's default lease for its size
+(`default_lease`); the load average is printed with every size (the host may be shared).
 
 Asset processes are forked from one prepared process, as `cps up` starts them (they share
 the imports and the OPC UA standard address space copy-on-write); the smallest size is
@@ -65,6 +72,21 @@ def memory(pid: int) -> tuple[float, float]:
     return rss, pss
 
 
+def cpu_s(pid: int) -> float:
+    """User + system CPU seconds a process has used so far (0 once it is gone)."""
+    import os
+
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return 0.0
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def load_average() -> float:
+    return float(Path("/proc/loadavg").read_text().split()[0])
+
+
 def lo_bytes() -> int:
     base = Path("/sys/class/net/lo/statistics")
     return int((base / "rx_bytes").read_text())
@@ -93,9 +115,11 @@ async def status_latency(wd: Path, repeats: int = 20) -> list[float]:
     return out
 
 
-def run_size(n: int, base: Path, lease: float, idle_s: float, per_process_mb: float | None,
-             fork: bool = True):  # fmt: skip
-    from transfertwin.cli._cps_floor import _wait_online
+def run_size(n: int, base: Path, lease: float | None, idle_s: float,
+             per_process_mb: float | None, fork: bool = True,
+             converge_s: float | None = None):  # fmt: skip
+    from transfertwin._errors import InputError
+    from transfertwin.cli._cps_floor import _wait_online, floor_status
     from transfertwin.cps import asset_pids, launch, prepare_floor, stop_floor, write_floor_info
 
     if per_process_mb is not None and n * per_process_mb * 1.5 > available_mb():
@@ -104,20 +128,39 @@ def run_size(n: int, base: Path, lease: float, idle_s: float, per_process_mb: fl
     floor = floor_of(n)
     wd = base / f"floor{n}{'' if fork else '-exec'}"
     t0 = time.monotonic()
-    configs = prepare_floor(floor, wd, time_scale=0.0, lease_s=lease)
+    configs = prepare_floor(floor, wd, time_scale=0.0,
+                            **({} if lease is None else {"lease_s": lease}))  # fmt: skip
+    lease_s = next(iter(configs.values())).lease_s
     t_prep = time.monotonic() - t0
     write_floor_info(wd, configs, floor)
     t1 = time.monotonic()
     procs = launch(configs, wd, fork=fork)
+    converged, online = True, n
     try:
-        _wait_online(wd, set(procs), 60.0 + 3.0 * n, procs)
+        try:
+            _wait_online(wd, set(procs), converge_s or 60.0 + 3.0 * n, procs)
+        except InputError as exc:
+            if "did not come up" not in str(exc):
+                raise
+            converged = False
+            try:
+                doc = floor_status(wd, with_objects=False)
+                online = sum(a["online"] for a in doc["assets"])
+            except Exception:
+                online = 0
         t_up = time.monotonic() - t1
         pids = asset_pids(wd)
         mem = {aid: memory(pid) for aid, pid in pids.items()}
         b0, m0 = lo_bytes(), time.monotonic()
+        c0 = {aid: cpu_s(pid) for aid, pid in pids.items()}
         time.sleep(idle_s)
-        traffic = (lo_bytes() - b0) / (time.monotonic() - m0) * 60.0 / n
-        lat = asyncio.run(status_latency(wd))
+        c1 = {aid: cpu_s(pid) for aid, pid in pids.items()}
+        span = time.monotonic() - m0
+        traffic = (lo_bytes() - b0) / span * 60.0 / n
+        load = load_average()
+        cpu = {aid: max(0.0, c1[aid] - c0[aid]) / span for aid in pids}
+        lat = asyncio.run(status_latency(wd)) if converged else [float("nan")]
+        detect = detection_s(wd, pids, lease_s) if converged else None
     finally:
         stop_floor(wd)
         for p in procs.values():
@@ -131,32 +174,65 @@ def run_size(n: int, base: Path, lease: float, idle_s: float, per_process_mb: fl
                             []).append(pss)  # fmt: skip
     rss = [r for r, _ in mem.values()]
     pss = [p for _, p in mem.values()]
-    return {"n": n, "fork": fork, "prepare_s": t_prep, "startup_s": t_up,
+    return {"n": n, "fork": fork, "lease_s": lease_s, "converged": converged, "online": online,
+            "prepare_s": t_prep, "startup_s": t_up,
             "rss_median_mb": statistics.median(rss), "rss_max_mb": max(rss),
             "pss_median_mb": statistics.median(pss), "pss_total_mb": sum(pss),
             "pss_by_class": {k: round(statistics.median(v), 1) for k, v in by_class.items()},
-            "lo_bytes_per_asset_min": traffic,
+            "cpu_median_pct": 100 * statistics.median(cpu.values()),
+            "cpu_kg_pct": 100 * cpu.get("KG", 0.0), "cpu_floor_pct": 100 * sum(cpu.values()),
+            "load": load, "lo_bytes_per_asset_min": traffic,
             "status_median_ms": 1000 * statistics.median(lat),
-            "status_p95_ms": 1000 * sorted(lat)[int(0.95 * (len(lat) - 1))]}  # fmt: skip
+            "status_p95_ms": 1000 * sorted(lat)[int(0.95 * (len(lat) - 1))],
+            "detect_s": detect}  # fmt: skip
+
+
+def detection_s(wd: Path, pids: dict[str, int], lease_s: float) -> float | None:
+    """Kill one object's process with -9 and time until the graph lists it offline (its
+    lease lapsing: no leave is announced); None when it is not seen within 3 leases."""
+    import os
+    import signal
+
+    from transfertwin.cli._cps_floor import floor_status
+
+    victim = max(a for a in pids if a.startswith("o"))
+    os.kill(pids[victim], signal.SIGKILL)
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 3 * lease_s + 10:
+        try:
+            doc = floor_status(wd, with_objects=False)
+        except Exception:
+            doc = None
+        if doc and not next(a for a in doc["assets"] if a["id"] == victim)["online"]:
+            return time.monotonic() - t0
+        time.sleep(0.2)
+    return None
 
 
 def main() -> int:
     logging.getLogger("asyncua").setLevel(logging.ERROR)  # one warning per session otherwise
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--sizes", default="10,50,200")
-    ap.add_argument("--lease", type=float, default=5.0)
+    ap.add_argument("--lease", type=float, default=None,
+                    help="lease in seconds (default: the launcher's for the floor's size)")
+    ap.add_argument("--converge-timeout", type=float, default=None,
+                    help="seconds a floor may take to converge (default 60 + 3 per asset)")
     ap.add_argument("--idle", type=float, default=30.0, help="seconds of idle traffic measured")
     ap.add_argument("--workdir")
     ap.add_argument("--no-baseline", dest="baseline", action="store_false",
                     help="skip the smallest size with one interpreter per asset")
     args = ap.parse_args()
-    sizes = [int(s) for s in args.sizes.split(",")]
+    try:
+        sizes = [int(s) for s in args.sizes.split(",")]
+    except ValueError:
+        ap.error(f"--sizes: a comma-separated list of integers, got {args.sizes!r}")
     base = Path(args.workdir or tempfile.mkdtemp(prefix="cps-scale-"))
     rows = []
     per_process = None
     runs = [(sizes[0], False)] if args.baseline else []
     for n, fork in [*runs, *((n, True) for n in sizes)]:
-        row = run_size(n, base, args.lease, args.idle, per_process if fork else None, fork)
+        row = run_size(n, base, args.lease, args.idle, per_process if fork else None, fork,
+                       args.converge_timeout)  # fmt: skip
         rows.append(row)
         if "skipped" in row:
             print(f"{n:4d} assets: skipped ({row['skipped']})", flush=True)
@@ -164,12 +240,18 @@ def main() -> int:
         if fork:
             per_process = max(per_process or 0.0, row["pss_total_mb"] / n)
         how = "forked" if fork else "one interpreter each (baseline)"
-        print(f"{n:4d} assets, {how}: up in {row['startup_s']:.1f} s (certificates "
+        up = (f"up in {row['startup_s']:.1f} s" if row["converged"] else
+              f"NOT converged: {row['online']} of {n} online after {row['startup_s']:.0f} s")
+        detect = "not seen" if row["detect_s"] is None else f"{row['detect_s']:.1f} s"
+        print(f"{n:4d} assets, {how}, lease {row['lease_s']:g} s: {up} (certificates "
               f"{row['prepare_s']:.1f} s before), RSS median {row['rss_median_mb']:.0f} MB "
               f"(max {row['rss_max_mb']:.0f}), PSS median {row['pss_median_mb']:.0f} MB, "
               f"total PSS {row['pss_total_mb'] / 1024:.2f} GB, by class {row['pss_by_class']}, "
+              f"idle CPU: median asset {row['cpu_median_pct']:.2f} %, graph "
+              f"{row['cpu_kg_pct']:.1f} %, floor {row['cpu_floor_pct']:.0f} % of a core, "
               f"loopback {row['lo_bytes_per_asset_min'] / 1024:.1f} KiB per asset per min, "
-              f"status {row['status_median_ms']:.1f} ms (p95 {row['status_p95_ms']:.1f})",
+              f"status {row['status_median_ms']:.1f} ms (p95 {row['status_p95_ms']:.1f}), "
+              f"a kill -9 seen offline in {detect}; load average {row['load']:.1f}",
               flush=True)  # fmt: skip
     base_row = next((r for r in rows if r.get("fork") is False), None)
     same = next((r for r in rows if r.get("fork") and base_row and r["n"] == base_row["n"]),
@@ -180,7 +262,7 @@ def main() -> int:
               f"({same['pss_total_mb'] / same['n']:.0f} vs "
               f"{base_row['pss_total_mb'] / base_row['n']:.0f} MB), start-up "
               f"{same['startup_s'] / base_row['startup_s']:.2f}x")  # fmt: skip
-    done = [r for r in rows if "skipped" not in r and r.get("fork")]
+    done = [r for r in rows if "skipped" not in r and r.get("fork") and r["converged"]]
     if len(done) > 1:
         a = done[0]
         for r in done[1:]:
@@ -188,6 +270,7 @@ def main() -> int:
             print(f"{r['n']} vs {a['n']} assets ({k:.0f}x): start-up "
                   f"{r['startup_s'] / a['startup_s']:.1f}x, traffic per asset "
                   f"{r['lo_bytes_per_asset_min'] / a['lo_bytes_per_asset_min']:.2f}x, "
+                  f"idle CPU per asset {r['cpu_median_pct'] / a['cpu_median_pct']:.2f}x, "
                   f"status latency {r['status_median_ms'] / a['status_median_ms']:.1f}x, "
                   f"PSS per asset "
                   f"{r['pss_total_mb'] / r['n'] / (a['pss_total_mb'] / a['n']):.2f}x")  # fmt: skip

@@ -462,9 +462,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--detach", action="store_true",
                    help="exit once the floor is up and leave it running (stop it with "
                         "'cps down')")  # fmt: skip
-    p.add_argument("--lease", type=float, default=5.0,
+    p.add_argument("--lease", type=float, default=None,
                    help="with --floor: seconds without a heartbeat before an asset counts as "
-                        "offline (default 5)")  # fmt: skip
+                        "offline (default 5 up to 66 assets, then 3 s per 40 assets: 15 at "
+                        "200; docs/scaling.md)")  # fmt: skip
     p.add_argument("--policy", choices=("nearest-idle", "predictive"),
                    help="with --floor: how the TMS assigns orders and chooses pre-transfer "
                         "states (default: the floor file's, else nearest-idle)")  # fmt: skip

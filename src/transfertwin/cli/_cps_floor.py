@@ -49,7 +49,7 @@ def cmd_up_floor(args: argparse.Namespace) -> int:
         raise InputError(f"--time-scale must be >= 0, got {args.time_scale}")
     if args.docking not in ("sampled", "navigated"):
         raise InputError(f"--docking must be sampled or navigated, got {args.docking!r}")
-    if not args.lease >= 0.5:
+    if args.lease is not None and not args.lease >= 0.5:
         raise InputError(f"--lease must be at least 0.5 s, got {args.lease}")
     floor = _with_operation(_floor_spec(args.floor), args.policy, args.study)
     if args.plant_seed is not None:  # every unit and module on the emulated plant

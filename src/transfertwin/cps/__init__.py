@@ -63,6 +63,7 @@ if TYPE_CHECKING:
         stop_floor,
         write_floor_info,
     )
+    from transfertwin.cps._lease import default_lease
     from transfertwin.cps._node import AssetNode, prepare_forking
     from transfertwin.cps._plant_assets import (
         PHYSICAL_RECORD_EXTRA,
@@ -88,6 +89,7 @@ _LAZY = {
     "default_floor_spec": "_floor_file",
     "floor_toml": "_floor_file",
     "load_floor": "_floor_file",
+    "default_lease": "_lease",
     "asset_pids": "_launcher",
     "check_workdir": "_launcher",
     "launch": "_launcher",
@@ -162,6 +164,7 @@ __all__ = [
     "check_workdir",
     "connect",
     "default_floor_spec",
+    "default_lease",
     "demo_descriptors",
     "export_aas",
     "externally_synced",

@@ -32,6 +32,7 @@ from transfertwin.cps._asset_config import (
 )
 from transfertwin.cps._floor_file import FloorSpec, floor_toml
 from transfertwin.cps._hal import PLANT_SEED_FILE, write_plant_seed
+from transfertwin.cps._lease import default_lease
 from transfertwin.cps.opcua import (
     ROLES,
     ensure_certificate,
@@ -60,7 +61,7 @@ def prepare_floor(
     seed: int = 0,
     time_scale: float = 1.0,
     docking: str = "sampled",
-    lease_s: float = 5.0,
+    lease_s: float | None = None,
     base_host: str = "127.0.0.2",
     plant_seed: int | None = None,
 ) -> dict[str, AssetConfig]:
@@ -70,7 +71,7 @@ def prepare_floor(
     (the ledger, operation ids, possessions): a floor started again goes on where it was.
     A floor with assets on the emulated plant (``hal = "plant"``) needs `plant_seed`; it is
     written to ``W/plant.secret`` (owner-only), which their asset files name, and nowhere
-    else.
+    else. Without `lease_s` the floor gets the default lease for its size (`default_lease`).
     """
     if floor.uses_plant() and plant_seed is None:
         raise InputError(f"floor {floor.name} runs assets on the emulated plant (hal = "
@@ -85,6 +86,8 @@ def prepare_floor(
     if not insecure and not creds_file.is_file():
         write_credentials(creds_file, new_credentials())
     descs = floor.descriptors()
+    if lease_s is None:
+        lease_s = default_lease(len(descs))
     order = sorted(descs, key=lambda d: (d.asset_id not in SEED_ASSETS, d.asset_id))
     hosts = {d.asset_id: _address(i, base_host) for i, d in enumerate(order)}
     ports = {aid: free_port(h) for aid, h in hosts.items()}

@@ -3,11 +3,12 @@ docs/architecture.md "Deployment").
 
 A node starts the asset's secure OPC UA server (its AAS), joins the network through its
 seed peers (decentralised discovery, `Discovery`), and keeps a **lease** at the knowledge
-graph: every ``lease_s / 3`` seconds it sends a heartbeat with its description and live
-state (`Heartbeat`); a graph that hears nothing for ``lease_s`` marks it offline (DDS
-liveliness: a missed lease is a leave, no goodbye needed). On SIGINT/SIGTERM it announces
-its leave and exits. What the asset does is its role (`transfertwin.cps._roles`); what
-must survive a crash is written atomically to its state folder (`NodeState`).
+graph: every ``lease_s / 3`` seconds (jittered) it sends a heartbeat (`Heartbeat`): its
+description and live state when they changed, a small renewal otherwise (`_lease`); a graph
+that hears nothing for ``lease_s`` marks it offline (DDS liveliness: a missed lease is a
+leave, no goodbye needed). On SIGINT/SIGTERM it announces its leave and exits. What the
+asset does is its role (`transfertwin.cps._roles`); what must survive a crash is written
+atomically to its state folder (`NodeState`).
 
 Sessions to peers are kept open and reopened on failure (`Peers`): a secure handshake
 costs far more than a call.
@@ -31,12 +32,14 @@ from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
 from transfertwin.cps._asset_config import AssetConfig
 from transfertwin.cps._floor_file import FloorSpec, load_floor
+from transfertwin.cps._lease import NO_LEASE, Renewal, heartbeat_period
 from transfertwin.cps._plant_assets import PROVENANCE as PLANT_PROVENANCE
 from transfertwin.cps.aas import AssetDescriptor, build_representation, externally_synced
 from transfertwin.cps.opcua import (
     AssetClient,
     AssetServer,
     Discovery,
+    OperationRefused,
     ServerConfig,
     connect,
     load_credentials,
@@ -187,6 +190,7 @@ class AssetNode:
         self._tasks: set[asyncio.Task] = set()
         self._known: dict[str, str] = {}  # asset id -> endpoint, from seeds and the graph
         self.role = _role_for(self)
+        self.lease = Renewal(cfg.asset_id, os.getpid())
         self.started = time.monotonic()
 
     # -- life cycle -----------------------------------------------------------------------
@@ -205,7 +209,11 @@ class AssetNode:
         await self.role.start()
         for url in cfg.seeds:
             self._known.setdefault(url.rsplit("/", 1)[-1], url)
-        self.discovery = Discovery(self.server, period_s=1.0, max_misses=2)
+        # a gossip round (a connection and a FindServers) pulls a peer's whole list: every
+        # 5 s, and at most 10 entries a second on average (every 20 s at 200 assets), so an
+        # idle asset spends next to nothing on it (docs/scaling.md). The endpoints of assets
+        # that join reach every asset sooner through the graph's directory (heartbeats).
+        self.discovery = Discovery(self.server, period_s=5.0, max_misses=2, entries_per_s=10.0)
         await self.discovery.join([u for u in cfg.seeds if u != cfg.endpoint], self._connector)
         self.spawn(self._heartbeats())
         log.info("%s up at %s (pid %d)", self.desc.asset_id, self.server.endpoint, os.getpid())
@@ -250,36 +258,68 @@ class AssetNode:
 
     def _open(self, url: str, aid: str, timeout_s: float = 10.0):
         cfg = self.cfg
+        # the graph's session carries heartbeats, which tell a dead connection soon enough:
+        # asyncua's own probe of it (a read every 10 s by default) would be one more call
+        # per asset at the one lease holder
+        watchdog = max(10.0, 3.0 * cfg.lease_s) if aid == "KG" else None
         return connect(url, aid, credentials=self.credentials, role="operator",
-                       cert_dir=cfg.cert_dir, insecure=cfg.insecure, timeout_s=timeout_s)
+                       cert_dir=cfg.cert_dir, insecure=cfg.insecure, timeout_s=timeout_s,
+                       watchdog_s=watchdog)  # fmt: skip
 
     def _connector(self, url: str):
-        return self._open(url, url.rsplit("/", 1)[-1], 5.0)
+        aid = url.rsplit("/", 1)[-1]
+        if aid == "KG" and self.desc.asset_id != "KG":
+            return self._graph_session()  # the heartbeats' session: one handshake, not two
+        return self._open(url, aid, 5.0)
+
+    @contextlib.asynccontextmanager
+    async def _graph_session(self):
+        """The kept session with the graph (opened if need be), not closed after use."""
+        await asyncio.wait_for(self.peers.open("KG"), 15.0)
+        yield await self.peers.session("KG")
 
     # -- lease ----------------------------------------------------------------------------
     async def _heartbeats(self) -> None:
-        period = self.cfg.lease_s / 3.0
+        period = heartbeat_period(self.cfg.lease_s)
         while True:
             if self.desc.asset_id == "KG":
                 await self.role.beat_self()
             else:
                 try:
-                    payload = heartbeat_payload(self.desc, self.server.endpoint,
-                                                self.server.security_policy,
-                                                {"hal": self.cfg.hal.kind,
-                                                 **await self.role.live()})  # fmt: skip
-                    # opening the session (a secure handshake) has its own, longer limit:
-                    # a graph busy with many joining assets must not see each handshake
-                    # cancelled by the heartbeat's limit and started again (no one would
-                    # ever get through)
-                    await asyncio.wait_for(self.peers.open("KG"), 15.0)
-                    known = await asyncio.wait_for(self.peers.call("KG", "Heartbeat", payload),
-                                                   max(period, 2.0))  # fmt: skip
-                    for aid, url in json.loads(known).items():
-                        self._known[aid] = url
+                    await self._beat(period)
                 except Exception as exc:  # the graph is away: keep serving, keep trying
                     log.debug("%s: heartbeat not delivered: %s", self.desc.asset_id, exc)
-            await asyncio.sleep(period)
+                if asyncio.current_task().cancelling():
+                    # stopped while a call's answer had already come: wait_for (Python
+                    # 3.11) returned it and dropped the cancellation; the node waits for us
+                    raise asyncio.CancelledError
+            await asyncio.sleep(self.lease.pause(period))
+
+    async def _beat(self, period: float) -> None:
+        """One heartbeat: a renewal, or the full description when it changed or the graph
+        holds no lease for this process (then sent at once)."""
+        live = {"hal": self.cfg.hal.kind, **await self.role.live()}
+        payload = heartbeat_payload(self.desc, self.server.endpoint,
+                                    self.server.security_policy, live)  # fmt: skip
+        # opening the session (a secure handshake) has its own, longer limit: a graph busy
+        # with many joining assets must not see each handshake cancelled by the heartbeat's
+        # limit and started again (no one would ever get through)
+        await asyncio.wait_for(self.peers.open("KG"), 15.0)
+        for _ in range(2):
+            try:
+                reply = await asyncio.wait_for(
+                    self.peers.call("KG", "Heartbeat", self.lease.request(payload)),
+                    max(period, 2.0))  # fmt: skip
+            except OperationRefused as exc:
+                if exc.status != NO_LEASE:
+                    raise
+                self.lease.refused()
+                continue
+            endpoints = self.lease.answered(reply)
+            if endpoints:
+                self._known.update(endpoints)
+            return
+        raise ConnectionError("the graph refused the full heartbeat too")
 
 
 def prepare_forking() -> None:

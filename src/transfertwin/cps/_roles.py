@@ -18,7 +18,9 @@ import time
 from typing import TYPE_CHECKING, Any
 
 from transfertwin._errors import InputError
+from transfertwin.cps._lease import NO_LEASE, directory_reply
 from transfertwin.cps._node import NodeState
+from transfertwin.cps.opcua import OperationRefused
 
 if TYPE_CHECKING:
     from transfertwin.cps._node import AssetNode
@@ -176,8 +178,12 @@ class ObjectRole(Role):
 class GraphRole(Role):
     """The knowledge graph: the semantic layer, kept current by the other assets' leases.
 
-    Its content is soft state: every heartbeat carries the sender's whole description, so
-    a restarted graph is complete again one heartbeat period after it comes back.
+    Its content is soft state: a heartbeat carries the sender's whole description when it
+    changed, a renewal otherwise, and the graph refuses the renewal of a lease it does not
+    hold (`_lease.NO_LEASE`), upon which the asset sends its description; so a restarted
+    graph is complete again one heartbeat period after it comes back. Its directory (the
+    online assets' endpoints) has a version that changes with every join, leave and move;
+    a heartbeat gets the directory only when the sender holds another version.
     """
 
     def __init__(self, node: AssetNode) -> None:
@@ -186,6 +192,10 @@ class GraphRole(Role):
         self.leases: dict[str, float] = {}  # asset id -> monotonic deadline
         self.info: dict[str, dict[str, Any]] = {}  # last heartbeat per asset
         self.gone: dict[str, dict[str, Any]] = {}  # offline asset -> why and since when
+        self.beats = {"full": 0, "renewals": 0, "refused": 0}  # heartbeats taken, by kind
+        self._boot = f"{time.time_ns():x}"  # a directory version from an earlier graph
+        self._directory = 0  # ... never equals one of this graph's
+        self._changed = True  # the graph changed since its counts were last published
         self._lock = asyncio.Lock()
 
     def handlers(self) -> dict[str, Any]:
@@ -211,8 +221,22 @@ class GraphRole(Role):
         await self._counts()
 
     async def _counts(self) -> None:
+        """Publish the graph's size (two SPARQL counts: only when something changed)."""
+        if not self._changed:
+            return
+        self._changed = False
         await self.set("Triples", self.kg.triples())
         await self.set("Assets", len(self.kg.assets(online_only=True)))
+
+    def _moved(self) -> None:
+        """The directory changed (an asset joined, left or answers elsewhere)."""
+        self._directory += 1
+        self._changed = True
+
+    def _reply(self, held: str | None) -> str:
+        endpoints = {a: i["endpoint"] for a, i in self.info.items()
+                     if a in self.leases or a == self.aid}  # fmt: skip
+        return directory_reply(f"{self._boot}.{self._directory}", endpoints, held)
 
     async def _query(self, sparql: str) -> str:
         return json.dumps(self.kg.query(sparql))
@@ -222,11 +246,25 @@ class GraphRole(Role):
 
         d = json.loads(payload)
         aid = d["id"]
+        held = d.pop("directory", None)
         fresh = aid not in self.leases or self.info.get(aid, {}).get("pid") != d.get("pid")
+        if d.get("renew"):
+            if fresh:
+                self.beats["refused"] += 1
+                raise OperationRefused(f"no lease of {aid} (pid {d.get('pid')}) held here: "
+                                       "send the full heartbeat", status=NO_LEASE)  # fmt: skip
+            self.beats["renewals"] += 1
+            self.leases[aid] = time.monotonic() + self.node.cfg.lease_s
+            self.info[aid]["seen"] = time.time()
+            return self._reply(held)
+        self.beats["full"] += 1
         self.leases[aid] = time.monotonic() + self.node.cfg.lease_s
         self.gone.pop(aid, None)
         d["seen"] = time.time()
+        before = self.info.get(aid)
         self.info[aid] = d
+        if fresh or before is None or before.get("endpoint") != d["endpoint"]:
+            self._moved()
         if fresh:
             desc = AssetDescriptor(
                 aid, AssetKind(d["kind"]), d["class"],
@@ -238,8 +276,8 @@ class GraphRole(Role):
                          state=_state_word(d.get("state")))  # fmt: skip
             log.info("KG: %s joined (pid %s, %s)", aid, d.get("pid"), d["endpoint"])
         self._apply(aid, d)
-        return json.dumps({a: i["endpoint"] for a, i in self.info.items()
-                           if a in self.leases or a == self.aid})  # fmt: skip
+        self._changed = True
+        return self._reply(held)
 
     def _apply(self, aid: str, d: dict[str, Any]) -> None:
         """The live part of a heartbeat into the graph (each fact on its own: one that does
@@ -263,6 +301,7 @@ class GraphRole(Role):
         if aid in self.leases:
             del self.leases[aid]
             self.kg.leave(aid)
+            self._moved()
             self.gone[aid] = {"reason": "left", "at": time.time(),
                               "detail": "announced its leave"}  # fmt: skip
             log.info("KG: %s left", aid)
@@ -277,11 +316,12 @@ class GraphRole(Role):
                 del self.leases[aid]
                 with contextlib.suppress(InputError):
                     self.kg.leave(aid)
+                self._moved()
                 self.gone[aid] = {"reason": "lapsed", "at": time.time(),
                                   "detail": f"no heartbeat for {self.node.cfg.lease_s:g} s "
                                             "(lease expired)"}  # fmt: skip
                 log.info("KG: %s offline (lease of %.1f s expired)", aid, self.node.cfg.lease_s)
-            if now - counted >= 1.0:  # two SPARQL counts: tens of ms on a floor of hundreds
+            if now - counted >= 1.0:  # counted again when something changed, at most 1/s
                 await self._counts()
                 counted = now
 

@@ -140,7 +140,7 @@ EXPECTED_OPERATIONS = [
     ("TMS", "ReportProgress", [("operation_id", _S), ("event_json", _S)], [("ok", _B)]),
     ("TMS", "Ledger", [], [("ledger_json", _S)]),
     ("TMS", "Locate", [("object", _S), ("holder", _S)], [("ok", _B)]),
-    ("KG", "Heartbeat", [("description_json", _S)], [("endpoints_json", _S)]),
+    ("KG", "Heartbeat", [("heartbeat_json", _S)], [("directory_json", _S)]),
     ("KG", "Leave", [("asset_id", _S)], [("ok", _B)]),
     ("KG", "Status", [], [("status_json", _S)]),
 ]  # fmt: skip

@@ -405,10 +405,12 @@ CONTROL_INTERFACE: Mapping[str, tuple[OperationSpec, ...]] = MappingProxyType(
             ),
             OperationSpec(
                 "Heartbeat",
-                (Arg("description_json", _S),),
-                (Arg("endpoints_json", _S),),
-                "Renew an asset's lease with its description and live state; answers the "
-                "endpoints of the online assets.",
+                (Arg("heartbeat_json", _S),),
+                (Arg("directory_json", _S),),
+                "Renew an asset's lease: with its description and live state, or a renewal "
+                "(id and pid) when they did not change (refused with BadNotFound when no "
+                "lease of that process is held); answers the directory's version, and the "
+                "endpoints of the online assets when the sender holds another version.",
             ),
             OperationSpec(
                 "Leave",

@@ -142,11 +142,14 @@ async def connect(
     cert_dir: Path = Path("certs"),
     insecure: bool = False,
     timeout_s: float = 10.0,
+    watchdog_s: float | None = None,
 ) -> AsyncIterator[AssetClient]:
     """A session with an asset server (secure unless `insecure`).
 
     The client's application certificate is ``cert_dir/client-<role>.der`` (created on
-    first use); the server accepts it only if it is on the server's trust list.
+    first use); the server accepts it only if it is on the server's trust list. asyncua
+    probes an open session every `watchdog_s` seconds (default: 10 s or `timeout_s`, the
+    longer).
 
     Raises:
         ua.UaStatusCodeError: BadCertificateUntrusted (the server does not trust this
@@ -156,7 +159,8 @@ async def connect(
     # probe takes longer than that (1 s by default): a busy server (load test, 14 servers on
     # two cores, an event loop that also runs the simulation) lost its clients mid-operation.
     # A probe may take as long as any request, and runs at most every 10 s.
-    client = Client(url=endpoint, timeout=timeout_s, watchdog_intervall=max(10.0, timeout_s))
+    watchdog = max(10.0, timeout_s) if watchdog_s is None else watchdog_s
+    client = Client(url=endpoint, timeout=timeout_s, watchdog_intervall=watchdog)
     client.application_uri = f"urn:transfertwin:client-{role}"
     if not insecure:
         cert, key = await ensure_certificate(cert_dir, f"client-{role}")

@@ -48,8 +48,11 @@ class Discovery:
 
     Args:
         server: The asset's running server (its FindServers answers with `peers`).
-        period_s: Gossip period.
+        period_s: Gossip period (the shortest, with `entries_per_s`).
         max_misses: Rounds a peer may be unreachable before it counts as gone.
+        entries_per_s: If set, the period stretches to ``len(peers) / entries_per_s``
+            when that is longer: a round pulls a peer's whole list, so this bounds what one
+            asset's gossip costs it and the peers it asks on a large floor (0: fixed).
         on_change: Called with ('join' | 'leave', peer) for every change seen here.
     """
 
@@ -58,6 +61,7 @@ class Discovery:
     max_misses: int = 2
     tombstone_s: float = 10.0
     on_change: Callable[[str, Peer], None] | None = None
+    entries_per_s: float = 0.0
     peers: dict[str, Peer] = field(default_factory=dict)
     _misses: dict[str, int] = field(default_factory=dict)
     _gone: dict[str, float] = field(default_factory=dict)  # uri -> when it was dropped
@@ -153,9 +157,16 @@ class Discovery:
         for other in found:
             self._add(other)
 
+    def pause(self) -> float:
+        """Seconds until the next round: `period_s`, stretched with the number of peers
+        when `entries_per_s` is set."""
+        if self.entries_per_s > 0:
+            return max(self.period_s, len(self.peers) / self.entries_per_s)
+        return self.period_s
+
     async def _gossip(self) -> None:
         while True:
-            await asyncio.sleep(self.period_s)
+            await asyncio.sleep(self.pause())
             await self.round()
 
     async def stop(self) -> None:

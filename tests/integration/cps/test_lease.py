@@ -1,0 +1,76 @@
+"""Leases that stay cheap as a floor grows (issue 27, item 5), with real asset nodes in this
+process on loopback: an idle asset renews its lease with a renewal, not its description;
+a change of its live state sends the description again; the directory travels only when
+it changed; a restarted graph refuses the renewals of leases it does not hold, and the
+assets' descriptions rebuild it within a heartbeat period; an asset that stops beating is
+offline within its lease."""
+
+from __future__ import annotations
+
+import asyncio
+import dataclasses
+import time
+
+from tests.integration.cps._cli import two_module_floor
+
+LEASE_S = 1.5
+
+
+def test_idle_assets_renew_and_a_restarted_graph_gets_their_descriptions(tmp_path):
+    from transfertwin.cps import AssetNode, load_floor, prepare_floor
+    from transfertwin.cps.opcua import connect
+
+    (tmp_path / "floor.toml").write_text(two_module_floor("lease", {"o1": "TU_A"}))
+    spec = load_floor(tmp_path / "floor.toml")
+    configs = prepare_floor(spec, tmp_path / "w", insecure=True, lease_s=LEASE_S)
+    kg_url = configs["KG"].endpoint
+    cfg = {a: dataclasses.replace(configs[a], seeds=(kg_url,)) for a in ("KG", "o1", "TU_A")}
+    cfg["KG"] = dataclasses.replace(cfg["KG"], seeds=())
+
+    async def until(check, timeout_s: float, what: str) -> float:
+        t0 = time.monotonic()
+        while not check():
+            assert time.monotonic() - t0 < timeout_s, f"{what} not within {timeout_s} s"
+            await asyncio.sleep(0.05)
+        return time.monotonic() - t0
+
+    async def main():
+        kg = await AssetNode(cfg["KG"]).__aenter__()
+        try:
+            async with AssetNode(cfg["o1"]) as o1, AssetNode(cfg["TU_A"]) as tu:
+                graph = kg.role
+                await until(lambda: {"o1", "TU_A"} <= set(graph.leases), 10.0, "both joined")
+                full = graph.beats["full"]
+                await asyncio.sleep(4 * LEASE_S / 3)  # four heartbeat periods, idle
+                idle = dict(graph.beats)
+                assert idle["full"] == full and idle["renewals"] >= 4, idle  # renewals only
+                assert o1.lease.directory.endswith(f".{graph._directory}")
+                assert o1._known["TU_A"] == tu.server.endpoint  # the directory reached it
+                # a live change (a client writes where o1 lies) goes out in full
+                async with connect(o1.server.endpoint, "o1", credentials=None,
+                                   insecure=True) as c:  # fmt: skip
+                    await c.write("OperationalData", "PossessedBy", "TM_1")
+                await until(lambda: graph.info["o1"].get("location") == "TM_1", 3 * LEASE_S,
+                            "o1's new location")  # fmt: skip
+                assert graph.beats["full"] == full + 1
+                # the graph restarts: it holds no lease, refuses renewals, gets descriptions
+                await kg.__aexit__(None, None, None)
+                kg = await AssetNode(cfg["KG"]).__aenter__()
+                t = await until(lambda: {"o1", "TU_A"} <= set(kg.role.leases), 10.0,
+                                "both back in the restarted graph")  # fmt: skip
+                assert kg.role.info["o1"]["location"] == "TM_1"  # from o1's description
+                assert kg.role.beats["refused"] >= 1 and kg.role.beats["full"] >= 2
+                assert t < 4 * LEASE_S, t
+                # o1 stops beating (its host hangs): offline within its lease
+                for task in list(o1._tasks):
+                    task.cancel()
+                t0 = time.monotonic()
+                await until(lambda: "o1" not in kg.role.leases, 2 * LEASE_S, "o1 lapsed")
+                assert kg.role.gone["o1"]["reason"] == "lapsed"
+                assert time.monotonic() - t0 <= LEASE_S + 1.0
+                return dict(kg.role.beats)
+        finally:
+            await kg.__aexit__(None, None, None)
+
+    beats = asyncio.run(asyncio.wait_for(main(), 120))
+    assert beats["renewals"] >= 1, beats  # renewing again after the descriptions

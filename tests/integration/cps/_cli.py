@@ -1,7 +1,8 @@
 """The CLI as a user runs it: `transfertwin ...` in a process of its own (`tt`) or through
 `transfertwin.cli.main` in this one (`run_main`, as tests/integration/cli/test_bad_input.py
 does: the same exit code, stdout and stderr, without an interpreter start and the imports
-of a CLI process, ~1–2 s of CPU each), and a running `cps up`."""
+of a CLI process, ~1–2 s of CPU each), a running `cps up`, and process floors started
+ahead of their tests (`early_floor`)."""
 
 from __future__ import annotations
 
@@ -14,7 +15,8 @@ from pathlib import Path
 
 import pytest
 
-__all__ = ["PLANT_SEED", "RunningCps", "run_main", "tt", "two_module_floor"]
+__all__ = ["PLANT_SEED", "EarlyFloor", "RunningCps", "early_floor", "early_floors", "run_main",
+           "tt", "two_module_floor"]
 
 #: Plant seed of the test run's shared CPS (conftest.py: `plant_cps`).
 PLANT_SEED = 913
@@ -122,3 +124,49 @@ class RunningCps:
         out, _ = self.proc.communicate(timeout=120)
         self._err.close()
         return self.proc.returncode, out, time.monotonic() - t0
+
+
+class EarlyFloor:
+    """`cps up --floor FLOOR --workdir W --detach ARGS` in a process of its own, started at
+    once; `result` waits for it (the floor comes up while the tests before its own run)."""
+
+    def __init__(self, base: Path, floor_text: str, args: tuple[str, ...]) -> None:
+        (base / "floor.toml").write_text(floor_text)
+        self.wd = base / "w"
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "transfertwin", "cps", "up", "--floor", str(base / "floor.toml"),
+             "--workdir", str(self.wd), "--detach", *args],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
+        self._result: subprocess.CompletedProcess | None = None
+        self.down = False
+
+    def result(self, timeout_s: float = 200) -> subprocess.CompletedProcess:
+        """What `cps up` exited with (stdout, stderr), once it has."""
+        if self._result is None:
+            out, err = self.proc.communicate(timeout=timeout_s)
+            self._result = subprocess.CompletedProcess(self.proc.args, self.proc.returncode,
+                                                       out, err)  # fmt: skip
+        return self._result
+
+    def stop(self) -> subprocess.CompletedProcess:
+        """`cps down` (once)."""
+        self.down = True
+        return subprocess.run([sys.executable, "-m", "transfertwin", "cps", "down", "--workdir",
+                               str(self.wd)], capture_output=True, text=True, timeout=120)
+
+
+_FLOORS: dict[str, EarlyFloor] = {}
+
+
+def early_floors() -> list[EarlyFloor]:
+    """The process floors started in this run."""
+    return list(_FLOORS.values())
+
+
+def early_floor(factory: pytest.TempPathFactory, key: str, floor_text: str,
+                args: tuple[str, ...]) -> EarlyFloor:  # fmt: skip
+    """The process floor `key` of this run, started now if it was not started ahead (a test
+    module names it in ``EARLY_FLOOR = (key, floor file text, cps up arguments)``)."""
+    if key not in _FLOORS:
+        _FLOORS[key] = EarlyFloor(factory.mktemp(key), floor_text, args)
+    return _FLOORS[key]

@@ -8,7 +8,8 @@ each drive their clients with `asyncio.run` can share it over loopback TCP.
 The whole CPS is one `cps up --plant-seed` subprocess (`plant_cps`) for the CLI tests and the
 plant tests. It starts when the first test of this folder runs, and the tests that use it run
 after the folder's other tests, so it comes up while they run. The test that stops it
-(SIGTERM) runs last; a test that needs it after that gets a new one.
+(SIGTERM) runs last; a test that needs it after that gets a new one. A module's process
+floor (``EARLY_FLOOR``: `cps up --floor --detach`) starts then too (`early_floor`).
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from typing import Any
 import basyx.aas.model as aas
 import pytest
 
-from tests.integration.cps._cli import PLANT_SEED, RunningCps
+from tests.integration.cps._cli import PLANT_SEED, RunningCps, early_floor, early_floors
 from transfertwin.cps import plant_descriptors
 from transfertwin.cps.aas._demo import demo_descriptors
 from transfertwin.cps.aas._representation import build_representation, externally_synced
@@ -220,13 +221,23 @@ def _shared_cps_launch(
     request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
 ) -> Iterator[None]:
     """Start the shared CPS (without waiting for it) when the first test here runs, if a
-    selected test uses it; stop it at the end of the run."""
+    selected test uses it, and the process floors of the selected tests' modules
+    (``EARLY_FLOOR``); stop them at the end of the run."""
     _SHARED.factory = tmp_path_factory
     if any(_USES in getattr(i, "fixturenames", ()) for i in request.session.items):
         _SHARED.certs = request.getfixturevalue("cps_certs")
         _SHARED.launch()
+    for item in request.session.items:
+        spec = getattr(getattr(item, "module", None), "EARLY_FLOOR", None)
+        if spec is not None and _in_folder(item):
+            early_floor(tmp_path_factory, *spec)
     yield
     _SHARED.close()
+    for floor in early_floors():  # a floor whose tests did not take it down
+        if not floor.down:
+            with suppress(Exception):
+                floor.result()
+                floor.stop()
 
 
 @pytest.fixture

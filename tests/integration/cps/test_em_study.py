@@ -1,7 +1,8 @@
 """Studies through the Experiment Manager (issue 28, item 5). The EM's node in this process
-(fast, default suite): StartStudy over OPC UA runs a plan into a store with its progress in
-the EM's variables, StopStudy stops it, the same plan resumes it, and a node that ends
-with a study running resumes it when it comes back. On a process floor (slow): `cps study
+(slow, ~25 s: three study processes spawned; CI runs this file's slow tests): StartStudy over
+OPC UA runs a plan into a store with its progress in the EM's variables, StopStudy stops it,
+the same plan resumes it, and a node that ends with a study running resumes it when it
+comes back. On a process floor (slow): `cps study
 start` runs a plan in the EM's process, `cps study status`, the console's Studies tab lists
 the store; a study is stopped, resumed, and resumed again after the EM process is killed
 with -9 and restarted by hand."""
@@ -57,6 +58,7 @@ def _em_config(tmp_path: Path):
     return dataclasses.replace(configs["EM"], seeds=())
 
 
+@pytest.mark.slow
 def test_the_em_node_runs_stops_and_resumes_a_study_over_opc_ua(tmp_path):
     from transfertwin.cps import AssetNode
     from transfertwin.cps.opcua import OperationRefused, connect

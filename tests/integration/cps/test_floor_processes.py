@@ -22,7 +22,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.integration.cps._cli import tt, two_module_floor
+from tests.integration.cps._cli import early_floor, run_main, tt, two_module_floor
 from tests.integration.cps.test_plant_assets import _hidden_numbers, _patterns
 
 FLOOR = two_module_floor("two-modules", {"o1": "TU_A"})  # TU_B free: orders need a free target
@@ -102,21 +102,22 @@ def objects_consistent(doc: dict) -> None:
             assert v["location"] in holders, (o, v)
 
 
+#: The floor, started ahead by the folder's conftest (`early_floor`): in real time, so that a
+#: kill lands in the middle of an operation.
+EARLY_FLOOR = ("floor", FLOOR, ("--time-scale", "1", "--lease", str(LEASE_S), "--start-timeout",
+                                "150", "--plant-seed", str(FLOOR_PLANT_SEED)))  # fmt: skip
+
+
 @pytest.fixture(scope="module")
 def floor(tmp_path_factory):
-    base = tmp_path_factory.mktemp("floor")
-    (base / "floor.toml").write_text(FLOOR)
-    wd = base / "w"
-    # in real time, so that a kill lands in the middle of an operation
-    up = tt("cps", "up", "--floor", str(base / "floor.toml"), "--workdir", str(wd), "--detach",
-            "--time-scale", "1", "--lease", str(LEASE_S), "--start-timeout", "150",
-            "--plant-seed", str(FLOOR_PLANT_SEED), timeout=200)  # fmt: skip
+    early = early_floor(tmp_path_factory, *EARLY_FLOOR)
+    up = early.result()
     assert up.returncode == 0, up.stderr
     assert "6 asset processes" in up.stdout and "1 on standby" in up.stdout
     try:
-        yield wd
+        yield early.wd
     finally:
-        down = tt("cps", "down", "--workdir", str(wd))
+        down = early.stop()
         for proc in STARTED:
             if proc.poll() is None:
                 proc.kill()
@@ -141,7 +142,7 @@ def test_every_asset_is_its_own_process_on_its_own_address(floor):
     assert info["mode"] == "processes"
 
 
-def test_a_unit_killed_with_minus_9_lapses_one_stopped_leaves_and_both_rejoin(floor):
+def test_a_unit_killed_with_minus_9_lapses_one_stopped_leaves_and_both_rejoin(floor, capfd):
     doc = status(floor)
     killed, stopped = asset(doc, "TU_A")["pid"], asset(doc, "TU_B")["pid"]
     os.kill(killed, signal.SIGKILL)  # the host dies: no goodbye, the lease lapses
@@ -156,7 +157,7 @@ def test_a_unit_killed_with_minus_9_lapses_one_stopped_leaves_and_both_rejoin(fl
     assert asset(doc, "TM_1")["online"] and asset(doc, "TM_1")["offline"] is None
     # the standby module was prepared but never started: standby, not 'not answering'
     assert asset(doc, "TM_2")["state"] == "standby" and not asset(doc, "TM_2")["online"]
-    shown = tt("cps", "status", "--workdir", str(floor))
+    shown = run_main(capfd, "cps", "status", "--workdir", str(floor))
     assert shown.returncode == 0, shown.stderr
     row = {line.split()[0]: line for line in shown.stdout.splitlines() if line.strip()}
     assert "OFFLINE" in row["TU_A"] and "lapsed" in row["TU_A"], shown.stdout
@@ -225,7 +226,7 @@ def test_orders_flow_and_a_module_killed_mid_operation_loses_nothing(floor):
     wait_for(floor, lambda d: asset(d, busy["id"])["online"], 90.0, "module back")
 
 
-def test_trust_is_per_asset_process(floor, tmp_path):
+def test_trust_is_per_asset_process(floor, tmp_path, capfd):
     """A client certificate no asset trusts is refused; trusted for one asset, only that
     asset accepts it (`cps trust --asset`)."""
     import asyncio
@@ -253,7 +254,7 @@ def test_trust_is_per_asset_process(floor, tmp_path):
 
     cert, _ = asyncio.run(ensure_certificate(mine, "client-operator"))
     assert refused("TU_B")
-    out = tt("cps", "trust", str(cert), "--workdir", str(floor), "--asset", "TU_B")
+    out = run_main(capfd, "cps", "trust", str(cert), "--workdir", str(floor), "--asset", "TU_B")
     assert out.returncode == 0, out.stderr
     assert asyncio.run(read("TU_B")) is not None
     assert refused("TU_A")

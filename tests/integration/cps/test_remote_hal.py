@@ -11,8 +11,9 @@ import time
 from pathlib import Path
 
 import pytest
-from asyncua import Server, ua
+from asyncua import ua
 
+from tests.integration.cps._plant_gateway import PlantGateway
 from transfertwin.cps import (
     AssetConfig,
     AssetNode,
@@ -22,25 +23,6 @@ from transfertwin.cps import (
     floor_toml,
 )
 from transfertwin.cps.opcua import free_port
-
-
-async def _gateway(port: int, unit: str) -> tuple[Server, dict[str, object]]:
-    """An OPC UA server like a PLC's: two belt setpoints, two light barriers."""
-    server = Server()
-    await server.init()
-    server.set_endpoint(f"opc.tcp://127.0.0.1:{port}/gateway")
-    server.set_security_policy([ua.SecurityPolicyType.NoSecurity])
-    ns = await server.register_namespace("urn:example:plc")
-    assert ns == 2  # the asset file's default NodeIds name namespace 2
-    plc = await server.nodes.objects.add_object(ns, "PLC")
-    nodes = {}
-    for name, value in (("BeltSpeedLeft", 0.0), ("BeltSpeedRight", 0.0), ("BarrierNear", False),
-                        ("BarrierFar", False)):  # fmt: skip
-        node = await plc.add_variable(ua.NodeId(f"{unit}.{name}", ns), name, value)
-        await node.set_writable()
-        nodes[name] = node
-    await server.start()
-    return server, nodes
 
 
 def _unit_config(tmp_path: Path, gateway_port: int) -> AssetConfig:
@@ -68,19 +50,21 @@ def test_a_remote_unit_drives_its_belts_and_reads_its_barriers_at_the_gateway(tm
     port = free_port()
     cfg = _unit_config(tmp_path, port)
 
+    # a PLC's server: two belt setpoints, two light barriers (and a module's nodes, unused)
+    gateway = PlantGateway(port, "TM_1", {"TU_A": "A"}, "o1", at="TU_A", seed=0).start()
+
     async def scenario() -> None:
-        gateway, plc = await _gateway(port, "TU_A")
         try:
             async with AssetNode(cfg) as node, connect(node.server.endpoint, "TU_A",
                                                        credentials=None, insecure=True) as tu:
                 # a belt command reaches the hardware, and the unit publishes it
                 assert await tu.call("SetBeltSpeed", "left", 0.25) is True
-                assert await plc["BeltSpeedLeft"].read_value() == pytest.approx(0.25)
-                assert await plc["BeltSpeedRight"].read_value() == 0.0
+                assert gateway.value("TU_A.BeltSpeedLeft") == pytest.approx(0.25)
+                assert gateway.value("TU_A.BeltSpeedRight") == 0.0
                 assert await tu.read("OperationalData", "BeltSpeedLeft") == pytest.approx(0.25)
                 # the machine's barrier is seen on the unit's server within a few polls
                 assert await tu.read("OperationalData", "BarrierNearInterrupted") is False
-                await plc["BarrierNear"].write_value(True)
+                gateway.set("TU_A.BarrierNear", True)
 
                 async def near() -> bool:
                     return await tu.read("OperationalData", "BarrierNearInterrupted") is True
@@ -91,18 +75,18 @@ def test_a_remote_unit_drives_its_belts_and_reads_its_barriers_at_the_gateway(tm
                 with pytest.raises(ua.UaStatusCodeError):
                     await tu.write("OperationalData", "BarrierNearInterrupted", False)
                 assert await tu.read("OperationalData", "BarrierNearInterrupted") is True
-                await plc["BarrierNear"].write_value(False)
+                gateway.set("TU_A.BarrierNear", False)
 
                 async def clear() -> bool:
                     return await tu.read("OperationalData", "BarrierNearInterrupted") is False
 
                 await _until(clear)
                 # the gateway away: a belt command is refused, not silently taken
-                await gateway.stop()
+                gateway.stop()
                 with pytest.raises(ua.UaStatusCodeError):
                     await tu.call("SetBeltSpeed", "right", 0.1)
                 assert await tu.read("OperationalData", "BeltSpeedRight") == 0.0
         finally:
-            await gateway.stop()
+            gateway.stop()
 
     asyncio.run(scenario())

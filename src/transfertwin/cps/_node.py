@@ -118,13 +118,20 @@ class Peers:
                 await self.drop(aid)
                 raise
 
-    async def call(self, aid: str, operation: str, *args: object) -> Any:
-        """Call `operation` on `aid`; a broken session is dropped and the error raised."""
+    async def call(self, aid: str, operation: str, *args: object,
+                   keep_if_slow: bool = False) -> Any:  # fmt: skip
+        """Call `operation` on `aid`; a broken session is dropped and the error raised.
+        With `keep_if_slow`, a call that ran out of time (the session's request timeout)
+        keeps the session: the peer is busy, and a new handshake would cost it more."""
         lock = self._locks.setdefault(aid, asyncio.Lock())
         async with lock:
             try:
                 return await (await self.session(aid)).call(operation, *args)
             except ua.UaStatusCodeError:  # the server answered: the session is fine
+                raise
+            except TimeoutError:
+                if not keep_if_slow:
+                    await self.drop(aid)
                 raise
             except BaseException:
                 await self.drop(aid)
@@ -286,7 +293,7 @@ class AssetNode:
                 await self.role.beat_self()
             else:
                 try:
-                    await self._beat(period)
+                    await self._beat()
                 except Exception as exc:  # the graph is away: keep serving, keep trying
                     log.debug("%s: heartbeat not delivered: %s", self.desc.asset_id, exc)
                 if asyncio.current_task().cancelling():
@@ -295,7 +302,7 @@ class AssetNode:
                     raise asyncio.CancelledError
             await asyncio.sleep(self.lease.pause(period))
 
-    async def _beat(self, period: float) -> None:
+    async def _beat(self) -> None:
         """One heartbeat: a renewal, or the full description when it changed or the graph
         holds no lease for this process (then sent at once)."""
         live = {"hal": self.cfg.hal.kind, **await self.role.live()}
@@ -306,10 +313,9 @@ class AssetNode:
         # limit and started again (no one would ever get through)
         await asyncio.wait_for(self.peers.open("KG"), 15.0)
         for _ in range(2):
-            try:
-                reply = await asyncio.wait_for(
-                    self.peers.call("KG", "Heartbeat", self.lease.request(payload)),
-                    max(period, 2.0))  # fmt: skip
+            try:  # a graph too busy to answer within the request timeout keeps the session
+                reply = await self.peers.call("KG", "Heartbeat", self.lease.request(payload),
+                                              keep_if_slow=True)  # fmt: skip
             except OperationRefused as exc:
                 if exc.status != NO_LEASE:
                     raise

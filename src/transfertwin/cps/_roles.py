@@ -193,6 +193,7 @@ class GraphRole(Role):
         self.info: dict[str, dict[str, Any]] = {}  # last heartbeat per asset
         self.gone: dict[str, dict[str, Any]] = {}  # offline asset -> why and since when
         self.beats = {"full": 0, "renewals": 0, "refused": 0}  # heartbeats taken, by kind
+        self.stalled_s = 0.0  # time the graph did not run, which its leases did not count
         self._boot = f"{time.time_ns():x}"  # a directory version from an earlier graph
         self._directory = 0  # ... never equals one of this graph's
         self._changed = True  # the graph changed since its counts were last published
@@ -309,9 +310,20 @@ class GraphRole(Role):
 
     async def _expire(self) -> None:
         counted = 0.0
+        last = time.monotonic()
         while True:
             await asyncio.sleep(0.25)
             now = time.monotonic()
+            late = now - last - 0.25
+            last = now
+            if late > 0.1:
+                # the graph itself did not run for that long (a starved host, a burst of
+                # joins): heartbeats may be waiting unread in its sockets, and that time is
+                # not the assets' silence. Without this, an overloaded graph expired the
+                # leases it had not read, the assets joined again in full, and the load grew.
+                self.stalled_s += late
+                for aid in self.leases:
+                    self.leases[aid] += late
             for aid in [a for a, t in self.leases.items() if t < now]:
                 del self.leases[aid]
                 with contextlib.suppress(InputError):

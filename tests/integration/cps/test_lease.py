@@ -2,8 +2,9 @@
 process on loopback: an idle asset renews its lease with a renewal, not its description;
 a change of its live state sends the description again; the directory travels only when
 it changed; a restarted graph refuses the renewals of leases it does not hold, and the
-assets' descriptions rebuild it within a heartbeat period; an asset that stops beating is
-offline within its lease."""
+assets' descriptions rebuild it within a heartbeat period; a graph that did not run for
+longer than a lease expires nobody for it; an asset that stops beating is offline within
+its lease."""
 
 from __future__ import annotations
 
@@ -61,13 +62,22 @@ def test_idle_assets_renew_and_a_restarted_graph_gets_their_descriptions(tmp_pat
                 assert kg.role.info["o1"]["location"] == "TM_1"  # from o1's description
                 assert kg.role.beats["refused"] >= 1 and kg.role.beats["full"] >= 2
                 assert t < 4 * LEASE_S, t
-                # o1 stops beating (its host hangs): offline within its lease
+                # the graph does not run for longer than a lease (here the whole process
+                # stalls): that time is not the assets' silence, nobody lapses
+                refused = kg.role.beats["refused"]
+                time.sleep(2 * LEASE_S)
+                await asyncio.sleep(0.3)
+                assert {"o1", "TU_A"} <= set(kg.role.leases), kg.role.gone
+                assert kg.role.beats["refused"] == refused  # no lapse (and no rejoin) for it
+                assert kg.role.stalled_s >= 2 * LEASE_S - 0.3
+                # o1 stops beating (its host hangs): offline within its lease (plus the time
+                # the graph itself did not run)
                 for task in list(o1._tasks):
                     task.cancel()
-                t0 = time.monotonic()
-                await until(lambda: "o1" not in kg.role.leases, 2 * LEASE_S, "o1 lapsed")
+                t0, stalled = time.monotonic(), kg.role.stalled_s
+                await until(lambda: "o1" not in kg.role.leases, 4 * LEASE_S, "o1 lapsed")
                 assert kg.role.gone["o1"]["reason"] == "lapsed"
-                assert time.monotonic() - t0 <= LEASE_S + 1.0
+                assert time.monotonic() - t0 <= LEASE_S + 1.0 + kg.role.stalled_s - stalled
                 return dict(kg.role.beats)
         finally:
             await kg.__aexit__(None, None, None)

@@ -195,6 +195,59 @@ def _reasons(finished: list[dict]) -> dict[str, int]:
     return out
 
 
+def run_arm(args, floor, name: str, policy: str, floor_file: str, study: Path, wd: Path,
+            orders: list, rng: np.random.Generator) -> dict | None:  # fmt: skip
+    """Start the floor of one arm, drive the orders, stop it; the arm's summary."""
+    pwd = wd / name
+    print(f"{name}: starting {floor.name} on plant seed {args.plant_seed}", flush=True)
+    up = tt("cps", "up", "--floor", floor_file, "--workdir", str(pwd), "--detach",
+            "--time-scale", "0", "--seed", str(args.seed), "--plant-seed",
+            str(args.plant_seed), "--policy", policy, "--study", str(study),
+            "--lease", str(args.lease), "--start-timeout", "600", timeout=900)  # fmt: skip
+    if up.returncode != 0:
+        print(up.stderr, file=sys.stderr)
+        return None
+    try:
+        run = drive(pwd, orders, len(floor.modules), args.timeout)
+    finally:
+        tt("cps", "down", "--workdir", str(pwd))
+    r = {**summarise(run["operations"], len(floor.modules), rng),
+         "refused": run["refused"], "located": run["located"],
+         "retried": run["retried"], "wall_s": run["wall_s"],
+         "by_leg": _by_leg(run["operations"])}  # fmt: skip
+    print(f"{name}: {r['delivered']}/{r['n']} delivered, share {r['share']:.3f} "
+          f"{[round(v, 3) for v in r['share_ci95']]}; {r['by_leg']}", flush=True)
+    return r
+
+
+def camera_only(args, floor, arm: tuple[str, str, str], study: Path, wd: Path, orders: list,
+                rng: np.random.Generator, res: Path) -> int:  # fmt: skip
+    """The camera arm alone, against the stored predictive run of the same orders."""
+    before = json.loads(res.read_text()) if res.is_file() else {}
+    same = {"orders": args.orders, "floor": floor.name, "plant_seed": args.plant_seed,
+            "seed": args.seed, "runs": args.runs}  # fmt: skip
+    if any(before.get(k) != v for k, v in same.items()) or "predictive" not in before.get(
+            "policies", {}):  # fmt: skip
+        raise SystemExit(f"--camera-only: {res} holds no predictive run of these orders "
+                         f"({same}); run without --camera-only first")  # fmt: skip
+    name, policy, floor_file = arm
+    c = run_arm(args, floor, name, policy, floor_file, study, wd, orders, rng)
+    if c is None:
+        return 1
+    c.pop("boot")
+    b = before["policies"]["predictive"]
+    lo, hi = b["share_ci95"]
+    inside = lo <= c["share"] <= hi
+    print(f"camera in the loop: success share {c['share']:.3f} "
+          f"{[round(v, 3) for v in c['share_ci95']]}, {'inside' if inside else 'OUTSIDE'} the "
+          f"ground-truth run's interval [{lo:.3f}, {hi:.3f}] ({b['share']:.3f}); failures "
+          f"{c['failed_by_reason'] or 'none'}")  # fmt: skip
+    before["policies"][name] = c
+    res.write_text(json.dumps(before, indent=2) + "\n")
+    print(f"wrote {res}")
+    return 0
+
+
 def main() -> int:
     from transfertwin.cps import load_floor
     from transfertwin.study.validation import newcombe_difference
@@ -210,6 +263,9 @@ def main() -> int:
     ap.add_argument("--timeout", type=float, default=3600.0, help="per policy, seconds")
     ap.add_argument("--camera", action="store_true",
                     help="also run predictive with the modules' cameras in the loop")
+    ap.add_argument("--camera-only", action="store_true",
+                    help="run only the camera arm; compare it with the predictive run of the "
+                         "same orders in benchmarks/results/operations.json and add it there")
     ap.add_argument("--lease", type=float, default=30.0,
                     help="the floor's lease, s (default 30: a 35-process floor on a loaded "
                          "2-core host misses 5 s heartbeats)")  # fmt: skip
@@ -236,29 +292,15 @@ def main() -> int:
     runs = [("nearest-idle", "nearest-idle", args.floor),
             ("twin-only", "predictive", variant("twin-only", "learn = false")),
             ("predictive", "predictive", args.floor)]  # fmt: skip
-    if args.camera:  # the same floor with the modules' cameras in the loop
+    res = ROOT / "benchmarks" / "results" / "operations.json"
+    if args.camera or args.camera_only:  # the same floor with the modules' cameras in the loop
         runs.append(("predictive+camera", "predictive", variant("camera", 'sensor = "camera"')))
+    if args.camera_only:
+        return camera_only(args, floor, runs[-1], study, wd, orders, rng, res)
     for name, policy, floor_file in runs:
-        pwd = wd / name
-        print(f"{name}: starting {floor.name} on plant seed {args.plant_seed}", flush=True)
-        up = tt("cps", "up", "--floor", floor_file, "--workdir", str(pwd), "--detach",
-                "--time-scale", "0", "--seed", str(args.seed), "--plant-seed",
-                str(args.plant_seed), "--policy", policy, "--study", str(study),
-                "--lease", str(args.lease), "--start-timeout", "600", timeout=900)  # fmt: skip
-        if up.returncode != 0:
-            print(up.stderr, file=sys.stderr)
+        out[name] = run_arm(args, floor, name, policy, floor_file, study, wd, orders, rng)
+        if out[name] is None:
             return 1
-        try:
-            run = drive(pwd, orders, len(floor.modules), args.timeout)
-        finally:
-            tt("cps", "down", "--workdir", str(pwd))
-        out[name] = {**summarise(run["operations"], len(floor.modules), rng),
-                       "refused": run["refused"], "located": run["located"],
-                       "retried": run["retried"], "wall_s": run["wall_s"],
-                       "by_leg": _by_leg(run["operations"])}  # fmt: skip
-        r = out[name]
-        print(f"{name}: {r['delivered']}/{r['n']} delivered, share {r['share']:.3f} "
-              f"{[round(v, 3) for v in r['share_ci95']]}; {r['by_leg']}", flush=True)
     a, b = out["nearest-idle"], out["predictive"]
     diffs = {}
     for name in ("twin-only", "predictive"):
@@ -302,7 +344,6 @@ def main() -> int:
                   "share_ci95": [d["share"].low, d["share"].high],
                   "ops_per_floor_hour": d["ops"],
                   "ops_per_floor_hour_ci95": d["ops_ci95"]} for name, d in diffs.items()}}
-    res = ROOT / "benchmarks" / "results" / "operations.json"
     res.write_text(json.dumps(result, indent=2) + "\n")
     print(f"wrote {res}")
     return 0

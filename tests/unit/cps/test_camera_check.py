@@ -3,7 +3,9 @@
 
 from __future__ import annotations
 
-from transfertwin.cps.apps._camera import expected_size, scan_check
+import pytest
+
+from transfertwin.cps.apps._camera import expected_size, far_side_open, scan_check
 from transfertwin.perception import AABB
 
 GAP = 0.02
@@ -35,3 +37,47 @@ def test_missing_moved_and_unexpected_objects_are_named():
                                   "TU_B", pickup=False, gap_m=GAP)  # fmt: skip
     assert not ok and "an unexpected object (40 x 40 mm) on TU_B" in why
     assert summary["matched"] == ["o1"]
+
+
+def test_a_far_end_hidden_on_the_unit_is_matched_on_width_and_height():
+    full = _box("o9", "front", 0.26)
+    length = 2 * full.half[0]
+    for cut, ok_expected in ((0.046, True), (0.12, False)):
+        near = full.centre[0] - full.half[0]
+        half_x = 0.5 * (length - cut)
+        seen = AABB((near + half_x, 0.0, full.centre[2]), (half_x, *full.half[1:]))
+        ok, why, _ = scan_check([seen], "o9", "front", "TM_1", "TU_A", pickup=True, gap_m=GAP)
+        assert ok is ok_expected, (cut, why)
+    # extended away from the camera only, and never beyond the expected length
+    grown = far_side_open(AABB((0.2, 0.0, 0.05), (0.08, *full.half[1:])), expected_size("o9",
+                                                                                        "front"))
+    assert grown.centre[0] - grown.half[0] == pytest.approx(0.12)
+    assert 2 * grown.half[0] <= length + 1e-9
+    # on the module's own belts (a delivery) a short box stays short: the camera sees it whole
+    short = AABB((-0.3, 0.0, full.centre[2]), (full.half[0] - 0.023, *full.half[1:]))
+    ok, _, _ = scan_check([short], "o9", "front", "TM_1", "TU_A", pickup=False, gap_m=GAP)
+    assert not ok
+
+
+def test_the_modules_camera_sees_a_core_in_the_middle_of_the_unit_as_the_ledger_says():
+    """A real scan (MuJoCo depth frames, the perception pipeline): o9 where a pick-up puts it
+    is seen short at its far end and still matched."""
+    from transfertwin.cps._role_tm import load_scene
+    from transfertwin.cps.apps._environment import system_for
+    from transfertwin.perception import CameraIntrinsics, DepthCamera, Workspace, workspace_scan
+    from transfertwin.sim import DockingError
+
+    scene = load_scene()
+    system = system_for("o9", "m", scene)
+    system.reset(DockingError())
+    tx, ty, _ = system.tu_pose
+    system.place("front", 0.0, tx + 0.25, ty)
+    system.clock.wait(scene.placement.settle_time_s)
+    workspace = Workspace.for_layout(scene.layout, scene.gap_m, docked=True)
+    with DepthCamera(system.model, system.data, intrinsics=CameraIntrinsics(160, 120)) as cam:
+        detection, _ = workspace_scan(cam, workspace, seed=1)
+    (box,) = detection.boxes
+    assert 2 * box.half[0] < expected_size("o9", "front")[0] - 0.03  # its far end is hidden
+    ok, why, _ = scan_check(detection.boxes, "o9", "front", "TM_1", "TU_A", pickup=True,
+                            gap_m=scene.gap_m)  # fmt: skip
+    assert ok, why

@@ -51,6 +51,7 @@ class PropsRole(Role):
 
         self.poses = PoseGraph()
         self.docking: dict[str, dict[str, Any]] = {}  # module -> its last docking error
+        self.reported: set[str] = set()  # nodes that told their own pose over OPC UA
 
     def handlers(self) -> dict[str, Any]:
         return {"ReportPose": self._report, "ReportRelativePose": self._report_relative,
@@ -73,6 +74,7 @@ class PropsRole(Role):
 
         obs = PoseObservation(source, subject, x, y, theta, sigma_xy, sigma_theta)
         if source == subject:  # it moved: what others saw of it is stale
+            self.reported.add(subject)
             self.poses.drop(lambda o: o.subject == subject and o.relative_to is not None)
         self.poses.put(obs)
         await self._publish()
@@ -94,7 +96,8 @@ class PropsRole(Role):
         except InputError as exc:
             raise ValueError(str(exc)) from None
         return json.dumps({"x": pose.x, "y": pose.y, "theta": pose.theta,
-                           "sd_x": sd[0], "sd_y": sd[1], "sd_theta": sd[2]})  # fmt: skip
+                           "sd_x": sd[0], "sd_y": sd[1], "sd_theta": sd[2],
+                           "reported": subject in self.reported})  # fmt: skip
 
     async def _docking_error(self, module: str, unit: str) -> str:
         """The fused pose of `module` in `unit`'s goal frame (its docking error)."""
@@ -124,7 +127,7 @@ class PropsRole(Role):
             sd = _sd(sol.covariances[node])
             fused[node] = {"x": round(pose.x, 6), "y": round(pose.y, 6),
                            "theta": round(pose.theta, 6), "sd_x": sd[0], "sd_y": sd[1],
-                           "sd_theta": sd[2]}  # fmt: skip
+                           "sd_theta": sd[2], "reported": node in self.reported}  # fmt: skip
         await self.set("FusedPoses", len(fused))
         await self.set("FusedPosesJson", json.dumps(fused))
         await self.set("DockingErrorsJson", json.dumps(self.docking))

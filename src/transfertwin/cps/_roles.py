@@ -66,6 +66,10 @@ class Role:
         return await self.node.server.get("OperationalData", prop)
 
 
+#: How often a unit tells PropS its pose again, s.
+POSE_REPORT_S = 60.0
+
+
 class UnitRole(Role):
     """A transfer unit (type D/E): belt drives, possession kept by others.
 
@@ -100,6 +104,27 @@ class UnitRole(Role):
         self.node.server.on_client_write(self._written)
         if self.gateway is not None:
             self.node.spawn(self._poll_barriers())
+        if "PropS" in self.node.floor.logical:
+            self.node.spawn(self._report_pose())
+
+    async def _report_pose(self) -> None:
+        """Tell PropS where this unit stands (its surveyed docking goal on the floor), and
+        again every `POSE_REPORT_S` (a restarted PropS hears it then)."""
+        from transfertwin.cps._role_props import UNIT_SIGMA_THETA_RAD, UNIT_SIGMA_XY_M
+
+        floor = self.node.floor
+        spec = next(s for s in floor.stations if s.unit == self.aid)
+        x, y, theta = (float(v) for v in floor.shop_floor().station(spec.name).goal_pose())
+        while True:
+            try:
+                await asyncio.wait_for(self.node.peers.call(
+                    "PropS", "ReportPose", self.aid, self.aid, x, y, theta, UNIT_SIGMA_XY_M,
+                    UNIT_SIGMA_THETA_RAD), 10.0)  # fmt: skip
+                delay = POSE_REPORT_S
+            except Exception as exc:  # PropS not (yet) there: try again soon
+                log.debug("%s: PropS not answering (%s)", self.aid, exc)
+                delay = 2.0
+            await asyncio.sleep(delay)
 
     async def stop(self) -> None:
         if self.gateway is not None:

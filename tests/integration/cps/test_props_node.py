@@ -109,8 +109,12 @@ def test_an_order_on_a_floor_docks_with_the_fused_estimate(tmp_path):
         assert order.returncode in (0, 3), order.stderr  # delivered, or failed as a transfer may
         info, creds = _info(Path(wd))
         op = json.loads(asyncio.run(_call(info, creds, "TMS", "OperationStatus", "op1")))
+        # the units told PropS where they stand (their own processes, over OPC UA)
+        units = [json.loads(asyncio.run(_call(info, creds, "PropS", "FusedPose", u)))
+                 for u in ("TU_A", "TU_B")]  # fmt: skip
     finally:
         tt("cps", "down", "--workdir", str(wd))
+    assert all(u["reported"] and u["sd_x"] <= 0.0025 for u in units), units
     docked = [leg["docking"]["props"] for leg in op["result"]["legs"] if "docking" in leg]
     assert docked, op["result"]
     for props in docked:

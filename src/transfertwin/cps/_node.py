@@ -195,6 +195,7 @@ class AssetNode:
         self.discovery: Discovery | None = None
         self.peers = Peers(self.endpoint_of, self._open)
         self._tasks: set[asyncio.Task] = set()
+        self._beating: asyncio.Task | None = None
         self._known: dict[str, str] = {}  # asset id -> endpoint, from seeds and the graph
         self.role = _role_for(self)
         self.lease = Renewal(cfg.asset_id, os.getpid())
@@ -222,11 +223,14 @@ class AssetNode:
         # that join reach every asset sooner through the graph's directory (heartbeats).
         self.discovery = Discovery(self.server, period_s=5.0, max_misses=2, entries_per_s=10.0)
         await self.discovery.join([u for u in cfg.seeds if u != cfg.endpoint], self._connector)
-        self.spawn(self._heartbeats())
+        self._beating = self.spawn(self._heartbeats())
         log.info("%s up at %s (pid %d)", self.desc.asset_id, self.server.endpoint, os.getpid())
         return self
 
     async def __aexit__(self, *exc: object) -> None:
+        if self._beating is not None:  # no heartbeat after the leave: it would join again
+            self._beating.cancel()
+            await asyncio.wait({self._beating}, timeout=2.0)
         if self.desc.asset_id != "KG":  # the graph does not open a session to itself to leave
             with contextlib.suppress(Exception):  # announce the leave; the lease covers a crash
                 await asyncio.wait_for(self.peers.call("KG", "Leave", self.desc.asset_id), 2.0)

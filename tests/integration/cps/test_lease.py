@@ -4,7 +4,7 @@ a change of its live state sends the description again; the directory travels on
 it changed; a restarted graph refuses the renewals of leases it does not hold, and the
 assets' descriptions rebuild it within a heartbeat period; a graph that did not run for
 longer than a lease expires nobody for it; an asset that stops beating is offline within
-its lease."""
+its lease; one that stops cleanly leaves and stays gone."""
 
 from __future__ import annotations
 
@@ -78,7 +78,10 @@ def test_idle_assets_renew_and_a_restarted_graph_gets_their_descriptions(tmp_pat
                 await until(lambda: "o1" not in kg.role.leases, 4 * LEASE_S, "o1 lapsed")
                 assert kg.role.gone["o1"]["reason"] == "lapsed"
                 assert time.monotonic() - t0 <= LEASE_S + 1.0 + kg.role.stalled_s - stalled
-                return dict(kg.role.beats)
+            # TU_A stopped cleanly: it left, and no heartbeat after its leave joined it again
+            await asyncio.sleep(LEASE_S)
+            assert "TU_A" not in kg.role.leases and kg.role.gone["TU_A"]["reason"] == "left"
+            return dict(kg.role.beats)
         finally:
             await kg.__aexit__(None, None, None)
 

@@ -575,27 +575,35 @@ def _make_transport():
             return await super().dock(leg)
 
         async def transfer(self, leg):
+            """A failed hand-over is taken back and tried again: a delivery onto the module
+            (its state cannot change), `DELIVERY_RETRIES` times; a pick-up onto the unit,
+            where the station puts the object down in the plan's fallback state (the same
+            state without one), `PICKUP_RETRIES` times."""
             result = await super().transfer(leg)
-            if leg.name == "pick-up":
-                return await self._retry_pick_up(leg, result)
+            pickup = leg.name == "pick-up"
+            onto, retries = ("unit", PICKUP_RETRIES) if pickup else ("module", DELIVERY_RETRIES)
             tries = []
-            while not result.ok and leg.name == "delivery" and result.info.get("valid"):
-                back = await self.cps._take_back(leg.unit)
+            while not result.ok and result.info.get("valid"):
+                back = await self.cps._take_back(leg.unit, to_unit=pickup)
                 tries.append({"attempt": self.attempt + 1, "taken_back": back,
-                              "reason": result.reason})  # fmt: skip
+                              "reason": result.reason, "state": self.load_state})  # fmt: skip
                 if not back:
                     self.cps._lost_in_gap = True
                     return StepResult(False, f"{result.reason}; the object did not come back "
-                                             "onto the module: it lies in the gap",
+                                             f"onto the {onto}: it lies in the gap",
                                       {**result.info, "retries": tries})  # fmt: skip
-                if self.attempt >= DELIVERY_RETRIES:
-                    return StepResult(False, f"{result.reason}; taken back onto the module "
+                if self.attempt >= retries:
+                    return StepResult(False, f"{result.reason}; taken back onto the {onto} "
                                              f"after {self.attempt + 1} attempt(s)",
                                       {**result.info, "retries": tries})  # fmt: skip
                 self.attempt += 1
                 self.cps._attempt = self.attempt
-                log.info("%s: took %s back; docking at %s again (attempt %d)", self.cps.aid,
-                         self.obj, leg.unit, self.attempt + 1)  # fmt: skip
+                if pickup and self.fallback:  # the station puts it down in the next-best state
+                    self._load(self.fallback)
+                log.info("%s: took %s back onto the %s at %s; %sdocking again (attempt %d)",
+                         self.cps.aid, self.obj, onto, leg.unit,
+                         f"loaded {_state_text(self.load_state)}, " if pickup else "",
+                         self.attempt + 1)  # fmt: skip
                 await self.cps._undock(self.cps.aid)
                 for step in (self.dock, self.form_ots):
                     pre = await step(leg)
@@ -606,44 +614,13 @@ def _make_transport():
                 return StepResult(result.ok, result.reason, {**result.info, "retries": tries})
             return result
 
-        async def _retry_pick_up(self, leg, result):
-            """A failed pick-up: take the object back onto the unit (belts reversed), let
-            the station put it in the plan's fallback state (the twin's next-best; the
-            same state without one), dock anew and try once more, `PICKUP_RETRIES` times."""
-            tries = []
-            while not result.ok and result.info.get("valid"):
-                back = await self.cps._take_back(leg.unit, to_unit=True)
-                tries.append({"attempt": self.attempt + 1, "taken_back": back,
-                              "reason": result.reason, "state": self.load_state})  # fmt: skip
-                if not back:
-                    self.cps._lost_in_gap = True
-                    return StepResult(False, f"{result.reason}; the object did not come back "
-                                             "onto the unit: it lies in the gap",
-                                      {**result.info, "retries": tries})  # fmt: skip
-                if self.attempt >= PICKUP_RETRIES:
-                    return StepResult(False, f"{result.reason}; taken back onto the unit "
-                                             f"after {self.attempt + 1} attempt(s)",
-                                      {**result.info, "retries": tries})  # fmt: skip
-                self.attempt += 1
-                self.cps._attempt = self.attempt
-                if self.fallback:  # the station re-places it in the next-best state
-                    self.load_state = dict(self.fallback)
-                    self.face = self.cps._face = str(self.fallback["face"])
-                    self.cps.state.data.setdefault("faces", {})[self.obj] = self.face
-                    if self.cps.op is not None:
-                        self.cps.op["load"] = self.load_state
-                log.info("%s: pick-up of %s failed; took it back onto %s, loading it %s and "
-                         "docking again", self.cps.aid, self.obj, leg.unit,
-                         _state_text(self.load_state))  # fmt: skip
-                await self.cps._undock(self.cps.aid)
-                for step in (self.dock, self.form_ots):
-                    pre = await step(leg)
-                    if not pre.ok:
-                        return StepResult(False, pre.reason, {**pre.info, "retries": tries})
-                result = await super().transfer(leg)
-            if tries:
-                return StepResult(result.ok, result.reason, {**result.info, "retries": tries})
-            return result
+        def _load(self, state) -> None:
+            """From now on the object lies in `state` (the face the module carries it on)."""
+            self.load_state = dict(state)
+            self.face = self.cps._face = str(state["face"])
+            self.cps.state.data.setdefault("faces", {})[self.obj] = self.face
+            if self.cps.op is not None:
+                self.cps.op["load"] = self.load_state
 
     return ModuleTransport
 

@@ -203,6 +203,7 @@ def _make_skills():
 
         async def dock(self, leg) -> StepResult:
             role, station = self.role, self._station(leg)
+            role.at_station = station  # a failed dock is undocked from too
             ok, why = await role.gateway.command("dock", station)
             pose = await role._refresh_pose()
             goal = role.robot.floor.station(station).goal_pose()
@@ -269,6 +270,7 @@ class RemoteModuleRole(ModuleRole):
     def __init__(self, node) -> None:
         super().__init__(node)  # its environment is a `GatewayWorld` (`environment_for`)
         self.gateway = ModuleGateway(node.cfg)
+        self.at_station: str | None = None  # a dock was commanded there (done or not)
 
     def _transport(self, source: str, target: str, obj: str):
         return _make_skills()(self, source, target, obj)
@@ -319,6 +321,7 @@ class RemoteModuleRole(ModuleRole):
             raise ValueError(f"no transfer unit {unit!r}")
         station = self.assets[unit].desc.station
         for verb in ("navigate", "dock"):
+            self.at_station = station if verb == "dock" else self.at_station
             ok, why = await self.gateway.command(verb, station)
             if not ok:
                 raise RuntimeError(why)
@@ -326,15 +329,17 @@ class RemoteModuleRole(ModuleRole):
         return await self._dock(self.aid, unit)
 
     async def _undock(self, tm: str) -> bool:
-        """Leave the docked unit (the drive first); the unit's barriers are its hardware's."""
+        """Leave the docked unit, or the station a dock was tried at (the drive first); the
+        unit's barriers are its hardware's."""
         unit = await self.get("DockedAt")
-        if unit:
+        if unit or self.at_station:
             try:
                 ok, why = await self.gateway.command("undock")
             except GatewayError as exc:
                 ok, why = False, str(exc)
             if not ok:
                 log.warning("%s: %s", self.aid, why)
+            self.at_station = None
         await self.set("DockedAt", "")
         self.robot.docked_at = None
         self.env.undock()

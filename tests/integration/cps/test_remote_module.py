@@ -2,8 +2,9 @@
 barriers and object sensor are a HAL gateway's nodes, and so are the two transfer units'
 belts and barriers. The gateway is a real asyncua server whose nodes a MuJoCo transfer
 system drives in real time (`_plant_gateway`); the module, the units and the gateway talk
-OPC UA only. One transport operation runs end to end through it, and one whose object the
-module's sensor does not see where the order says it is fails at forming the OTS."""
+OPC UA only. One transport operation runs end to end through it; one whose object the
+module's sensor does not see where the order says it is fails at forming the OTS; one whose
+delivery the machine cannot dock for fails at docking with the object on the module."""
 
 from __future__ import annotations
 
@@ -64,7 +65,7 @@ def _events(node: AssetNode, op_id: str) -> list[dict]:
     return [e for o, e in node.role.state.data["outbox"] if o == op_id]
 
 
-@pytest.mark.slow  # real time: two transfers and nine drive commands, ~20 s
+@pytest.mark.slow  # real time: three transfers and fifteen drive commands, ~25 s
 def test_a_remote_module_transfers_through_its_gateway_end_to_end(tmp_path):
     port = free_port()
     # o2 lies on TU_B (the demo placement); the plant's physics is the only truth
@@ -94,9 +95,15 @@ def test_a_remote_module_transfers_through_its_gateway_end_to_end(tmp_path):
                 # the sensor sees nothing on TU_B now: no OTS, no transfer
                 assert await client.call("AssignOperation", "op2", "TU_B", "TU_A", "o2", "{}")
                 second = await _until(lambda: finished("op2"), 60, "op2")
-                return {"result": result, "possessed": possessed,
-                        "second": second, "moved": [e for e in _events(tm, "op1")
-                                                    if e["event"] == "moved"]}  # fmt: skip
+                holder = plant.holder  # where the physics has the object after op1 and op2
+                # the machine cannot dock at C (the plant has no unit there): the delivery
+                # fails at docking, the object stays on the module, the drive leaves C
+                assert await client.call("AssignOperation", "op3", "TU_A", "TU_C", "o2", "{}")
+                third = await _until(lambda: finished("op3"), 90, "op3")
+                third["possessed"] = await client.read("OperationalData", "PossessedObjects")
+                return {"result": result, "possessed": possessed, "second": second,
+                        "holder": holder, "third": third,
+                        "moved": [e for e in _events(tm, "op1") if e["event"] == "moved"]}
 
     try:
         out = asyncio.run(scenario())
@@ -108,10 +115,12 @@ def test_a_remote_module_transfers_through_its_gateway_end_to_end(tmp_path):
     assert [(e["object"], e["holder"]) for e in out["moved"]] == [("o2", "TM_1"), ("o2", "TU_A")]
     assert out["possessed"] == ""
     # the physics agrees: the object lies on TU_A's belts
-    assert plant.holder == "TU_A"
-    # the module drove and docked through its gateway, leg by leg
+    assert out["holder"] == "TU_A"
+    # the module drove and docked through its gateway, leg by leg (op1, op2, op3)
     assert plant.log.commands == ["navigate B", "dock B", "undock", "navigate A", "dock A",
-                                  "undock", "navigate B", "dock B", "undock"]  # fmt: skip
+                                  "undock", "navigate B", "dock B", "undock",
+                                  "navigate A", "dock A", "undock", "navigate C", "dock C",
+                                  "undock"]  # fmt: skip
     # the docking errors the module recorded are what its localisation at the gateway said
     for leg, (station, xi) in zip(result["legs"], plant.log.errors, strict=False):
         assert station == UNITS[leg["unit"]]
@@ -130,5 +139,8 @@ def test_a_remote_module_transfers_through_its_gateway_end_to_end(tmp_path):
     second = out["second"]
     assert second["status"] == "failed at pick-up" and second["failed_step"] == "scanning"
     assert "o2 not seen on TU_B" in second["reason"]
-    assert plant.holder == "TU_A"
+    third = out["third"]
+    assert third["status"] == "failed at delivery" and third["failed_step"] == "docking"
+    assert "no unit at C" in third["reason"] and third["y_pickup"] == 1
+    assert third["possessed"] == "o2" and plant.holder == "TM_1"
     json.dumps(result)  # the report is JSON as the TMS gets it

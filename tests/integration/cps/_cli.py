@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 __all__ = ["PLANT_SEED", "EarlyFloor", "RunningCps", "early_floor", "early_floors", "run_main",
-           "tt", "two_module_floor"]
+           "small_study", "tt", "two_module_floor"]
 
 #: Plant seed of the test run's shared CPS (conftest.py: `plant_cps`).
 PLANT_SEED = 913
@@ -56,6 +56,19 @@ y_m = 3.0
 standby = true
 """
     return head + "".join(f'\n[[object]]\nid = "{o}"\nat = "{at}"\n' for o, at in objects.items())
+
+
+def small_study(path: Path, obj: str) -> None:
+    """A real study store of `obj`: the 12 states at θ = 0, ±90 and 180, one run each."""
+    from transfertwin.cps._runtime import _docking_model
+    from transfertwin.store import SQLiteResultStore
+    from transfertwin.study.experiment import StudyPlan, run_study
+
+    store = SQLiteResultStore(path)
+    try:
+        run_study(StudyPlan((obj,), 90, 1, 0, _docking_model()), store, workers=1)
+    finally:
+        store.close()
 
 
 def tt(*args: str, timeout: float = 300, env: dict | None = None) -> subprocess.CompletedProcess:

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.integration.cps._cli import tt, two_module_floor
+from tests.integration.cps._cli import small_study, tt, two_module_floor
 
 #: A floor of 6 processes on the plant and two orders (~90 s): slow, run by .ci/run.
 pytestmark = pytest.mark.slow
@@ -24,19 +24,6 @@ FLOOR = two_module_floor("hand-over", {"o6": "TU_A"}) + """
 policy = "predictive"
 study = "study.sqlite"
 """
-
-
-def _study(path: Path) -> None:
-    """The twin's study of o6: the 12 states at θ = 0, ±90 and 180, one run each."""
-    from transfertwin.cps._runtime import _docking_model
-    from transfertwin.store import SQLiteResultStore
-    from transfertwin.study.experiment import StudyPlan, run_study
-
-    store = SQLiteResultStore(path)
-    try:
-        run_study(StudyPlan(("o6",), 90, 1, 0, _docking_model()), store, workers=1)
-    finally:
-        store.close()
 
 
 def _tms(wd: Path, op: str, *args):
@@ -50,7 +37,7 @@ def _tms(wd: Path, op: str, *args):
 def floor(tmp_path_factory):
     base = tmp_path_factory.mktemp("hand-over")
     (base / "floor.toml").write_text(FLOOR)
-    _study(base / "study.sqlite")
+    small_study(base / "study.sqlite", "o6")  # 12 states, one run each
     wd = base / "w"
     up = tt("cps", "up", "--floor", str(base / "floor.toml"), "--workdir", str(wd), "--detach",
             "--time-scale", "0", "--plant-seed", "7", "--lease", "10",

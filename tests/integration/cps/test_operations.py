@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.integration.cps._cli import run_main, tt, two_module_floor
+from tests.integration.cps._cli import run_main, small_study, tt, two_module_floor
 
 #: A floor of 8 processes and a dozen orders (~100 s): slow, run by .ci/run on its own.
 pytestmark = pytest.mark.slow
@@ -40,24 +40,11 @@ out = ["TU_B", "TU_C"]
 """
 
 
-def _study(path: Path) -> None:
-    """A real study of o1 (not o2): the 12 states at θ = 0, ±90 and 180, one run each."""
-    from transfertwin.cps._runtime import _docking_model
-    from transfertwin.store import SQLiteResultStore
-    from transfertwin.study.experiment import StudyPlan, run_study
-
-    store = SQLiteResultStore(path)
-    try:
-        run_study(StudyPlan(("o1",), 90, 1, 0, _docking_model()), store, workers=1)
-    finally:
-        store.close()
-
-
 @pytest.fixture(scope="module")
 def floor(tmp_path_factory):
     base = tmp_path_factory.mktemp("operations")
     (base / "floor.toml").write_text(FLOOR)
-    _study(base / "study.sqlite")
+    small_study(base / "study.sqlite", "o1")  # 12 states, one run each
     wd = base / "w"
     up = tt("cps", "up", "--floor", str(base / "floor.toml"), "--workdir", str(wd), "--detach",
             "--time-scale", "0", "--start-timeout", "150", timeout=200)

@@ -169,6 +169,7 @@ class GatewayWorld:
 
 
 def _make_skills():
+    from transfertwin._errors import InputError
     from transfertwin.cps.apps import StepResult, form_ots
     from transfertwin.navigation import relative
     from transfertwin.ots import BeltThresholds, TransferDirection
@@ -215,7 +216,7 @@ def _make_skills():
                 return StepResult(False, f"docking at {leg.unit}: {why}", info)
             try:
                 DockingError(*xi)
-            except Exception as exc:  # InputError: an error the pair cannot work with
+            except InputError as exc:  # an error the pair cannot work with
                 await role._undock(role.aid)
                 return StepResult(False, f"docking at {leg.unit}: {exc}", info)
             role.robot.docked_at = station

@@ -6,7 +6,8 @@ one process per asset on its own loopback address.
 For each size it prints the start-up time (launch until the knowledge graph lists every
 asset online: discovery convergence through the leases), the memory of one asset process
 (RSS and PSS, median and largest, by class), the CPU the processes spend while the floor
-idles (median asset process, the knowledge graph, the whole floor, in % of one core), the
+idles, `--settle` seconds after it converged (median asset process, by class, the knowledge
+graph, the whole floor, in % of one core), the
 traffic on the loopback interface per asset per minute while the floor idles (heartbeats,
 gossip), the latency of a status query (the graph's `Status`, median and 95th percentile of
 20) and the time the graph takes to see an object process killed with -9 offline (its lease
@@ -117,7 +118,7 @@ async def status_latency(wd: Path, repeats: int = 20) -> list[float]:
 
 def run_size(n: int, base: Path, lease: float | None, idle_s: float,
              per_process_mb: float | None, fork: bool = True,
-             converge_s: float | None = None):  # fmt: skip
+             converge_s: float | None = None, settle_s: float = 0.0):  # fmt: skip
     from transfertwin._errors import InputError
     from transfertwin.cli._cps_floor import _wait_online, floor_status
     from transfertwin.cps import asset_pids, launch, prepare_floor, stop_floor, write_floor_info
@@ -149,6 +150,7 @@ def run_size(n: int, base: Path, lease: float | None, idle_s: float,
             except Exception:
                 online = 0
         t_up = time.monotonic() - t1
+        time.sleep(settle_s)  # the start's tail (modules warming up, first gossip rounds)
         pids = asset_pids(wd)
         mem = {aid: memory(pid) for aid, pid in pids.items()}
         b0, m0 = lo_bytes(), time.monotonic()
@@ -169,9 +171,11 @@ def run_size(n: int, base: Path, lease: float | None, idle_s: float,
             except Exception:
                 p.kill()
     by_class: dict[str, list[float]] = {}
+    cpu_class: dict[str, list[float]] = {}
     for aid, (_, pss) in mem.items():
-        by_class.setdefault(configs[aid].asset_id.split("_")[0] if aid[0] != "o" else "object",
-                            []).append(pss)  # fmt: skip
+        cls = configs[aid].asset_id.split("_")[0] if aid[0] != "o" else "object"
+        by_class.setdefault(cls, []).append(pss)
+        cpu_class.setdefault(cls, []).append(100 * cpu.get(aid, 0.0))
     rss = [r for r, _ in mem.values()]
     pss = [p for _, p in mem.values()]
     return {"n": n, "fork": fork, "lease_s": lease_s, "converged": converged, "online": online,
@@ -181,6 +185,7 @@ def run_size(n: int, base: Path, lease: float | None, idle_s: float,
             "pss_by_class": {k: round(statistics.median(v), 1) for k, v in by_class.items()},
             "cpu_median_pct": 100 * statistics.median(cpu.values()),
             "cpu_kg_pct": 100 * cpu.get("KG", 0.0), "cpu_floor_pct": 100 * sum(cpu.values()),
+            "cpu_by_class_pct": {k: round(statistics.median(v), 2) for k, v in cpu_class.items()},
             "load": load, "lo_bytes_per_asset_min": traffic,
             "status_median_ms": 1000 * statistics.median(lat),
             "status_p95_ms": 1000 * sorted(lat)[int(0.95 * (len(lat) - 1))],
@@ -218,6 +223,8 @@ def main() -> int:
     ap.add_argument("--converge-timeout", type=float, default=None,
                     help="seconds a floor may take to converge (default 60 + 3 per asset)")
     ap.add_argument("--idle", type=float, default=30.0, help="seconds of idle traffic measured")
+    ap.add_argument("--settle", type=float, default=15.0,
+                    help="seconds a converged floor idles before it is measured")
     ap.add_argument("--workdir")
     ap.add_argument("--no-baseline", dest="baseline", action="store_false",
                     help="skip the smallest size with one interpreter per asset")
@@ -232,7 +239,7 @@ def main() -> int:
     runs = [(sizes[0], False)] if args.baseline else []
     for n, fork in [*runs, *((n, True) for n in sizes)]:
         row = run_size(n, base, args.lease, args.idle, per_process if fork else None, fork,
-                       args.converge_timeout)  # fmt: skip
+                       args.converge_timeout, args.settle)  # fmt: skip
         rows.append(row)
         if "skipped" in row:
             print(f"{n:4d} assets: skipped ({row['skipped']})", flush=True)
@@ -249,6 +256,7 @@ def main() -> int:
               f"total PSS {row['pss_total_mb'] / 1024:.2f} GB, by class {row['pss_by_class']}, "
               f"idle CPU: median asset {row['cpu_median_pct']:.2f} %, graph "
               f"{row['cpu_kg_pct']:.1f} %, floor {row['cpu_floor_pct']:.0f} % of a core, "
+              f"median by class {row['cpu_by_class_pct']}, "
               f"loopback {row['lo_bytes_per_asset_min'] / 1024:.1f} KiB per asset per min, "
               f"status {row['status_median_ms']:.1f} ms (p95 {row['status_p95_ms']:.1f}), "
               f"a kill -9 seen offline in {detect}; load average {row['load']:.1f}",

@@ -201,18 +201,26 @@ def _in_folder(item: pytest.Item) -> bool:
     return _HERE in Path(str(item.path)).resolve().parents
 
 
+def _early_floor(item: pytest.Item) -> bool:
+    return getattr(getattr(item, "module", None), "EARLY_FLOOR", None) is not None
+
+
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """This folder's tests that use the shared CPS after its other tests (which run while
-    it comes up); the one that stops it after them."""
+    it comes up); the one that stops it after them. The tests of a module whose process
+    floor starts ahead (``EARLY_FLOOR``) just before those, for the same reason."""
     users = [i for i in items if _in_folder(i) and _USES in getattr(i, "fixturenames", ())]
-    if not users:
-        return
     ids = {id(i) for i in users}
+    floors = [i for i in items if _in_folder(i) and _early_floor(i) and id(i) not in ids]
+    if not users and not floors:
+        return
+    ids |= {id(i) for i in floors}
+    first = min(k for k, i in enumerate(items) if id(i) in ids)
     rest = [i for i in items if id(i) not in ids]
     others = [k for k, i in enumerate(rest) if _in_folder(i)]
-    at = others[-1] + 1 if others else items.index(users[0])
+    at = others[-1] + 1 if others else min(first, len(rest))
     stoppers = [i for i in users if _STOPS in i.fixturenames]
-    ordered = [i for i in users if _STOPS not in i.fixturenames] + stoppers
+    ordered = floors + [i for i in users if _STOPS not in i.fixturenames] + stoppers
     items[:] = rest[:at] + ordered + rest[at:]
 
 

@@ -81,8 +81,9 @@ def test_a_remote_unit_drives_its_belts_and_reads_its_barriers_at_the_gateway(tm
                     return await tu.read("OperationalData", "BarrierNearInterrupted") is False
 
                 await _until(clear)
-                # the gateway away: a belt command is refused, not silently taken
-                gateway.stop()
+                # the gateway away: a belt command is refused, not silently taken (stopped
+                # off this loop: its server closes the unit's session, which this loop serves)
+                await asyncio.to_thread(gateway.stop)
                 with pytest.raises(ua.UaStatusCodeError):
                     await tu.call("SetBeltSpeed", "right", 0.1)
                 assert await tu.read("OperationalData", "BeltSpeedRight") == 0.0

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from transfertwin.sim import SimClock, VirtualTransferSystem
+from transfertwin.sim import TrackingClock, VirtualTransferSystem
 
 __all__ = ["CAMERA_RESOLUTION", "PlantRecording"]
 
@@ -66,22 +66,6 @@ def _quantize(values: np.ndarray, step: float) -> np.ndarray:
     return np.round(np.asarray(values, dtype=float), round(-np.log10(step)))
 
 
-class _CameraClock(SimClock):
-    """`SimClock` that tells its track about every start and wait."""
-
-    def __init__(self, system: VirtualTransferSystem, track: _CameraTrack) -> None:
-        super().__init__(system)
-        self._track = track
-
-    def start(self) -> None:
-        super().start()
-        self._track.starts.append(float(self._system.data.time))
-
-    def wait(self, dt_s: float) -> None:
-        super().wait(dt_s)
-        self._track.sample(self._system)
-
-
 class _CameraTrack:
     """Builds recording plant systems (`systems`, in `_run_job`'s place of the cache) and
     keeps the samples of the last run (each attempt starts afresh)."""
@@ -94,7 +78,7 @@ class _CameraTrack:
 
     def systems(self, obj, scene, refine: int = 0, mismatch=None) -> VirtualTransferSystem:
         system = self._build(obj, scene, refine, mismatch)
-        system.clock = _CameraClock(system, self)
+        system.clock = TrackingClock(system, self)
         self.placements += refine == 0  # a finer re-run is the same placement
         self.starts, self.rows = [], []
         return system

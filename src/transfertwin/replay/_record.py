@@ -3,10 +3,10 @@
 `record_experiment(spec)` runs `transfertwin.study.experiment.run_experiment` as a study or
 `transfertwin transfer` does (the same spec in a system compiled the same way, so the same
 bits: the result is returned with the recording and can be compared with a stored row), with
-the system's clock swapped for a `SimClock` subclass that, after each wait, notes the
-simulation time, the object's free-joint pose, the four light barriers, the four belt speeds
-and the object readout (Eq. 5.4 without f, c, t). Waiting and starting are `SimClock`'s own,
-so the physics is untouched.
+the system's clock swapped for a `TrackingClock` (a `SimClock` that, after each wait,
+lets a track note what it needs): here the simulation time, the object's free-joint
+pose, the four light barriers, the four belt speeds and the object readout (Eq. 5.4
+without f, c, t). Waiting and starting are `SimClock`'s own, so the physics is untouched.
 
 The OTS phases (Eq. 4.11) are recovered from the clock starts and the controller's samples
 (`ExperimentSpec.record` frames): each sample of a transfer is classified against the belt
@@ -35,7 +35,7 @@ from transfertwin.ots import (
     conveyor_of,
     outcome_codes,
 )
-from transfertwin.sim import SceneConfig, SimClock, VirtualTransferSystem
+from transfertwin.sim import SceneConfig, TrackingClock, VirtualTransferSystem
 from transfertwin.study.experiment import ExperimentResult, ExperimentSpec, run_experiment
 
 __all__ = [
@@ -133,22 +133,6 @@ class _Track:
         self.segment.append(len(self.starts))
 
 
-class _RecordingClock(SimClock):
-    """`SimClock` that tells a track about every start and wait."""
-
-    def __init__(self, system: VirtualTransferSystem, track: _Track) -> None:
-        super().__init__(system)
-        self._track = track
-
-    def start(self) -> None:
-        super().start()
-        self._track.starts.append(float(self._system.data.time))
-
-    def wait(self, dt_s: float) -> None:
-        super().wait(dt_s)
-        self._track.sample(self._system)
-
-
 def compile_system(spec: ExperimentSpec, scene: SceneConfig | None = None) -> VirtualTransferSystem:
     """A freshly compiled system for `spec`'s object and scene (or `scene`), as
     `system_for` builds it but not shared: a replay never runs in a system that another
@@ -163,7 +147,7 @@ def compile_system(spec: ExperimentSpec, scene: SceneConfig | None = None) -> Vi
 def _run(spec: ExperimentSpec, scene: SceneConfig) -> tuple[ExperimentResult, _Track, tuple]:
     system = compile_system(spec, scene)
     track = _Track()
-    system.clock = _RecordingClock(system, track)
+    system.clock = TrackingClock(system, track)
     result = run_experiment(dataclasses.replace(spec, scene=scene), system=system)
     return result, track, tuple(float(v) for v in system.tu_pose)
 

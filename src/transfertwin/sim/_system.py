@@ -113,6 +113,24 @@ class SimClock:
             listener()
 
 
+class TrackingClock(SimClock):
+    """`SimClock` that tells a track about every start (`track.starts`, the simulation time)
+    and, after every wait, lets it sample the system (`track.sample(system)`): the physics
+    is `SimClock`'s own, bit for bit (replays and recordings of experiments)."""
+
+    def __init__(self, system: VirtualTransferSystem, track) -> None:
+        super().__init__(system)
+        self._track = track
+
+    def start(self) -> None:
+        super().start()
+        self._track.starts.append(float(self._system.data.time))
+
+    def wait(self, dt_s: float) -> None:
+        super().wait(dt_s)
+        self._track.sample(self._system)
+
+
 def _axle_in_geom_frame(model: mujoco.MjModel, geom: int) -> np.ndarray:
     """The unit's y axis (a pulley's axle) in `geom`'s compiled frame, (3,)."""
     if model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_CYLINDER:

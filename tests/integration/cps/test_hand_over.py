@@ -1,10 +1,10 @@
 """A failed pick-up on the emulated plant, handled and learnt from (docs/architecture.md,
-"Operation"): o6 on plant seed 7 does not go over on its front face (measured: 10 of 12
-front states stall in the gap, the back face goes over), while the twin, calibrated on the
-real data and not on this plant, ranks a front state first. The module takes the object
-back onto the unit, the station puts it down in the plan's fallback state and the module
-tries again; the TMS counts each try as a plant experiment in its own state and plans the
-next order of the object with them."""
+"Operation"): o6 on plant seed 7 does not go over on its front face (checked by hand: 9 of
+10 valid front states of a 12-state grid fail, all 11 valid back states go over), while the
+twin, calibrated on the real data and not on this plant, ranks a front state first. The
+module takes the object back onto the unit, the station puts it down in the plan's fallback
+state and the module tries again; the TMS counts each try as a plant experiment in its own
+state and plans the next order of the object with them."""
 
 from __future__ import annotations
 

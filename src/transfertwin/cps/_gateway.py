@@ -21,6 +21,7 @@ import asyncio
 import contextlib
 import hashlib
 import logging
+from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -29,7 +30,8 @@ if TYPE_CHECKING:
 
     from transfertwin.cps._asset_config import AssetConfig
 
-__all__ = ["GatewayError", "GatewayLink", "gateway_refusal", "gateway_trust_dir", "open_gateway"]
+__all__ = ["GatewayError", "GatewayLink", "gateway_refusal", "gateway_trust_dir", "open_gateway",
+           "poll_gateway"]
 
 log = logging.getLogger("transfertwin.cps")
 
@@ -83,6 +85,27 @@ async def _secure(client: Client, cfg: AssetConfig) -> None:
     own, key = await ensure_certificate(cfg.cert_dir, GATEWAY_CLIENT_CERT)
     await client.set_security(SecurityPolicyBasic256Sha256, str(own), str(key),
                               server_certificate=der, mode=mode)  # fmt: skip
+
+
+async def poll_gateway(aid: str, read: Callable[[], Awaitable[Any]], period_s: float,
+                       on_value: Callable[[Any], Awaitable[None]] | None = None) -> None:
+    """Call `read` every `period_s`, for ever, and pass what it returns to `on_value`; a
+    gateway away (`ConnectionError`) is said once and tried again, its return said once."""
+    away = False
+    while True:
+        try:
+            value = await read()
+        except ConnectionError as exc:
+            if not away:
+                log.warning("%s: %s", aid, exc)
+            away = True
+        else:
+            if away:
+                log.info("%s: HAL gateway answering again", aid)
+            away = False
+            if on_value is not None:
+                await on_value(value)
+        await asyncio.sleep(period_s)
 
 
 async def open_gateway(cfg: AssetConfig) -> Client:

@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from transfertwin.cps._gateway import GatewayError, GatewayLink, gateway_refusal
+from transfertwin.cps._gateway import GatewayError, GatewayLink, gateway_refusal, poll_gateway
 from transfertwin.cps._role_tm import ModuleRole
 
 if TYPE_CHECKING:
@@ -170,7 +170,7 @@ class GatewayWorld:
 
 def _make_skills():
     from transfertwin._errors import InputError
-    from transfertwin.cps.apps import StepResult, form_ots
+    from transfertwin.cps.apps import StepResult, form_ots, transfer_step
     from transfertwin.navigation import relative
     from transfertwin.ots import BeltThresholds, TransferDirection
     from transfertwin.perception import AABB
@@ -242,18 +242,9 @@ def _make_skills():
 
         async def transfer(self, leg) -> StepResult:
             rec = await self.role._gateway_transfer(leg.unit, leg.direction, self.face)
-            t_end = rec.t_end_s
-            info = {"y": rec.y, "valid": rec.valid, "conveyor": rec.conveyor,
-                    "t_end_s": None if math.isnan(t_end) else round(t_end, 3)}  # fmt: skip
             log.info("%s: %s %s at %s: y = %d", self.role.aid, leg.name, self.obj, leg.unit,
                      rec.y)  # fmt: skip
-            if not rec.valid:
-                return StepResult(False, "the controller's observed start state is not in "
-                                         "P_pre (Eq. 5.7)", info)  # fmt: skip
-            if rec.y != 1:
-                return StepResult(False, f"the object did not reach the receiver "
-                                         f"(failure state after {t_end:.2f} s)", info)  # fmt: skip
-            return StepResult(True, info=info)
+            return transfer_step(rec)
 
         async def resolve(self, leg, success: bool) -> None:
             role = self.role
@@ -295,19 +286,7 @@ class RemoteModuleRole(ModuleRole):
     async def _poll_pose(self) -> None:
         """Publish the module's pose as the gateway reports it (a gateway away: said once,
         kept trying)."""
-        away = False
-        while True:
-            try:
-                await self._refresh_pose()
-            except GatewayError as exc:
-                if not away:
-                    log.warning("%s: %s", self.aid, exc)
-                away = True
-            else:
-                if away:
-                    log.info("%s: HAL gateway answering again", self.aid)
-                away = False
-            await asyncio.sleep(max(self.node.cfg.hal.poll_s, 0.2))
+        await poll_gateway(self.aid, self._refresh_pose, max(self.node.cfg.hal.poll_s, 0.2))
 
     async def _set_belt(self, belt: str, speed: float) -> bool:
         try:  # the drive first: then publish

@@ -133,24 +133,18 @@ class UnitRole(Role):
     async def _poll_barriers(self) -> None:
         """Publish the gateway's barriers as they change (a gateway away: said once, kept
         trying; the last values stay)."""
+        from transfertwin.cps._gateway import poll_gateway
+
         shown: dict[str, bool] | None = None
-        away = False
-        while True:
-            try:
-                now = await self.gateway.barriers()
-            except ConnectionError as exc:
-                if not away:
-                    log.warning("%s: %s", self.aid, exc)
-                away = True
-            else:
-                if away:
-                    log.info("%s: HAL gateway answering again", self.aid)
-                away = False
-                if now != shown:
-                    await self.set("BarrierNearInterrupted", now["near"])
-                    await self.set("BarrierFarInterrupted", now["far"])
-                    shown = now
-            await asyncio.sleep(self.node.cfg.hal.poll_s)
+
+        async def publish(now: dict[str, bool]) -> None:
+            nonlocal shown
+            if now != shown:
+                await self.set("BarrierNearInterrupted", now["near"])
+                await self.set("BarrierFarInterrupted", now["far"])
+                shown = now
+
+        await poll_gateway(self.aid, self.gateway.barriers, self.node.cfg.hal.poll_s, publish)
 
     def _written(self, submodel: str, prop: str, value: object) -> None:
         if prop == "PossessedObjects":

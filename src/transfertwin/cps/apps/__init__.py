@@ -39,6 +39,7 @@ if TYPE_CHECKING:
         form_ots,
         legs_of,
         run_transport_operation,
+        transfer_step,
     )
 
 __all__ = [
@@ -69,6 +70,7 @@ __all__ = [
     "run_transport_operation",
     "study_opcua_values",
     "study_stores",
+    "transfer_step",
     "wrap_angle",
 ]
 

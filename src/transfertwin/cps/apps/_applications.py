@@ -26,7 +26,6 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
-import math
 from collections.abc import Awaitable, Callable
 
 from transfertwin._errors import InputError
@@ -39,6 +38,7 @@ from transfertwin.cps.apps._transport import (
     form_ots,
     legs_of,
     run_transport_operation,
+    transfer_step,
 )
 from transfertwin.cps.opcua import AssetServer, OpcUaUnitHAL, OperationRefused
 from transfertwin.ots import BeltThresholds, TransferDirection
@@ -461,16 +461,7 @@ class VirtualTransport:
             log.info("%s: took %s from %s: y = %d", self.tm, self.obj, leg.unit, rec.y)
         else:
             log.info("%s: handed %s to %s: y = %d", self.tm, self.obj, leg.unit, rec.y)
-        t_end = rec.t_end_s
-        info = {"y": rec.y, "valid": rec.valid, "conveyor": rec.conveyor,
-                "t_end_s": None if math.isnan(t_end) else round(t_end, 3)}  # fmt: skip
-        if not rec.valid:
-            return StepResult(False, "the controller's observed start state is not in "
-                                     "P_pre (Eq. 5.7)", info)  # fmt: skip
-        if rec.y != 1:
-            return StepResult(False, f"the object did not reach the receiver "
-                                     f"(failure state after {t_end:.2f} s)", info)  # fmt: skip
-        return StepResult(True, info=info)
+        return transfer_step(rec)
 
     async def resolve(self, leg: Leg, success: bool) -> None:
         cps = self.cps

@@ -55,6 +55,7 @@ __all__ = [
     "form_ots",
     "legs_of",
     "run_transport_operation",
+    "transfer_step",
 ]
 
 #: The transport module's states while it runs a leg, in order; 'idle' before and after.
@@ -96,6 +97,22 @@ class StepResult:
     ok: bool
     reason: str = ""
     info: Mapping[str, object] = field(default_factory=dict)
+
+
+def transfer_step(rec) -> StepResult:
+    """The transferring step's result from the OTS controller's `TransferRecord`: y, the
+    start state's validity, the conveyor and the end time recorded; not ok when the start
+    state was outside P_pre (Eq. 5.7) or the object did not reach the receiver."""
+    t_end = rec.t_end_s
+    info = {"y": rec.y, "valid": rec.valid, "conveyor": rec.conveyor,
+            "t_end_s": None if math.isnan(t_end) else round(t_end, 3)}  # fmt: skip
+    if not rec.valid:
+        return StepResult(False, "the controller's observed start state is not in "
+                                 "P_pre (Eq. 5.7)", info)  # fmt: skip
+    if rec.y != 1:
+        return StepResult(False, f"the object did not reach the receiver "
+                                 f"(failure state after {t_end:.2f} s)", info)  # fmt: skip
+    return StepResult(True, info=info)
 
 
 @dataclass(frozen=True)

@@ -30,8 +30,8 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-__all__ = ["FACE_POOL", "LEGS", "PRIOR_RUNS", "fallback", "leg_outcomes", "posterior", "record",
-           "rerank", "state_key", "tries"]  # fmt: skip
+__all__ = ["FACE_POOL", "LEGS", "PRIOR_RUNS", "fallback", "posterior", "record", "rerank",
+           "state_key", "tries"]  # fmt: skip
 
 #: How many plant runs the twin's prediction of a state is worth at most.
 PRIOR_RUNS = 4.0
@@ -71,15 +71,6 @@ def tries(result: Mapping[str, Any],
         last_failed_in_retries = bool(retries) and not tr.get("y")
         if tr.get("valid") and final and not last_failed_in_retries:
             out.append((name, final, int(tr.get("y") or 0)))
-    return out
-
-
-def leg_outcomes(result: Mapping[str, Any]) -> dict[str, tuple[int, int]]:
-    """(successes, tries) per leg whose transfer ran (`tries`, all states together)."""
-    out: dict[str, tuple[int, int]] = {}
-    for leg, _, y in tries(result, {"face": "?", "conveyor": "?", "theta_deg": 0}):
-        k, n = out.get(leg, (0, 0))
-        out[leg] = (k + y, n + 1)
     return out
 
 

@@ -8,7 +8,6 @@ from transfertwin.cps._learn import (
     FACE_POOL,
     PRIOR_RUNS,
     fallback,
-    leg_outcomes,
     posterior,
     record,
     rerank,
@@ -29,6 +28,15 @@ def _result(*legs: tuple[str, dict | None]) -> dict:
             leg["transferring"] = tr
         out.append(leg)
     return {"status": "x", "legs": out}
+
+
+def leg_outcomes(result: dict) -> dict[str, tuple[int, int]]:
+    """(successes, tries) per leg of `tries`, all states together."""
+    out: dict[str, tuple[int, int]] = {}
+    for leg, _, y in tries(result, {"face": "front", "conveyor": "both", "theta_deg": 0}):
+        k, n = out.get(leg, (0, 0))
+        out[leg] = (k + y, n + 1)
+    return out
 
 
 def test_a_leg_counts_every_try_that_ran_and_nothing_else():

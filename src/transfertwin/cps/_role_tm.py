@@ -253,6 +253,7 @@ class ModuleRole(Role):
         skills.load_state = op.get("load")
         skills.fallback = op.get("fallback")
         skills.camera = self.node.floor.operation.sensor == "camera"
+        skills.heights = self.state.data.setdefault("heights", {})  # learnt by the camera
         faces = self.state.data.setdefault("faces", {})  # of the objects on board
         if op["source"] == self.aid:  # on board already: it lies as it was loaded
             self._face = faces.get(obj, "front")

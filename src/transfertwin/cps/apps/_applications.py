@@ -363,6 +363,8 @@ class VirtualTransport:
     #: "camera"); the face the object lies on, for that check.
     camera: bool = False
     face: str = "front"
+    #: Heights the camera has learnt ('o10/front' -> m; `cps.apps._camera`), None: none kept.
+    heights: dict[str, float] | None = None
 
     def __init__(self, cps: AssetApplications, tm: str, source: str, target: str, obj: str):
         self.cps, self.tm, self.obj = cps, tm, obj
@@ -435,14 +437,19 @@ class VirtualTransport:
         info = {"source": "depth camera" if seeing else "ground truth",
                 "boxes": [b.as_dict() for b in boxes]}  # fmt: skip
         if self.camera:  # what it sees against what the ledger says (Sec. 5.5)
-            from transfertwin.cps.apps._camera import scan_check
+            from transfertwin.cps.apps._camera import height_key, scan_check
 
-            ok, why, info["possessions"] = scan_check(
+            verdict = scan_check(
                 boxes, self.obj, self.face, self.tm, leg.unit,
-                leg.direction is TransferDirection.TU_TO_TM, cps.config.scene.gap_m)
-            if not ok:
-                log.info("%s: scanned %s and itself: %s", self.tm, leg.unit, why)
-                return StepResult(False, why, info)
+                leg.direction is TransferDirection.TU_TO_TM, cps.config.scene.gap_m,
+                self.heights)  # fmt: skip
+            info["possessions"] = verdict.summary
+            if not verdict.ok:
+                log.info("%s: scanned %s and itself: %s", self.tm, leg.unit, verdict.why)
+                return StepResult(False, verdict.why, info)
+            if verdict.height_m is not None and self.heights is not None:
+                self.heights[height_key(self.obj, self.face)] = round(verdict.height_m, 4)
+                log.info("%s: learnt %s", self.tm, verdict.summary["learnt"][0])
         # The transport module carries objects only on its belts; a unit's representation
         # also lists what its station holds off the belts, so for a unit the scan decides.
         pickup = leg.direction is TransferDirection.TU_TO_TM

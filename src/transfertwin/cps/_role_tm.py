@@ -335,7 +335,8 @@ class ModuleRole(Role):
         self.state.save()
 
     async def _docking_estimate(self, tm: str, unit: str, error, seed: int):
-        return await _props_docking_estimate(self, tm, unit, error, seed)  # PropS in the loop
+        observed = functools.partial(_observe_docking, self.robot, error, seed)
+        return await _props_docking_estimate(self, tm, unit, error, observed)  # PropS in the loop
 
     def _error(self, source: str, target: str, obj: str, leg: int):
         from transfertwin.cps._runtime import _docking_model
@@ -423,34 +424,17 @@ class ModuleRole(Role):
                            seed=seed)  # fmt: skip
 
     async def _take_back(self, unit: str, to_unit: bool = False) -> bool:
-        """Reverse both belt pairs (the unit's through its interface) until the object is
-        wholly on the module, clear of its tip (True) — with `to_unit`, after a failed
-        pick-up, wholly back on the unit, clear of its tip — or `TAKE_BACK_S` of simulated
-        time passed (False: it is caught in the gap); belts stopped either way."""
+        """Reverse both belt pairs (the unit's through its interface) in the simulation
+        until the object is back (`cps._hand_over.take_back`)."""
+        from transfertwin.cps._hand_over import take_back
+
         hal = await self._unit_hal(unit)
         system = self.env.system
-        speed = self.env.scene.layout.belt_speed_m_s * (-1.0 if not to_unit else 1.0)
-        gap = self.env.scene.gap_m  # the twin's: what the module knows of the docked pair
 
         def reverse() -> bool:
             with self.env.lock:
-                for belt in ("left", "right"):
-                    system.tm.set_belt_speed(belt, speed)
-                    hal.set_belt_speed(belt, speed)
-                clear = False
-                for _ in range(round(TAKE_BACK_S / TAKE_BACK_STEP_S)):
-                    self.env.clock.wait(TAKE_BACK_STEP_S)
-                    state = system.observe()  # (a, x, y, z, s_x, s_y, s_z, θ), Eq. 5.4
-                    if to_unit:  # wholly on the unit's belts (they start at x = gap)
-                        clear = bool(state[1] - state[4] > gap + TAKE_BACK_CLEARANCE_M)
-                    else:  # wholly on the module's belts, clear of its tip (x = 0)
-                        clear = bool(state[1] + state[4] < -TAKE_BACK_CLEARANCE_M)
-                    if clear:
-                        break
-                for belt in ("left", "right"):
-                    system.tm.set_belt_speed(belt, 0.0)
-                    hal.set_belt_speed(belt, 0.0)
-                return clear
+                return take_back(system.tm, hal, system.observe, self.env.clock,
+                                 self.env.scene, to_unit)  # fmt: skip
 
         return await asyncio.to_thread(reverse)
 
@@ -497,20 +481,23 @@ def _mm_deg(x: float, y: float, theta: float) -> dict[str, float]:
             "theta_deg": round(math.degrees(theta), 4)}  # fmt: skip
 
 
-async def _props_docking_estimate(role, tm: str, unit: str, error, seed: int):
-    """PropS in the loop: report the module's pose and the unit camera's observation to
+async def _props_docking_estimate(role, tm: str, unit: str, error, observed,
+                                  measured: str = "true"):  # fmt: skip
+    """PropS in the loop: report the module's pose and the unit camera's observation
+    (`observed()`, run in a worker thread: (x, y, θ, σ_xy, σ_θ), and (x, y, θ) or None) to
     PropS, and take the docking error from its fused estimate (with its uncertainty). On
     the emulated plant the physics docks with the true error (it is the reality; the
     estimate is what the twin knows). Without PropS on the floor, or when it does not
-    answer, the true error, and why."""
+    answer, `error` (recorded as `measured`: the true one, or the module's localisation's
+    on real hardware), and why."""
     from transfertwin.sim import DockingError
 
     props = next((d.asset_id for d in role.node.descriptors.values()
                   if d.asset_class == "props"), None)  # fmt: skip
     if props is None:
         return error, None
-    own, seen = await asyncio.to_thread(_observe_docking, role.robot, error, seed)
-    info: dict[str, Any] = {"true": _mm_deg(error.x_m, error.y_m, error.theta_rad),
+    own, seen = await asyncio.to_thread(observed)
+    info: dict[str, Any] = {measured: _mm_deg(error.x_m, error.y_m, error.theta_rad),
                             "camera": seen is not None}  # fmt: skip
     try:
         await asyncio.wait_for(role.node.peers.call(props, "ReportPose", tm, tm, *own), 10.0)
@@ -522,8 +509,9 @@ async def _props_docking_estimate(role, tm: str, unit: str, error, seed: int):
             role.node.peers.call(props, "DockingError", tm, unit), 10.0))  # fmt: skip
         fused = DockingError(est["x_m"], est["y_m"], est["theta_rad"])
     except Exception as exc:  # PropS away, or an estimate outside the dockable range
-        log.info("%s: docking error from PropS not available (%s); the true one", tm, exc)
-        return error, {**info, "used": "true", "why": f"{type(exc).__name__}: {exc}"}
+        log.info("%s: docking error from PropS not available (%s); the %s one", tm, exc,
+                 measured)  # fmt: skip
+        return error, {**info, "used": measured, "why": f"{type(exc).__name__}: {exc}"}
     info["fused"] = {**_mm_deg(fused.x_m, fused.y_m, fused.theta_rad),
                      "sd_x_mm": round(est["sd_x_m"] * 1e3, 4),
                      "sd_y_mm": round(est["sd_y_m"] * 1e3, 4),
@@ -540,31 +528,15 @@ def _warm_up() -> None:
     _docking_model()
 
 
-#: Hand-over policy of a delivery whose transfer failed: take the object back onto the
-#: module (belts reversed, at most `TAKE_BACK_S` of simulated time) and try again after
-#: docking anew, at most `DELIVERY_RETRIES` times, then take it back once more and fail
-#: the operation with the object on the module; an object that does not come back lies
-#: in the gap, and its place is unknown.
-DELIVERY_RETRIES = 1
-#: A failed pick-up is tried again this many times: the object taken back onto the unit,
-#: put down in the plan's fallback state by the station, the module docked anew.
-PICKUP_RETRIES = 1
-TAKE_BACK_S = 6.0
-TAKE_BACK_STEP_S = 0.1
-#: How far behind the module's tip (x = 0 of F_T) the object's near edge must be.
-TAKE_BACK_CLEARANCE_M = 0.03
-
-
 def _make_transport():
-    from transfertwin.cps.apps import StepResult, VirtualTransport
+    from transfertwin.cps._hand_over import HandOverRetries
+    from transfertwin.cps.apps import VirtualTransport
 
-    class ModuleTransport(VirtualTransport):
-        """The skills of `VirtualTransport` with the hand-over policy above; a module that
+    class ModuleTransport(HandOverRetries, VirtualTransport):
+        """The skills of `VirtualTransport` with the hand-over policy (`HandOverRetries`:
+        a failed transfer taken back and tried again); a module that
         restarted with an object on board puts it back on its belts in the simulation
         before docking to deliver it."""
-
-        attempt = 0
-        fallback = None  # the state a failed pick-up is tried again in (the TMS's plan)
 
         def _seed(self, leg):
             return super()._seed(leg) + 7919 * self.attempt
@@ -575,61 +547,7 @@ def _make_transport():
                 await asyncio.to_thread(self.cps._locked, _load_on_module, env, self.obj)
             return await super().dock(leg)
 
-        async def transfer(self, leg):
-            """A failed hand-over is taken back and tried again: a delivery onto the module
-            (its state cannot change), `DELIVERY_RETRIES` times; a pick-up onto the unit,
-            where the station puts the object down in the plan's fallback state (the same
-            state without one), `PICKUP_RETRIES` times."""
-            result = await super().transfer(leg)
-            pickup = leg.name == "pick-up"
-            onto, retries = ("unit", PICKUP_RETRIES) if pickup else ("module", DELIVERY_RETRIES)
-            tries = []
-            while not result.ok and result.info.get("valid"):
-                back = await self.cps._take_back(leg.unit, to_unit=pickup)
-                tries.append({"attempt": self.attempt + 1, "taken_back": back,
-                              "reason": result.reason, "state": self.load_state})  # fmt: skip
-                if not back:
-                    self.cps._lost_in_gap = True
-                    return StepResult(False, f"{result.reason}; the object did not come back "
-                                             f"onto the {onto}: it lies in the gap",
-                                      {**result.info, "retries": tries})  # fmt: skip
-                if self.attempt >= retries:
-                    return StepResult(False, f"{result.reason}; taken back onto the {onto} "
-                                             f"after {self.attempt + 1} attempt(s)",
-                                      {**result.info, "retries": tries})  # fmt: skip
-                self.attempt += 1
-                self.cps._attempt = self.attempt
-                if pickup and self.fallback:  # the station puts it down in the next-best state
-                    self._load(self.fallback)
-                log.info("%s: took %s back onto the %s at %s; %sdocking again (attempt %d)",
-                         self.cps.aid, self.obj, onto, leg.unit,
-                         f"loaded {_state_text(self.load_state)}, " if pickup else "",
-                         self.attempt + 1)  # fmt: skip
-                await self.cps._undock(self.cps.aid)
-                for step in (self.dock, self.form_ots):
-                    pre = await step(leg)
-                    if not pre.ok:
-                        return StepResult(False, pre.reason, {**pre.info, "retries": tries})
-                result = await super().transfer(leg)
-            if tries:
-                return StepResult(result.ok, result.reason, {**result.info, "retries": tries})
-            return result
-
-        def _load(self, state) -> None:
-            """From now on the object lies in `state` (the face the module carries it on)."""
-            self.load_state = dict(state)
-            self.face = self.cps._face = str(state["face"])
-            self.cps.state.data.setdefault("faces", {})[self.obj] = self.face
-            if self.cps.op is not None:
-                self.cps.op["load"] = self.load_state
-
     return ModuleTransport
-
-
-def _state_text(state) -> str:
-    if not state:
-        return "as before (front/both/0 deg)"
-    return f"{state['face']}/{state['conveyor']}/{state['theta_deg']} deg"
 
 
 def _ModuleTransport(*args):

@@ -145,8 +145,12 @@ class _ThreadHAL:
     def barriers(self) -> dict[str, bool]:
         return self._run(self._gw.barriers())
 
+    def sensed(self) -> np.ndarray | None:
+        """What the object sensor sees (None: nothing)."""
+        return self._run(self._gw.object_state())
+
     def observe(self) -> np.ndarray:
-        s = self._run(self._gw.object_state())
+        s = self.sensed()
         if s is None:
             raise RuntimeError(f"{self.name}'s object sensor lost the object")
         return s
@@ -170,23 +174,23 @@ class GatewayWorld:
 
 def _make_skills():
     from transfertwin._errors import InputError
+    from transfertwin.cps._hand_over import HandOverRetries
     from transfertwin.cps.apps import StepResult, form_ots, transfer_step
     from transfertwin.navigation import relative
     from transfertwin.ots import BeltThresholds, TransferDirection
     from transfertwin.perception import AABB
     from transfertwin.sim import DockingError
 
-    class GatewayTransport:
-        """The steps of a leg (`TransportSkills`) on the module's hardware."""
+    class GatewaySteps:
+        """The steps of a leg (`TransportSkills`) on the module's hardware, one try each."""
 
         load_state: dict | None = None
-        fallback: dict | None = None
         camera = False
         face = "front"
 
         def __init__(self, role: RemoteModuleRole, source: str, target: str, obj: str):
-            self.role, self.obj = role, obj
-            self.source, self.target = source, target
+            self.role = self.cps = role  # `cps`: the module's role, as `HandOverRetries` asks
+            self.obj, self.source, self.target = obj, source, target
 
         def _station(self, leg) -> str:
             station = self.role.assets[leg.unit].desc.station
@@ -209,16 +213,21 @@ def _make_skills():
             pose = await role._refresh_pose()
             goal = role.robot.floor.station(station).goal_pose()
             xi = tuple(float(v) for v in relative(goal, pose))
-            info = {"station": station, "x_mm": round(xi[0] * 1e3, 3),
-                    "y_mm": round(xi[1] * 1e3, 3), "theta_deg": round(math.degrees(xi[2]), 4),
+            info = {"station": station, **_error_info(xi),
                     "source": "the module's localisation at the gateway"}  # fmt: skip
             if not ok:
                 return StepResult(False, f"docking at {leg.unit}: {why}", info)
             try:
-                DockingError(*xi)
+                err = DockingError(*xi)
             except InputError as exc:  # an error the pair cannot work with
                 await role._undock(role.aid)
                 return StepResult(False, f"docking at {leg.unit}: {exc}", info)
+            used, props = await role._docking_estimate(role.aid, leg.unit, err, pose)
+            if props is not None:  # PropS in the loop: its fused estimate is the record's
+                info["props"] = props
+                if props["used"] == "fused":
+                    info |= {**_error_info((used.x_m, used.y_m, used.theta_rad)),
+                             "source": "PropS's fused estimate"}  # fmt: skip
             role.robot.docked_at = station
             role.env.docked_unit = leg.unit
             await role._dock(role.aid, leg.unit)
@@ -252,7 +261,18 @@ def _make_skills():
                 await role._moved(self.obj, role.aid if leg.name == "pick-up" else leg.unit)
             await role._undock(role.aid)
 
+    class GatewayTransport(HandOverRetries, GatewaySteps):
+        """The steps of a leg on the module's hardware with the hand-over policy: a failed
+        transfer is taken back with the belts at the gateway and tried again after a dock
+        commanded anew."""
+
     return GatewayTransport
+
+
+def _error_info(xi) -> dict[str, float]:
+    """A docking error (x m, y m, θ rad) as a leg's record holds it."""
+    return {"x_mm": round(xi[0] * 1e3, 3), "y_mm": round(xi[1] * 1e3, 3),
+            "theta_deg": round(math.degrees(xi[2]), 4)}  # fmt: skip
 
 
 class RemoteModuleRole(ModuleRole):
@@ -282,6 +302,18 @@ class RemoteModuleRole(ModuleRole):
             self.robot.pose = pose
             await self._publish_pose(self.aid)
         return pose
+
+    async def _docking_estimate(self, tm: str, unit: str, error, pose):
+        """PropS in the loop: the module's localisation fix at the gateway (`pose`, with
+        the σ of the module's navigation model) reported to PropS, and the docking error
+        taken from its fused estimate. No unit camera is seen from here (a unit on real
+        hardware would report its own)."""
+        from transfertwin.cps._role_tm import _props_docking_estimate
+
+        noise = self.robot.cfg.noise
+        own = (*(float(v) for v in pose), noise.loc_xy_sd_m, noise.loc_theta_sd_rad)
+        return await _props_docking_estimate(self, tm, unit, error, lambda: (own, None),
+                                             measured="gateway")  # fmt: skip
 
     async def _poll_pose(self) -> None:
         """Publish the module's pose as the gateway reports it (a gateway away: said once,
@@ -330,20 +362,40 @@ class RemoteModuleRole(ModuleRole):
                 log.info("%s: %s not answering while undocking: %s", self.aid, unit, exc)
         return True
 
-    async def _gateway_transfer(self, unit: str, direction, face: str):
-        """One transfer between the module and the docked `unit` on the hardware: the OTS
-        controller with the module's gateway, the unit's OPC UA interface and the wall
-        clock."""
+    async def _pair(self, unit: str, work):
+        """Run `work(tm, tu)` in a worker thread with the docked pair's HALs: the module's
+        at the gateway (`_ThreadHAL`) and `unit`'s OPC UA interface."""
         from transfertwin.cps.opcua import OpcUaUnitHAL
-        from transfertwin.study.experiment import scene_controller
 
         loop = asyncio.get_running_loop()
         session = await self.node.peers.session(unit)
         tu = OpcUaUnitHAL(session, loop, timeout_s=10)
         tm = _ThreadHAL(self.aid, self.gateway, loop)
-        ctl = scene_controller(self.env.scene, tm, tu, tm, WallClock())
         try:
-            return await asyncio.to_thread(ctl.transfer, direction, face, None)
+            return await asyncio.to_thread(work, tm, tu)
         except Exception:
             await self.node.peers.drop(unit)
             raise
+
+    async def _gateway_transfer(self, unit: str, direction, face: str):
+        """One transfer between the module and the docked `unit` on the hardware: the OTS
+        controller with the module's gateway, the unit's OPC UA interface and the wall
+        clock."""
+        from transfertwin.study.experiment import scene_controller
+
+        def work(tm, tu):
+            ctl = scene_controller(self.env.scene, tm, tu, tm, WallClock())
+            return ctl.transfer(direction, face, None)
+
+        return await self._pair(unit, work)
+
+    async def _take_back(self, unit: str, to_unit: bool = False) -> bool:
+        """Reverse the module's belts at the gateway and `unit`'s through its interface
+        until the object sensor sees the object back (`cps._hand_over.take_back`, on the
+        wall clock)."""
+        from transfertwin.cps._hand_over import take_back
+
+        def work(tm, tu):
+            return take_back(tm, tu, tm.sensed, WallClock(), self.env.scene, to_unit)
+
+        return await self._pair(unit, work)

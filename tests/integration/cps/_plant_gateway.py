@@ -36,6 +36,8 @@ class PlantLog:
     belts: dict[str, float] = field(default_factory=dict)  # node -> largest |speed|
     barriers: set[str] = field(default_factory=set)  # barrier nodes that were interrupted
     commands: list[str] = field(default_factory=list)
+    signs: dict[str, set[int]] = field(default_factory=dict)  # node -> directions it ran
+    jammed_s: float = 0.0  # how long the module's belts stood jammed (wall)
 
 
 class PlantGateway:
@@ -48,10 +50,14 @@ class PlantGateway:
         seed: Seed of the docking errors.
         secure: (gateway cert, key, trust folder) for Basic256Sha256 SignAndEncrypt only;
             None: NoSecurity.
+        jam: The module's belt drive trips once: its belts stand still from the first time
+            they are commanded to run until they are next commanded to stop (then it is
+            reset and runs as commanded).
     """
 
     def __init__(self, port: int, module: str, units: dict[str, str], obj: str, at: str,
-                 seed: int, secure: tuple[Path, Path, Path] | None = None) -> None:  # fmt: skip
+                 seed: int, secure: tuple[Path, Path, Path] | None = None,
+                 jam: bool = False) -> None:  # fmt: skip
         from transfertwin.cps import default_floor_spec
 
         self.url = f"opc.tcp://127.0.0.1:{port}/gateway"
@@ -64,6 +70,8 @@ class PlantGateway:
         self.pose = np.array([6.0, 5.2, 0.0])
         self.secure = secure
         self.log = PlantLog()
+        self._jam = "armed" if jam else "off"  # armed -> jammed -> reset
+        self._jam_t0 = 0.0
         self._loop: asyncio.AbstractEventLoop | None = None
         self._thread: threading.Thread | None = None
         self._ready = threading.Event()
@@ -179,6 +187,17 @@ class PlantGateway:
         vtype = ua.VariantType.Double if isinstance(value, float | list) else None
         await self.nodes[key].write_value(ua.Variant(value, vtype) if vtype else value)
 
+    def _drive(self, asset: str, speed: float) -> float:
+        """The speed `asset`'s belt runs at when commanded `speed` (the jam, if armed)."""
+        if asset != self.module or self._jam == "off":
+            return speed
+        if self._jam == "armed" and speed:
+            self._jam, self._jam_t0 = "jammed", time.monotonic()
+        if self._jam == "jammed" and not speed:  # stopped: the drive is reset
+            self._jam = "off"
+            self.log.jammed_s = time.monotonic() - self._jam_t0
+        return 0.0 if self._jam == "jammed" else speed
+
     def _in_pair(self) -> bool:
         return self.docked is not None and self.holder in (self.module, self.docked)
 
@@ -244,8 +263,10 @@ class PlantGateway:
                     for belt in ("left", "right"):
                         key = f"{who}.BeltSpeed{belt.capitalize()}"
                         speed = float(await self._read(key))
-                        hal.set_belt_speed(belt, speed)
                         self.log.belts[key] = max(self.log.belts.get(key, 0.0), abs(speed))
+                        if speed:
+                            self.log.signs.setdefault(key, set()).add(1 if speed > 0 else -1)
+                        hal.set_belt_speed(belt, self._drive(who, speed))
                 target = time.monotonic() - wall0  # real time: the physics keeps pace
                 steps = int((target - sim_t) / self.env.scene.physics.timestep_s)
                 if steps > 0:

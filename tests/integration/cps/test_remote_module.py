@@ -144,3 +144,74 @@ def test_a_remote_module_transfers_through_its_gateway_end_to_end(tmp_path):
     assert "no unit at C" in third["reason"] and third["y_pickup"] == 1
     assert third["possessed"] == "o2" and plant.holder == "TM_1"
     json.dumps(result)  # the report is JSON as the TMS gets it
+
+
+@pytest.mark.slow  # real time: a jammed transfer, a take-back and three transfers, ~30 s
+def test_a_failed_pickup_is_taken_back_and_retried_through_the_gateway_with_props(tmp_path):
+    """The module's belt drive trips at the first pick-up (its belts stand still: the
+    object does not arrive); the module reverses both belt pairs through the gateway and
+    the unit, the object goes back onto TU_B, the module undocks, docks anew by command and
+    the second try delivers. PropS runs on the floor: each docking reports the module's
+    localisation at the gateway and the leg's docking error is PropS's fused estimate."""
+    port = free_port()
+    plant = PlantGateway(port, "TM_1", UNITS, "o2", at="TU_B", seed=12, jam=True).start()
+    cfgs = _configs(tmp_path, plant.url)
+    cfgs["PropS"] = dataclasses.replace(cfgs["TU_A"], asset_id="PropS", port=free_port(),
+                                        hal=HalConfig(), cert_dir=tmp_path / "PropS" / "certs",
+                                        trust_dir=tmp_path / "PropS" / "trusted",
+                                        state_dir=tmp_path / "PropS" / "state")  # fmt: skip
+
+    async def scenario() -> dict:
+        async with AssetNode(cfgs["TU_A"]) as tu_a, AssetNode(cfgs["TU_B"]) as tu_b, \
+                AssetNode(cfgs["PropS"]) as props, AssetNode(cfgs["TM_1"]) as tm:
+            for peer in (tu_a, tu_b, props):
+                tm.learn(peer.desc.asset_id, peer.server.endpoint)
+            async with connect(tm.server.endpoint, "TM_1", credentials=None,
+                               insecure=True) as client:  # fmt: skip
+                assert await client.call("AssignOperation", "op1", "TU_B", "TU_A", "o2", "{}")
+
+                async def finished():
+                    done = [e for e in _events(tm, "op1") if e["event"] == "result"]
+                    return done[0]["result"] if done else None
+
+                result = await _until(finished, 120, "op1")
+            async with connect(props.server.endpoint, "PropS", credentials=None,
+                               insecure=True) as ps:  # fmt: skip
+                fused = json.loads(await ps.read("OperationalData", "FusedPosesJson"))
+                errors = json.loads(await ps.read("OperationalData", "DockingErrorsJson"))
+            return {"result": result, "fused": fused, "errors": errors}
+
+    try:
+        out = asyncio.run(scenario())
+    finally:
+        plant.stop()
+    result = out["result"]
+    assert result["status"] == "delivered", result
+    assert (result["y_pickup"], result["y_delivery"]) == (1, 1)
+    pick = result["legs"][0]
+    tries = pick["transferring"]["retries"]
+    assert [(t["attempt"], t["taken_back"]) for t in tries] == [(1, True)]
+    assert "did not reach the receiver" in tries[0]["reason"]
+    assert plant.log.jammed_s > 1.0  # the drive really stood still through the first try
+    # taken back: TU_B's belts ran towards the module and back (through TU_B's process)
+    assert plant.log.signs["TU_B.BeltSpeedLeft"] == {-1, 1}
+    # the pick-up was docked for anew by command, without driving away
+    assert plant.log.commands == ["navigate B", "dock B", "undock", "dock B", "undock",
+                                  "navigate A", "dock A", "undock"]  # fmt: skip
+    assert plant.holder == "TU_A"  # the physics agrees: delivered
+    # PropS in the loop: the docking error recorded is its fused estimate of the module's
+    # localisation fix (the only observation of the module: the same error, σ of the fix)
+    for leg, (station, xi) in zip(result["legs"], [plant.log.errors[0], plant.log.errors[2]],
+                                  strict=True):  # fmt: skip
+        rec = leg["docking"]
+        assert station == UNITS[leg["unit"]] and rec["source"] == "PropS's fused estimate"
+        assert rec["props"]["used"] == "fused" and rec["props"]["camera"] is False
+        assert rec["x_mm"] == pytest.approx(xi[0] * 1e3, abs=0.01)
+        assert rec["y_mm"] == pytest.approx(xi[1] * 1e3, abs=0.01)
+        assert rec["theta_deg"] == pytest.approx(np.degrees(xi[2]), abs=1e-3)
+        assert rec["props"]["gateway"]["x_mm"] == pytest.approx(xi[0] * 1e3, abs=2e-3)
+        assert 15.0 < rec["props"]["fused"]["sd_x_mm"] < 25.0  # the 20 mm fix, 2 mm survey
+    assert out["errors"]["TM_1"]["unit"] == "TU_A"
+    # PropS holds the pose the gateway reported at the last docking (at A; undocking
+    # leaves the module where it stands)
+    assert out["fused"]["TM_1"]["x"] == pytest.approx(plant.pose[0], abs=1e-6)

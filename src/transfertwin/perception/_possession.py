@@ -17,7 +17,11 @@ A box fits an object when its size agrees within `size_tol_m` and, where the exp
 position is known, its centre lies within `position_tol_m` of it. The size is compared
 without knowing the yaw: an object of extents (L, W) at yaw θ has the footprint
 (L|cos θ| + W|sin θ|, L|sin θ| + W|cos θ|); the distance to a detected footprint is the
-smallest over θ (a 0.5° grid), unless the expected yaw is given.
+smallest over θ (a 0.5° grid), unless the expected yaw is given. That footprint is a box's;
+a rounded object's is smaller at a slant (a starter-motor core at 60° covers about 162 × 220
+mm, not the 240 × 267 of its yaw-0 box turned), so a `Possession` may carry its real
+footprint over yaw (`Possession.footprint_m`, e.g. its hull points' extents turned), which is
+then used instead.
 """
 
 from __future__ import annotations
@@ -36,6 +40,7 @@ __all__ = [
     "Possession",
     "PossessionMatch",
     "PossessionReport",
+    "footprint_over_yaw",
     "match_possessions",
     "size_distance",
     "unit_by_gap",
@@ -56,16 +61,26 @@ class Possession:
         xy_m: Where it should lie (x, y) in F_T (m), or None when unknown.
         theta_rad: Its yaw, or None when unknown (the footprint is then compared over
             all yaws).
+        footprint_m: Its footprint's extents (x, y) at n yaws evenly over [0°, 180°)
+            (`footprint_over_yaw`), or None: the footprint of its yaw-0 box turned.
     """
 
     object_id: str
     size_m: tuple[float, float, float]
     xy_m: tuple[float, float] | None = None
     theta_rad: float | None = None
+    footprint_m: tuple[tuple[float, float], ...] | None = None
 
     def __post_init__(self) -> None:
         if len(self.size_m) != 3 or not all(math.isfinite(v) and v > 0 for v in self.size_m):
             raise InputError(f"Possession {self.object_id!r}: size_m must be 3 positive numbers")
+        if self.footprint_m is not None and not (
+            len(self.footprint_m) > 0
+            and all(len(f) == 2 and all(math.isfinite(v) and v > 0 for v in f)
+                    for f in self.footprint_m)
+        ):  # fmt: skip
+            raise InputError(f"Possession {self.object_id!r}: footprint_m must be (x, y) pairs "
+                             "of positive numbers")  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -126,11 +141,33 @@ class PossessionReport:
         }
 
 
-def size_distance(box: AABB, size_m: Sequence[float], theta_rad: float | None = None) -> float:
+def footprint_over_yaw(points_xy: np.ndarray, n: int = 180) -> tuple[tuple[float, float], ...]:
+    """Extents (x, y) of points (k, 2) turned by n yaws evenly over [0°, 180°), m: a
+    `Possession.footprint_m` (the extents repeat every 180°)."""
+    pts = np.asarray(points_xy, dtype=float)
+    if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) == 0 or n < 1:
+        raise InputError("footprint_over_yaw: points must be (k, 2) with k >= 1, n >= 1")
+    yaws = np.pi * np.arange(n) / n
+    c, s = np.cos(yaws)[:, None], np.sin(yaws)[:, None]
+    x = c * pts[:, 0] - s * pts[:, 1]
+    y = s * pts[:, 0] + c * pts[:, 1]
+    return tuple(zip(np.ptp(x, axis=1).tolist(), np.ptp(y, axis=1).tolist(), strict=True))
+
+
+def size_distance(box: AABB, size_m: Sequence[float], theta_rad: float | None = None,
+                  footprint_m: Sequence[Sequence[float]] | None = None) -> float:  # fmt: skip
     """Largest extent difference (m) between a box and an object of extents (L, W, H),
-    at yaw `theta_rad`, or at the yaw that fits best when None."""
+    at yaw `theta_rad`, or at the yaw that fits best when None; with `footprint_m` (the
+    object's footprint over yaw, `Possession.footprint_m`) its footprint is that, not its
+    yaw-0 box's turned."""
     dx, dy, dz = (2.0 * h for h in box.half)
     length, width, height = size_m
+    if footprint_m is not None:
+        fp = np.asarray(footprint_m, dtype=float)
+        if theta_rad is not None:
+            fp = fp[[round(theta_rad % math.pi / math.pi * len(fp)) % len(fp)]]
+        foot = np.maximum(np.abs(dx - fp[:, 0]), np.abs(dy - fp[:, 1]))
+        return float(max(foot.min(), abs(dz - height)))
     yaws = _YAWS if theta_rad is None else np.array([theta_rad])
     c, s = np.abs(np.cos(yaws)), np.abs(np.sin(yaws))
     foot = np.maximum(np.abs(dx - (length * c + width * s)), np.abs(dy - (length * s + width * c)))
@@ -152,7 +189,7 @@ def _cost(
     pos = np.full((n, m), np.nan)
     for i, box in enumerate(boxes):
         for j, p in enumerate(items):
-            size[i, j] = size_distance(box, p.size_m, p.theta_rad)
+            size[i, j] = size_distance(box, p.size_m, p.theta_rad, p.footprint_m)
             if p.xy_m is not None:
                 pos[i, j] = math.dist(box.centre[:2], p.xy_m)
     cost = size / size_tol + np.nan_to_num(pos / pos_tol, nan=0.0)
@@ -225,7 +262,8 @@ def match_possessions(
     # leftovers across units, by size only (the expected position was on the other unit)
     rest_boxes = [(u, b) for u in units for b in left_boxes[u]]
     rest_items = [(u, p) for u in units for p in left_items[u]]
-    loose = [Possession(p.object_id, p.size_m, None, p.theta_rad) for _, p in rest_items]
+    loose = [Possession(p.object_id, p.size_m, None, p.theta_rad, p.footprint_m)
+             for _, p in rest_items]
     same = np.array([[ub == ui for ui, _ in rest_items] for ub, _ in rest_boxes], dtype=bool)
     pairs = _assign([b for _, b in rest_boxes], loose, size_tol_m, position_tol_m, same)
     moved = [

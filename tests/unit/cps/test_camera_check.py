@@ -5,8 +5,15 @@ from __future__ import annotations
 
 import pytest
 
-from transfertwin.cps.apps._camera import expected_size, far_side_open, height_key, scan_check
-from transfertwin.perception import AABB
+from transfertwin.cps.apps._camera import (
+    SIZE_TOL_M,
+    expected_footprint,
+    expected_size,
+    far_side_open,
+    height_key,
+    scan_check,
+)
+from transfertwin.perception import AABB, size_distance
 
 GAP = 0.02
 
@@ -49,7 +56,7 @@ def test_a_far_end_hidden_on_the_unit_is_matched_on_width_and_height():
         ok, why, _, _ = scan_check([seen], "o9", "front", "TM_1", "TU_A", pickup=True, gap_m=GAP)
         assert ok is ok_expected, (cut, why)
     # extended away from the camera only, and never beyond the expected length
-    grown = far_side_open(AABB((0.2, 0.0, 0.05), (0.08, *full.half[1:])), expected_size("o9",
+    grown = far_side_open(AABB((0.2, 0.0, 0.05), (0.08, *full.half[1:])), expected_footprint("o9",
                                                                                         "front"))
     assert grown.centre[0] - grown.half[0] == pytest.approx(0.12)
     assert 2 * grown.half[0] <= length + 1e-9
@@ -119,3 +126,12 @@ def test_no_height_is_learnt_from_a_scan_that_disagrees_otherwise():
     # on the module before a delivery the same rule holds for the module's belts
     on_module = AABB((-0.3, 0.0, 0.0), taller.half)
     assert scan_check([on_module], "o10", "front", "TM_1", "TU_A", pickup=False, gap_m=GAP).ok
+
+
+def test_a_yawed_core_is_matched_on_its_real_footprint():
+    size, fp = expected_size("o3", "front"), expected_footprint("o3", "front")
+    fx, fy = fp[45]  # the rounded core at 45 degrees covers less than its box turned
+    seen = AABB((-0.3, 0.0, size[2] / 2), (fx / 2, fy / 2, size[2] / 2))
+    assert size_distance(seen, size) > SIZE_TOL_M  # its yaw-0 box fits at no yaw
+    verdict = scan_check([seen], "o3", "front", "TM_1", "TU_A", pickup=False, gap_m=GAP)
+    assert verdict.ok and verdict.height_m is None, verdict.why

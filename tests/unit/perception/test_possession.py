@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from transfertwin._errors import InputError
 from transfertwin.perception import (
     AABB,
     Possession,
+    footprint_over_yaw,
     match_possessions,
     size_distance,
     unit_by_gap,
@@ -35,6 +37,27 @@ def test_size_distance_is_zero_at_any_yaw_and_sees_a_wrong_height() -> None:
     assert size_distance(_box(0, 0, CORE, 30), CORE, 0.0) > 0.02  # wrong yaw given
     taller = _box(0, 0, (0.20, 0.09, 0.12))
     assert size_distance(taller, CORE) == pytest.approx(0.04)
+
+
+def test_a_round_objects_real_footprint_is_matched_where_its_turned_box_is_not() -> None:
+    # a disc of 200 mm: its footprint is 200 x 200 at every yaw, its yaw-0 box turned by 45
+    # degrees would cover 283 x 283
+    ring = [(0.1 * math.cos(a), 0.1 * math.sin(a)) for a in np.linspace(0, 2 * math.pi, 721)]
+    fp = footprint_over_yaw(np.array(ring), 180)
+    assert len(fp) == 180 and all(f == pytest.approx((0.2, 0.2), abs=1e-4) for f in fp)
+    disc = (0.2, 0.2, 0.05)
+    seen = AABB((0.2, 0.0, 0.025), (0.1, 0.1, 0.025))
+    assert size_distance(seen, disc, None, fp) == pytest.approx(0.0, abs=1e-4)
+    assert size_distance(seen, disc, math.radians(45), fp) == pytest.approx(0.0, abs=1e-4)
+    # a bar's footprint at a known yaw picks that yaw's entry
+    bar = footprint_over_yaw(np.array([(-0.1, -0.02), (0.1, 0.02)]), 180)
+    assert bar[90] == pytest.approx((0.04, 0.2))
+    assert size_distance(AABB((0, 0, 0.025), (0.02, 0.1, 0.025)), (0.2, 0.04, 0.05),
+                         math.radians(90), bar) == pytest.approx(0.0, abs=1e-9)  # fmt: skip
+    with pytest.raises(InputError, match="footprint_m"):
+        Possession("o1", disc, footprint_m=((0.2, -0.1),))
+    with pytest.raises(InputError, match="points"):
+        footprint_over_yaw(np.zeros((3, 3)))
 
 
 def test_objects_on_their_units_are_matched() -> None:

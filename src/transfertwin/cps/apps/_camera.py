@@ -5,8 +5,9 @@ Sec. 5.5); an object missing, seen on the other unit, or a box nobody expects st
 step with the reason, which goes into the order's history.
 
 What the ledger says an object is comes from its model: the extents of its convex hulls
-lying on the face it was loaded on (yaw 0), compared over every yaw (the camera's AABB
-cannot tell the yaw).
+lying on the face it was loaded on, their footprint at every yaw (`expected_footprint`: a
+core is rounded, so at 60° it covers about 162 × 220 mm, where its yaw-0 box turned would
+cover 240 × 267), compared over every yaw (the camera's AABB cannot tell the yaw).
 
 The camera looks from the module across the gap, low over the belts, so on the docked unit
 the far end of an object can hide behind its own taller near part (measured: o9 in the
@@ -40,6 +41,7 @@ import numpy as np
 from transfertwin.perception import (
     AABB,
     Possession,
+    footprint_over_yaw,
     match_possessions,
     size_distance,
     unit_by_gap,
@@ -50,6 +52,7 @@ __all__ = [
     "OCCLUSION_M",
     "SIZE_TOL_M",
     "ScanVerdict",
+    "expected_footprint",
     "expected_size",
     "far_side_open",
     "height_key",
@@ -89,8 +92,8 @@ def height_key(obj: str, face: str) -> str:
 
 
 @lru_cache(maxsize=256)
-def expected_size(obj: str, face: str) -> tuple[float, float, float]:
-    """Full extents (L, W, H) of `obj`'s hulls lying on `face` at yaw 0, m."""
+def _lying(obj: str, face: str) -> np.ndarray:
+    """`obj`'s hull points lying on `face` at yaw 0 (n, 3), m."""
     import mujoco
 
     from transfertwin.objects import load_object
@@ -99,20 +102,29 @@ def expected_size(obj: str, face: str) -> tuple[float, float, float]:
     pts = np.vstack(load_object(obj).hulls)
     rot = np.empty(9)
     mujoco.mju_quat2Mat(rot, object_quat(face, 0.0))
-    ext = np.ptp(pts @ rot.reshape(3, 3).T, axis=0)
+    return pts @ rot.reshape(3, 3).T
+
+
+def expected_size(obj: str, face: str) -> tuple[float, float, float]:
+    """Full extents (L, W, H) of `obj`'s hulls lying on `face` at yaw 0, m."""
+    ext = np.ptp(_lying(obj, face), axis=0)
     return (float(ext[0]), float(ext[1]), float(ext[2]))
 
 
-def far_side_open(box: AABB, size: tuple[float, float, float]) -> AABB:
+@lru_cache(maxsize=256)
+def expected_footprint(obj: str, face: str) -> tuple[tuple[float, float], ...]:
+    """Extents (x, y) of `obj`'s footprint lying on `face` at each whole degree of yaw
+    0..179 (`perception.footprint_over_yaw` of its hull points), m."""
+    return footprint_over_yaw(_lying(obj, face)[:, :2], 180)
+
+
+def far_side_open(box: AABB, footprint: Sequence[Sequence[float]]) -> AABB:
     """`box` with its far end (+x, away from the module's camera) extended to the length the
-    expected object of extents `size` has at the yaw that fits the box's width, by at most
-    `OCCLUSION_M`; unchanged when it is that long already."""
-    length, width, _ = size
-    yaws = np.radians(np.arange(0.0, 180.0, 1.0))
-    c, s = np.abs(np.cos(yaws)), np.abs(np.sin(yaws))
-    dy = 2.0 * box.half[1]
-    best = int(np.argmin(np.abs(dy - (length * s + width * c))))
-    missing = (length * c[best] + width * s[best]) - 2.0 * box.half[0]
+    expected object of footprint `footprint` (`expected_footprint`) has at the yaw that fits
+    the box's width, by at most `OCCLUSION_M`; unchanged when it is that long already."""
+    fp = np.asarray(footprint, dtype=float)
+    best = int(np.argmin(np.abs(2.0 * box.half[1] - fp[:, 1])))
+    missing = fp[best, 0] - 2.0 * box.half[0]
     if missing <= 0.0:
         return box
     grow = min(missing, OCCLUSION_M)
@@ -130,17 +142,18 @@ def scan_check(boxes: Sequence[AABB], obj: str, face: str, tm: str, unit: str, p
     and a box that differs from it only in height, by at most `HEIGHT_SLACK_M`, is taken
     as the object and its height learnt (module docstring)."""
     holder = unit if pickup else tm
-    size = expected_size(obj, face)
+    size, footprint = expected_size(obj, face), expected_footprint(obj, face)
     learnt = (heights or {}).get(height_key(obj, face))
     if learnt is not None:
         size = (size[0], size[1], float(learnt))
     on = unit_by_gap(gap_m, tm, unit)
     seen = {}  # what the camera saw, by the box that is matched
     for box in boxes:
-        opened = far_side_open(box, size) if on(box) == unit else box
+        opened = far_side_open(box, footprint) if on(box) == unit else box
         seen[id(opened)] = (opened, box)
-    report = match_possessions([o for o, _ in seen.values()], {tm: [], unit: [],
-                               holder: [Possession(obj, size)]}, on, size_tol_m=SIZE_TOL_M)
+    expected = {tm: [], unit: [], holder: [Possession(obj, size, footprint_m=footprint)]}
+    report = match_possessions([o for o, _ in seen.values()], expected, on,
+                               size_tol_m=SIZE_TOL_M)  # fmt: skip
     summary = report.summary()
     if report.consistent:
         return ScanVerdict(True, "", summary)
@@ -148,8 +161,9 @@ def scan_check(boxes: Sequence[AABB], obj: str, face: str, tm: str, unit: str, p
             and [u for u, _ in report.unexpected] == [holder]:  # fmt: skip
         box = report.unexpected[0][1]
         height = 2.0 * box.half[2]
-        footprint = size_distance(AABB(box.centre, (*box.half[:2], 0.5 * size[2])), size)
-        if footprint <= SIZE_TOL_M and abs(height - size[2]) <= HEIGHT_SLACK_M:
+        flat = AABB(box.centre, (*box.half[:2], 0.5 * size[2]))  # the footprint alone
+        if size_distance(flat, size, None, footprint) <= SIZE_TOL_M \
+                and abs(height - size[2]) <= HEIGHT_SLACK_M:  # fmt: skip
             summary = {**summary, "matched": [obj], "missing": [], "unexpected": [],
                        "learnt": [f"{obj} stands {1000 * height:.0f} mm high on its {face} "
                                   f"face (its model {1000 * size[2]:.0f} mm)"]}  # fmt: skip

@@ -322,7 +322,8 @@ def cmd_trust(args: argparse.Namespace) -> int:
     once. The list is ``WORKDIR/certs/trusted`` (created by the first ``cps up``); on a
     floor with one process per asset every asset has its own list
     (``WORKDIR/assets/<id>/trusted``): the certificate goes on all of them, or with
-    ``--asset`` on that asset's only.
+    ``--asset`` on that asset's only. With ``--gateway --asset ID`` the certificate is a
+    HAL gateway's, trusted by that asset as its gateway (`_trust_gateway`).
     """
     from cryptography.hazmat.primitives import hashes
 
@@ -336,6 +337,8 @@ def cmd_trust(args: argparse.Namespace) -> int:
         cert = read_certificate(Path(args.cert))
     except ValueError as exc:
         raise InputError(str(exc)) from None
+    if args.gateway:
+        return _trust_gateway(wd, args.asset, cert)
     per_asset = sorted(p for p in (wd / "assets").glob("*/trusted") if p.is_dir())
     if args.asset is not None:
         per_asset = [p for p in per_asset if p.parent.name == args.asset]
@@ -352,6 +355,41 @@ def cmd_trust(args: argparse.Namespace) -> int:
     info = json.loads((wd / "cps.json").read_text()) if (wd / "cps.json").is_file() else {}
     if info.get("insecure"):
         print("note: this CPS runs with --insecure (NoSecurity): it checks no certificates")
+    return 0
+
+
+def _trust_gateway(wd: Path, asset: str | None, cert) -> int:
+    """Put a HAL gateway's certificate on `asset`'s gateway trust list (``[hal] trust_dir``
+    of ``WORKDIR/assets/<asset>.toml``, default its ``cert_dir/gateways``): the asset checks
+    the gateway's certificate against it before it opens the secure channel, on every new
+    session (a unit that was refused connects without a restart)."""
+    from cryptography.hazmat.primitives import hashes
+    from cryptography.hazmat.primitives.serialization import Encoding
+
+    from transfertwin.cps import gateway_trust_dir, load_asset_config
+    from transfertwin.cps.opcua import trust_certificate
+
+    if asset is None:
+        raise InputError("--gateway: a gateway is trusted by the asset it serves; name it "
+                         "with --asset ID")  # fmt: skip
+    path = wd / "assets" / f"{asset}.toml"
+    if Path(asset).name != asset or not path.is_file():
+        raise InputError(f"--asset {asset}: no such asset file {path}")
+    cfg = load_asset_config(path)
+    if cfg.hal.kind != "remote":
+        raise InputError(f"--asset {asset}: its hardware is [hal] kind = \"{cfg.hal.kind}\", "
+                         "not \"remote\": it has no HAL gateway to trust")  # fmt: skip
+    own = cfg.cert_dir / "client-operator.der"
+    der = cert.public_bytes(Encoding.DER)
+    if own.is_file() and own.read_bytes() == der:
+        raise InputError(f"--gateway: {own} is {asset}'s own certificate; trust the one the "
+                         f"gateway {cfg.hal.endpoint} shows")  # fmt: skip
+    written = trust_certificate(gateway_trust_dir(cfg), cert)
+    print(f"trusted HAL gateway {cfg.hal.endpoint} for {asset}: {cert.subject.rfc4514_string()} "
+          f"(SHA-256 {cert.fingerprint(hashes.SHA256()).hex()[:16]}...): {written}")  # fmt: skip
+    if cfg.hal.insecure:
+        print(f"note: {asset} talks to its gateway with NoSecurity ([hal] insecure = true): "
+              "it checks no gateway certificate")  # fmt: skip
     return 0
 
 
@@ -496,6 +534,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--workdir", default=".", help="the CPS's workdir (default: .)")
     p.add_argument("--asset", help="on a --floor floor: trust it for this asset only "
                                    "(default: every asset of the floor)")  # fmt: skip
+    p.add_argument("--gateway", action="store_true",
+                   help="CERT is the HAL gateway's of --asset (hal = \"remote\"): put it on "
+                        "that asset's gateway trust list ([hal] trust_dir)")  # fmt: skip
     p.set_defaults(func=cmd_trust)
     p = csub.add_parser("experiment",
                         help="run experiments through the Experiment Manager: E^V on a "

@@ -53,6 +53,7 @@ if TYPE_CHECKING:
         floor_toml,
         load_floor,
     )
+    from transfertwin.cps._gateway import gateway_trust_dir
     from transfertwin.cps._hal import GatewayHAL
     from transfertwin.cps._launcher import (
         asset_pids,
@@ -81,6 +82,7 @@ _LAZY = {
     "AssetConfig": "_asset_config",
     "HalConfig": "_asset_config",
     "GatewayHAL": "_hal",
+    "gateway_trust_dir": "_gateway",
     "load_asset_config": "_asset_config",
     "write_asset_config": "_asset_config",
     "FloorSpec": "_floor_file",
@@ -169,6 +171,7 @@ __all__ = [
     "export_aas",
     "externally_synced",
     "floor_toml",
+    "gateway_trust_dir",
     "launch",
     "load_asset_config",
     "load_floor",

@@ -8,7 +8,9 @@ gateway's certificate connects without a restart."""
 from __future__ import annotations
 
 import asyncio
+import dataclasses
 import logging
+import shutil
 import time
 from pathlib import Path
 
@@ -16,7 +18,15 @@ import pytest
 from asyncua import ua
 
 from tests.integration.cps._plant_gateway import PlantGateway
-from transfertwin.cps import AssetConfig, AssetNode, GatewayHAL, HalConfig, connect
+from transfertwin.cli import main
+from transfertwin.cps import (
+    AssetConfig,
+    AssetNode,
+    GatewayHAL,
+    HalConfig,
+    connect,
+    write_asset_config,
+)
 from transfertwin.cps.opcua import ensure_certificate, free_port, trust_certificate
 
 UNITS = {"TU_A": "A"}
@@ -148,3 +158,72 @@ def test_a_gateway_without_security_needs_insecure_explicitly(tmp_path, pki):
         assert asyncio.run(use(explicit)) == {"near": False, "far": False}
     finally:
         plant.stop()
+
+
+def _workdir(tmp_path: Path, pki, endpoint: str) -> tuple[Path, AssetConfig]:
+    """A floor's workdir as `cps up` leaves it (``certs/``, ``assets/<id>.toml``): TU_A on
+    real hardware behind `endpoint` with the default gateway trust list (its own copy of
+    the run's certificates), TU_B virtual."""
+    wd = tmp_path / "w"
+    (wd / "certs" / "trusted").mkdir(parents=True)
+    certs = shutil.copytree(pki.cert_dir, wd / "assets" / "TU_A" / "certs")
+    cfg = dataclasses.replace(_cfg(tmp_path, pki, endpoint), cert_dir=certs,
+                              trust_dir=wd / "assets" / "TU_A" / "trusted")  # fmt: skip
+    write_asset_config(wd / "assets" / "TU_A.toml", cfg)
+    write_asset_config(wd / "assets" / "TU_B.toml",
+                       dataclasses.replace(cfg, asset_id="TU_B", hal=HalConfig()))
+    return wd, cfg
+
+
+def _tree(root: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(root)): p.read_bytes() for p in root.rglob("*") if p.is_file()}
+
+
+def test_cps_trust_gateway_puts_the_gateways_certificate_on_one_assets_hal_list(
+    tmp_path, pki, gateway, capsys
+):
+    plant, cert = gateway
+    wd, cfg = _workdir(tmp_path, pki, plant.url)
+
+    async def belt(speed: float) -> None:
+        hal = GatewayHAL(cfg)
+        try:
+            await hal.set_belt("left", speed)
+        finally:
+            await hal.close()
+
+    with pytest.raises(ua.UaStatusCodeError, match=r"is not trusted; put it in .*gateways"):
+        asyncio.run(belt(0.4))
+    before = _tree(wd)
+    argv = ["cps", "trust", str(cert), "--workdir", str(wd), "--asset", "TU_A", "--gateway"]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert out.startswith(f"trusted HAL gateway {plant.url} for TU_A: CN=gateway")
+    added = set(_tree(wd)) - set(before)
+    # on TU_A's gateway list only (cert_dir/gateways), not on any list of clients
+    assert len(added) == 1 and next(iter(added)).startswith("assets/TU_A/certs/gateways/")
+    asyncio.run(belt(0.4))  # the asset now opens the secure session
+    assert plant.value("TU_A.BeltSpeedLeft") == pytest.approx(0.4)
+    plant.set("TU_A.BeltSpeedLeft", 0.0)
+    assert main(argv) == 0 and _tree(wd).keys() == (before.keys() | added)  # again: no-op
+
+
+@pytest.mark.parametrize(("case", "extra", "says"), [
+    ("no asset named", ["--gateway"], "name it with --asset ID"),
+    ("no such asset", ["--asset", "TU_X", "--gateway"], "no such asset file"),
+    ("a path for an asset", ["--asset", "../TU_A", "--gateway"], "no such asset file"),
+    ("a virtual asset", ["--asset", "TU_B", "--gateway"], 'not "remote": it has no HAL gateway'),
+    ("the asset's own certificate", ["--asset", "TU_A", "--gateway", "OWN"],
+     "TU_A's own certificate; trust the one the gateway"),
+])  # fmt: skip
+def test_cps_trust_gateway_refuses_bad_input_with_one_line(case, extra, says, tmp_path, pki,
+                                                           gateway, capfd):  # fmt: skip
+    plant, cert = gateway
+    wd, cfg = _workdir(tmp_path, pki, plant.url)
+    if "OWN" in extra:
+        extra, cert = extra[:-1], cfg.cert_dir / "client-operator.der"
+    before = _tree(tmp_path)
+    assert main(["cps", "trust", str(cert), "--workdir", str(wd), *extra]) == 2, case
+    err = capfd.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("transfertwin: error: ") and says in err, err
+    assert _tree(tmp_path) == before, f"{case}: something was written"

@@ -4,7 +4,9 @@ belts and barriers. The gateway is a real asyncua server whose nodes a MuJoCo tr
 system drives in real time (`_plant_gateway`); the module, the units and the gateway talk
 OPC UA only. One transport operation runs end to end through it; one whose object the
 module's sensor does not see where the order says it is fails at forming the OTS; one whose
-delivery the machine cannot dock for fails at docking with the object on the module."""
+delivery the machine cannot dock for fails at docking with the object on the module. A
+pick-up whose belts jam is taken back and tried again, with PropS fusing the module's
+localisation into the docking error."""
 
 from __future__ import annotations
 
@@ -65,6 +67,24 @@ def _events(node: AssetNode, op_id: str) -> list[dict]:
     return [e for o, e in node.role.state.data["outbox"] if o == op_id]
 
 
+async def _finished(node: AssetNode, op_id: str) -> dict | None:
+    """`op_id`'s result as the module reported it (None while it runs)."""
+    done = [e for e in _events(node, op_id) if e["event"] == "result"]
+    return done[0]["result"] if done else None
+
+
+def _delivered(plant: PlantGateway, scenario) -> dict:
+    """Run `scenario` (the plant is stopped either way); its first operation delivered."""
+    try:
+        out = asyncio.run(scenario())
+    finally:
+        plant.stop()
+    result = out["result"]
+    assert result["status"] == "delivered", result
+    assert (result["y_pickup"], result["y_delivery"]) == (1, 1)
+    return out
+
+
 @pytest.mark.slow  # real time: three transfers and fifteen drive commands, ~25 s
 def test_a_remote_module_transfers_through_its_gateway_end_to_end(tmp_path):
     port = free_port()
@@ -83,35 +103,26 @@ def test_a_remote_module_transfers_through_its_gateway_end_to_end(tmp_path):
                 assert await client.read("OperationalData", "PoseX") == pytest.approx(6.0)
                 assert await client.call("AssignOperation", "op1", "TU_B", "TU_A", "o2", "{}")
 
-                async def finished(op: str):
-                    done = [e for e in _events(tm, op) if e["event"] == "result"]
-                    return done[0]["result"] if done else None
-
-                result = await _until(lambda: finished("op1"), 90, "op1")
+                result = await _until(lambda: _finished(tm, "op1"), 90, "op1")
                 pose = [await client.read("OperationalData", k) for k in ("PoseX", "PoseY")]
                 # the module's published pose is the gateway's (docked at A, then undocked)
                 assert pose == pytest.approx(list(plant.pose[:2]), abs=1e-9)
                 possessed = await client.read("OperationalData", "PossessedObjects")
                 # the sensor sees nothing on TU_B now: no OTS, no transfer
                 assert await client.call("AssignOperation", "op2", "TU_B", "TU_A", "o2", "{}")
-                second = await _until(lambda: finished("op2"), 60, "op2")
+                second = await _until(lambda: _finished(tm, "op2"), 60, "op2")
                 holder = plant.holder  # where the physics has the object after op1 and op2
                 # the machine cannot dock at C (the plant has no unit there): the delivery
                 # fails at docking, the object stays on the module, the drive leaves C
                 assert await client.call("AssignOperation", "op3", "TU_A", "TU_C", "o2", "{}")
-                third = await _until(lambda: finished("op3"), 90, "op3")
+                third = await _until(lambda: _finished(tm, "op3"), 90, "op3")
                 third["possessed"] = await client.read("OperationalData", "PossessedObjects")
                 return {"result": result, "possessed": possessed, "second": second,
                         "holder": holder, "third": third,
                         "moved": [e for e in _events(tm, "op1") if e["event"] == "moved"]}
 
-    try:
-        out = asyncio.run(scenario())
-    finally:
-        plant.stop()
+    out = _delivered(plant, scenario)
     result = out["result"]
-    assert result["status"] == "delivered", result
-    assert (result["y_pickup"], result["y_delivery"]) == (1, 1)
     assert [(e["object"], e["holder"]) for e in out["moved"]] == [("o2", "TM_1"), ("o2", "TU_A")]
     assert out["possessed"] == ""
     # the physics agrees: the object lies on TU_A's belts
@@ -169,25 +180,15 @@ def test_a_failed_pickup_is_taken_back_and_retried_through_the_gateway_with_prop
             async with connect(tm.server.endpoint, "TM_1", credentials=None,
                                insecure=True) as client:  # fmt: skip
                 assert await client.call("AssignOperation", "op1", "TU_B", "TU_A", "o2", "{}")
-
-                async def finished():
-                    done = [e for e in _events(tm, "op1") if e["event"] == "result"]
-                    return done[0]["result"] if done else None
-
-                result = await _until(finished, 120, "op1")
+                result = await _until(lambda: _finished(tm, "op1"), 120, "op1")
             async with connect(props.server.endpoint, "PropS", credentials=None,
                                insecure=True) as ps:  # fmt: skip
                 fused = json.loads(await ps.read("OperationalData", "FusedPosesJson"))
                 errors = json.loads(await ps.read("OperationalData", "DockingErrorsJson"))
             return {"result": result, "fused": fused, "errors": errors}
 
-    try:
-        out = asyncio.run(scenario())
-    finally:
-        plant.stop()
+    out = _delivered(plant, scenario)
     result = out["result"]
-    assert result["status"] == "delivered", result
-    assert (result["y_pickup"], result["y_delivery"]) == (1, 1)
     pick = result["legs"][0]
     tries = pick["transferring"]["retries"]
     assert [(t["attempt"], t["taken_back"]) for t in tries] == [(1, True)]

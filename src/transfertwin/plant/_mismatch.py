@@ -12,21 +12,42 @@ streams (so the in-class draws do not move):
 - **dents**: on 1–3 hulls of the core, the vertices within 8–15 mm of one of its vertices
   pulled 1–3 mm towards the hull's centroid (MuJoCo collides the convex hull of what
   remains: a flattened patch);
-- **a cable-tie-like appendage** (with probability 0.6): a thin strip 2 × 5 × 25–45 mm
-  from a random outer vertex, pointing outwards within 50° (rigid, not loose);
+- **a loose cable-tie-like appendage** (with probability 0.6): a thin strip 2 × 5 ×
+  25–45 mm from a random outer vertex, pointing outwards within 50°, a body of its own at
+  its root on two hinges and a slide (it bends as a thin strip does): about its width axis
+  a bending stiffness of 2e-4–2e-3 N·m/rad with a set (the spring's rest angle, MuJoCo
+  `springref`) of ±0.15 rad, about its thickness axis (width/thickness)² = 6.25 times
+  stiffer, and along its length a weak spring down to its whole length (pushed end-on it
+  buckles and folds flat); damping ratio 0.05–0.5; nylon, about 0.4 g;
+- **a compliant part** (with probability 0.8): one of the in-class features (a face's
+  protrusion: a clip, a cable housing), or without one the core hull farthest from the
+  core's centre, a body of its own on a ball joint at its root (where it meets the core):
+  rotational stiffness 0.5–5 N·m/rad, damping ratio 0.2–1, 1500 kg/m³ — it gives way when
+  it meets the gap's edge or a pulley, which no contact softness of a rigid body does;
 - **non-uniform mass in 3-D**: the inertia scaled per axis of F_O by 0.8–1.25 (mass
   moved away from or towards each axis, which no centre-of-mass shift along x represents)
   and the centre of mass moved by up to ±12, ±6, ±6 mm on top of the in-class offset;
 - **belts**: speed ripple from pulley run-out, ±2–8 % at each pulley's revolution
   frequency with a random phase per unit, and each unit's right belt off its left by up to
   ±3 % (the twin's belts are equal and steady);
+- **belt sag and compliance**: each belt's deck between its pulleys is `SAG_SEGMENTS`
+  slats following a sag profile, 0.5–3 mm deep at mid-span (a half sine, none at the
+  pulleys), each slat a body on a vertical slide joint with a spring (1e4–6e4 N/m per slat,
+  damping ratio 0.5–1, weightless: gravity compensated) so that the load presses it down
+  (a 4 kg core about 0.5–2 mm more); the twin's deck is one flat rigid box;
 - **contact model and solver**: MuJoCo's PGS solver with a pyramidal friction cone,
   condim 4 (torsional friction), impratio 1.5–5 and a softer, wider impedance (solimp
   width 2–5 mm), against the twin's Newton solver, elliptic cone, condim 3, impratio 1.
 
-Not modelled (missed, see docs/fidelity.md): compliant or loose parts as extra
-bodies with joints (a flexible joint needs a second body in the object), belt compliance
-and sag, and a second physics engine.
+The jointed parts are stiff or light against the plant's 5 ms step: each joint carries an
+armature (rotor inertia) that keeps its undamped period at least 12 steps and makes its
+part move, at its far end, as at least 50 g would (MuJoCo's soft contacts scale their
+stiffness by the effective mass: a bare 0.4 g strip is pushed centimetres into a belt by
+its own spring). So a strip bends back in a few tenths of a second rather than at once.
+The plant's pose readout (a camera) follows the core body and sees the jointed parts where
+they were drawn; their mass is taken out of the core's.
+
+Not modelled (missed, see docs/fidelity.md): a second physics engine.
 """
 
 from __future__ import annotations
@@ -46,9 +67,19 @@ __all__: list[str] = []  # private to transfertwin.plant
 PLANT_KINDS = ("in-class", "mismatch")
 
 #: Parts of the mismatch that can be switched off one by one (ablation, benchmark):
-#: shape (knobs, dents, appendage), mass (inertia, centre of mass), belts (ripple, skew),
-#: contact (solver and contact model).
-MISMATCH_PARTS = ("shape", "mass", "belts", "contact")
+#: shape (knobs, dents), mass (inertia, centre of mass), belts (ripple, skew), contact
+#: (solver and contact model), appendage (the loose strip on its hinge), compliant (the
+#: elastic part on its ball joint), sag (sagging, compliant belt decks).
+MISMATCH_PARTS = ("shape", "mass", "belts", "contact", "appendage", "compliant", "sag")
+
+#: Slats per belt deck of a sagging belt.
+SAG_SEGMENTS = 4
+
+#: The belts of a sagging plant, in the order of `MismatchScene.sag`: (unit, belt).
+SAG_BELTS = (("tm", "left"), ("tm", "right"), ("tu", "left"), ("tu", "right"))
+
+#: The plant's base physics step (s): the armatures keep the joints stable at it.
+_STEP_S = 0.005
 
 
 @dataclass(frozen=True)
@@ -62,6 +93,10 @@ class MismatchObject:
             None.
         inertia_scale: Factors of the inertia tensor's diagonal in F_O (x, y, z).
         com_shift_m: Centre-of-mass shift on top of the in-class offset.
+        appendage_joint: The appendage's hinge: stiffness (N·m/rad), damping ratio, rest
+            angle (rad, `springref`); None without an appendage.
+        compliant: The compliant part: index of its hull among the in-class object's hulls,
+            its root (x, y, z), rotational stiffness (N·m/rad), damping ratio; or None.
     """
 
     bumps: tuple[tuple[float, ...], ...]
@@ -69,11 +104,15 @@ class MismatchObject:
     appendage: tuple[float, ...] | None
     inertia_scale: tuple[float, float, float]
     com_shift_m: tuple[float, float, float]
+    appendage_joint: tuple[float, float, float] | None = None
+    compliant: tuple[float, ...] | None = None
 
 
 @dataclass(frozen=True)
 class MismatchScene:
-    """Structural differences of the plant's scene: belt ripple and skew, contact model."""
+    """Structural differences of the plant's scene: belt ripple and skew, contact model,
+    belt sag and compliance (`sag`: per belt of `SAG_BELTS`, its depth at mid-span (m), each
+    slat's spring stiffness (N/m) and damping ratio; empty: flat rigid decks)."""
 
     ripple: float
     ripple_phase: tuple[float, float]
@@ -81,6 +120,7 @@ class MismatchScene:
     impratio: float
     solimp_width_m: float
     contact: bool = True  # False: the twin's contact model and solver (an ablation)
+    sag: tuple[tuple[float, float, float], ...] = ()
 
 
 def _rng(seed: int, *key: int) -> np.random.Generator:
@@ -123,7 +163,27 @@ def draw_mismatch_object(seed: int, object_id: str, hulls: tuple[np.ndarray, ...
     scale = tuple(float(v) for v in rng.uniform(0.8, 1.25, 3))
     shift = (float(rng.uniform(-0.012, 0.012)), float(rng.uniform(-0.006, 0.006)),
              float(rng.uniform(-0.006, 0.006)))  # fmt: skip
-    return MismatchObject(tuple(bumps), tuple(dents), appendage, scale, shift)  # type: ignore[arg-type]
+    # The joints draw from a stream of their own: the draws above stay as they were.
+    jrng = _rng(seed, 8, zlib.crc32(object_id.encode()))
+    hinge = (float(10 ** jrng.uniform(math.log10(2e-4), math.log10(2e-3))),
+             float(jrng.uniform(0.05, 0.5)), float(jrng.uniform(-0.15, 0.15)))  # fmt: skip
+    compliant = None
+    features = len(hulls) - core_hulls
+    if jrng.random() < 0.8 and (features or core_hulls > 1):
+        if features:
+            k = core_hulls + int(jrng.integers(features))
+        else:  # the core hull farthest out: a lug, a flap
+            cents = [np.asarray(h, dtype=float).mean(axis=0) for h in hulls[:core_hulls]]
+            k = int(np.argmax([np.linalg.norm(c - centre) for c in cents]))
+        hv = np.asarray(hulls[k], dtype=float)
+        c = hv.mean(axis=0)
+        u = _unit(centre - c)
+        root = c + u * float(np.max((hv - c) @ u))  # where the part meets the core
+        compliant = (float(k), *(float(x) for x in root),
+                     float(10 ** jrng.uniform(math.log10(0.5), math.log10(5.0))),
+                     float(jrng.uniform(0.2, 1.0)))  # fmt: skip
+    return MismatchObject(tuple(bumps), tuple(dents), appendage, scale, shift,  # type: ignore[arg-type]
+                          hinge if appendage is not None else None, compliant)  # fmt: skip
 
 
 def without_parts(obj: MismatchObject, scene: MismatchScene,
@@ -138,18 +198,32 @@ def without_parts(obj: MismatchObject, scene: MismatchScene,
         scene = dataclasses.replace(scene, ripple=0.0, right_belt_skew=(0.0, 0.0))
     if "contact" in off:
         scene = dataclasses.replace(scene, contact=False)
+    if "appendage" in off:
+        obj = dataclasses.replace(obj, appendage=None, appendage_joint=None)
+    if "compliant" in off:
+        obj = dataclasses.replace(obj, compliant=None)
+    if "sag" in off:
+        scene = dataclasses.replace(scene, sag=())
     return obj, scene
 
 
 def draw_mismatch_scene(seed: int) -> MismatchScene:
     """The structural scene differences of plant `seed`."""
-    rng = _rng(seed, 7)
+    rng, srng = _rng(seed, 7), _rng(seed, 9)  # the sag's own stream
     return MismatchScene(
         ripple=float(rng.uniform(0.02, 0.08)),
         ripple_phase=(float(rng.uniform(0, 2 * math.pi)), float(rng.uniform(0, 2 * math.pi))),
         right_belt_skew=(float(rng.uniform(-0.03, 0.03)), float(rng.uniform(-0.03, 0.03))),
         impratio=float(rng.uniform(1.5, 5.0)),
         solimp_width_m=float(rng.uniform(0.002, 0.005)),
+        sag=tuple(
+            (
+                float(srng.uniform(0.0005, 0.003)),
+                float(srng.uniform(1e4, 6e4)),
+                float(srng.uniform(0.5, 1.0)),
+            )
+            for _ in SAG_BELTS
+        ),
     )
 
 
@@ -203,3 +277,103 @@ def mismatched_inertia(inertia: np.ndarray, m: MismatchObject) -> np.ndarray:
     for _ in range(3):  # clip towards the triangle inequality
         vals = np.minimum(vals, (vals.sum() - vals) * 0.999)
     return (vecs * vals) @ vecs.T
+
+
+@dataclass(frozen=True)
+class JointedPart:
+    """A part of the plant object on a joint of its own (F_O, metres, kilograms).
+
+    Attributes:
+        hull: Index of its hull among `mismatched_hulls`' hulls.
+        joint: 'hinge' (the appendage, about `axis`), 'slide' (the appendage folding
+            along `axis`, by at most `fold_m`) or 'ball' (the compliant part). A second
+            part on the same hull is a second joint of the same body.
+        anchor: The joint's position (the part's root).
+        axis: The hinge's axis (unit; unused for a ball joint).
+        stiffness, damping, springref, armature: The joint's spring (N·m/rad), damping
+            (N·m·s/rad), rest angle (rad; a hinge's) and rotor inertia (kg·m²).
+        mass: The part's mass (taken out of the core's, so the object's stays).
+        com: Its centre of mass.
+        inertia: Its principal moments about its centre of mass (its bounding box's).
+    """
+
+    hull: int
+    joint: str
+    anchor: tuple[float, float, float]
+    axis: tuple[float, float, float]
+    stiffness: float
+    damping: float
+    springref: float
+    armature: float
+    mass: float
+    com: tuple[float, float, float]
+    inertia: tuple[float, float, float]
+    fold_m: float = 0.0
+
+
+#: Densities of the appendage (nylon) and of the compliant part (a plastic housing).
+_NYLON, _HOUSING = 1150.0, 1500.0
+#: Undamped period of a joint, in base physics steps, below which an armature slows it.
+_MIN_PERIOD_STEPS = 12
+#: Least effective mass of a jointed part at its far end (kg), by its joint's armature.
+_MIN_TIP_KG = 0.05
+
+
+def _part(hull: int, joint: str, verts: np.ndarray, anchor: np.ndarray, axis: np.ndarray,
+          stiffness: float, ratio: float, springref: float,
+          density: float) -> JointedPart:  # fmt: skip
+    from scipy.spatial import ConvexHull
+
+    mass = density * float(ConvexHull(verts).volume)
+    com = verts.mean(axis=0)
+    ext = np.ptp(verts, axis=0)
+    inertia = mass / 12 * np.array([ext[1] ** 2 + ext[2] ** 2, ext[0] ** 2 + ext[2] ** 2,
+                                    ext[0] ** 2 + ext[1] ** 2])  # fmt: skip
+    arm = com - anchor
+    if joint == "hinge":  # about the axis through the anchor
+        i_joint = float(axis**2 @ inertia) + mass * float(arm @ arm - (arm @ axis) ** 2)
+    elif joint == "slide":
+        i_joint = mass
+    else:
+        i_joint = float(inertia.mean()) + mass * float(arm @ arm)
+    # At its far end a part moves as at least _MIN_TIP_KG would: MuJoCo's soft contacts
+    # scale their stiffness by the effective mass, and a 0.4 g strip is pushed centimetres
+    # into a belt by its own weak spring.
+    reach2 = 1.0 if joint == "slide" else float(np.max(np.sum((verts - anchor) ** 2, axis=1)))
+    armature = max(0.0, stiffness * (_MIN_PERIOD_STEPS * _STEP_S / (2 * math.pi)) ** 2 - i_joint,
+                   _MIN_TIP_KG * reach2 - i_joint)  # fmt: skip
+    damping = ratio * 2 * math.sqrt(stiffness * (i_joint + armature))
+    return JointedPart(hull, joint, tuple(float(v) for v in anchor),  # type: ignore[arg-type]
+                       tuple(float(v) for v in axis), stiffness, damping, springref, armature,  # type: ignore[arg-type]
+                       mass, tuple(float(v) for v in com), tuple(float(v) for v in inertia))  # type: ignore[arg-type]  # fmt: skip
+
+
+def jointed_parts(m: MismatchObject, hulls: tuple[np.ndarray, ...], in_class_hulls: int,
+                  in_class_features: int) -> tuple[JointedPart, ...]:  # fmt: skip
+    """The parts of `m` on joints of their own, over `hulls` = `mismatched_hulls`' hulls of
+    an in-class object of `in_class_hulls` hulls, the last `in_class_features` features."""
+    parts = []
+    if m.appendage is not None and m.appendage_joint is not None:
+        a = np.asarray(m.appendage, dtype=float)
+        d = a[3:6]
+        side = _unit(np.cross(d, [0.0, 0.0, 1.0]) if abs(d[2]) < 0.99 else np.cross(d, [1.0, 0, 0]))
+        k, ratio, ref = m.appendage_joint
+        verts = np.asarray(hulls[-1], dtype=float)
+        # A strip bends about its width axis; about its thickness axis (w/t)² times stiffer.
+        parts.append(_part(len(hulls) - 1, "hinge", verts, a[:3], side, k, ratio, ref, _NYLON))
+        parts.append(_part(len(hulls) - 1, "hinge", verts, a[:3], np.cross(side, d),
+                           k * (a[7] / a[8]) ** 2, ratio, 0.0, _NYLON))  # fmt: skip
+        # Pushed along its length it buckles and folds flat (a load no hinge can take):
+        # a weak spring along it, down to its whole length.
+        fold = _part(len(hulls) - 1, "slide", verts, a[:3], d, 10 * k / a[6] ** 2, ratio, 0.0,
+                     _NYLON)  # fmt: skip
+        parts.append(dataclasses.replace(fold, fold_m=a[6]))
+    if m.compliant is not None:
+        core = in_class_hulls - in_class_features
+        k_in = int(m.compliant[0])
+        idx = k_in if k_in < core else k_in + len(m.bumps)  # the knobs follow the core
+        k, ratio = m.compliant[4], m.compliant[5]
+        parts.append(_part(idx, "ball", np.asarray(hulls[idx], dtype=float),
+                           np.asarray(m.compliant[1:4]), np.zeros(3), k, ratio, 0.0,
+                           _HOUSING))  # fmt: skip
+    return tuple(parts)

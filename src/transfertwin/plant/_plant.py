@@ -25,6 +25,7 @@ from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
 
+import mujoco
 import numpy as np
 
 from transfertwin._errors import InputError
@@ -33,14 +34,18 @@ from transfertwin.ots import state_index
 from transfertwin.plant._mismatch import (
     MISMATCH_PARTS,
     PLANT_KINDS,
+    SAG_SEGMENTS,
+    JointedPart,
     MismatchObject,
     MismatchScene,
     draw_mismatch_object,
     draw_mismatch_scene,
+    jointed_parts,
     mismatched_hulls,
     mismatched_inertia,
     without_parts,
 )
+from transfertwin.plant._mismatch_spec import add_jointed_parts, add_sagging_decks, slat_name
 from transfertwin.plant._recording import PlantRecording, _CameraTrack
 from transfertwin.plant._truth import (
     PLANT_TAG,
@@ -53,6 +58,7 @@ from transfertwin.plant._truth import (
     real_copula,
 )
 from transfertwin.sim import (
+    OBJECT_JOINT,
     DockingError,
     GapAreaLayout,
     MujocoUnitHAL,
@@ -98,16 +104,26 @@ class PlantRequest:
 
 
 class _SlippingHAL(MujocoUnitHAL):
-    """A unit whose belts run `scale` times the commanded speed (reports the command)."""
+    """A unit whose belts run `scale` times the commanded speed (reports the command).
+    A sagging belt's slats (`_mismatch_spec`) run with its deck."""
 
     def __init__(self, system: VirtualTransferSystem, unit: str, scale: float) -> None:
         super().__init__(system, unit)
         self._scale = scale
         self._commanded: dict[str, float] = {}
+        model = system.model
+        self._slats = {
+            belt: [model.geom(slat_name(unit, belt, i)).id for i in range(1, SAG_SEGMENTS)]
+            for belt in ("left", "right")
+            if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, slat_name(unit, belt, 1)) >= 0
+        }  # fmt: skip
 
     def set_belt_speed(self, belt: str, speed_m_s: float) -> None:
         super().set_belt_speed(belt, speed_m_s * self._scale)
         self._commanded[belt] = float(speed_m_s)
+        if belt in self._slats:
+            surface = self._system.model.geom_surfacevel
+            surface[self._slats[belt]] = surface[self._belt_rows[belt][0][0]]
 
     def belt_speed(self, belt: str) -> float:
         return self._commanded.get(belt, 0.0)
@@ -153,12 +169,23 @@ class _PlantSystem(VirtualTransferSystem):
         com = np.asarray(mass.com_m) + np.asarray(obj.com_offset_m)
         inertia = np.asarray(mass.inertia_kg_m2) * obj.mass_scale
         hulls, features = model.hulls, model.feature_hulls
+        self._parts: tuple[JointedPart, ...] = ()
+        self._sag: tuple[tuple[float, float, float], ...] = ()
         if mismatch is not None:
             hulls, features = mismatched_hulls(hulls, features, mismatch[0])
             com = com + np.asarray(mismatch[0].com_shift_m)
             inertia = mismatched_inertia(inertia, mismatch[0])
+            self._parts = jointed_parts(mismatch[0], hulls, len(model.hulls),
+                                        model.feature_hulls)  # fmt: skip
+            self._sag = mismatch[1].sag
         super().__init__(hulls, mass.mass_kg * obj.mass_scale, com, inertia, cfg,
                          feature_hulls=features)  # fmt: skip
+        # Every joint but the object's free one (jointed parts, slats): set at rest on placing.
+        free = self.model.joint(OBJECT_JOINT).id
+        m = self.model
+        rest = [(j, int(m.jnt_type[j])) for j in range(m.njnt) if j != free]
+        self._rest_q = [int(m.jnt_qposadr[j]) + i for j, t in rest for i in range(_QSIZE[t])]
+        self._rest_v = [int(m.jnt_dofadr[j]) + i for j, t in rest for i in range(_VSIZE[t])]
         if mismatch is None:
             self.tm = _SlippingHAL(self, "tm", scene.belt_speed_scale)
             self.tu = _SlippingHAL(self, "tu", scene.belt_speed_scale)
@@ -169,6 +196,28 @@ class _PlantSystem(VirtualTransferSystem):
                          ms.right_belt_skew[k])
             for k, unit in enumerate(("tm", "tu"))
         )  # fmt: skip
+
+
+    def _spec(self, hulls, mass_kg, com_m, inertia_kg_m2, cfg, feature_hulls):  # type: ignore[no-untyped-def]
+        spec = super()._spec(hulls, mass_kg, com_m, inertia_kg_m2, cfg, feature_hulls)
+        if self._parts:
+            add_jointed_parts(spec, self._parts)
+        if self._sag:
+            add_sagging_decks(spec, self._sag)
+        return spec
+
+    def place(self, face: str, theta_rad: float, x_m: float, y_m: float) -> None:
+        """`VirtualTransferSystem.place`, with every jointed part and slat at rest (its
+        spring's rest position, still)."""
+        if self._rest_q:
+            self.data.qpos[self._rest_q] = self.model.qpos_spring[self._rest_q]
+            self.data.qvel[self._rest_v] = 0.0
+        super().place(face, theta_rad, x_m, y_m)
+
+
+#: Position and velocity coordinates per MuJoCo joint type (free, ball, slide, hinge).
+_QSIZE = {0: 7, 1: 4, 2: 1, 3: 1}
+_VSIZE = {0: 6, 1: 3, 2: 1, 3: 1}
 
 
 def _object_model(obj: ObjectTruth):

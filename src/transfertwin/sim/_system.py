@@ -223,9 +223,7 @@ class VirtualTransferSystem:
         if cfg.physics.max_hulls is not None:
             hulls = merge_hulls(hulls, cfg.physics.max_hulls, keep_last=feature_hulls)
         com_m = np.asarray(com_m, dtype=float) + np.array([cfg.com_offset_m, 0.0, 0.0])
-        self.model = build_spec(
-            hulls, mass_kg, com_m, inertia_kg_m2, cfg, feature_hulls=feature_hulls
-        ).compile()
+        self.model = self._spec(hulls, mass_kg, com_m, inertia_kg_m2, cfg, feature_hulls).compile()
         self.data = mujoco.MjData(self.model)
         self._opt = self.model.opt  # bound once: read at every wait and step
         self._body = self.model.body(OBJECT_BODY).id
@@ -254,6 +252,14 @@ class VirtualTransferSystem:
         self._mass = float(self.model.body_mass[self._body])
         self._g = float(-self.model.opt.gravity[2])
         self._attach_data(self.data)
+
+    def _spec(self, hulls: tuple[np.ndarray, ...], mass_kg: float, com_m: np.ndarray,
+              inertia_kg_m2: np.ndarray, cfg: SceneConfig,
+              feature_hulls: int) -> mujoco.MjSpec:  # fmt: skip
+        """The scene's spec before compiling (`build_spec`); a subclass may add to it (the
+        emulated plant's jointed parts and sagging belts). The object's free joint and the
+        readout stay the object body's."""
+        return build_spec(hulls, mass_kg, com_m, inertia_kg_m2, cfg, feature_hulls=feature_hulls)
 
     def _attach_data(self, data: mujoco.MjData) -> None:
         """Make `data` this system's state: the readout's views, the units' HALs, the clock

@@ -7,7 +7,10 @@ from the plant seed and the experiment id), so outcome differences are the struc
 Prints per plant: success share with its Clopper–Pearson 95 % interval; the share of
 experiments whose outcome differs from the in-class plant's and from the full mismatch
 plant's, with an exact McNemar test (scipy's binomial test on the discordant pairs) of the
-share's change. The baseline is the in-class plant (first line).
+share's change. The baseline is the in-class plant (first line). The parts
+(`MISMATCH_PARTS`): shape (knobs, dents), mass, belts (ripple, skew), contact (solver and
+contact model), appendage (a loose strip on hinges), compliant (a part on a ball joint),
+sag (sagging decks on springs).
 
     python benchmarks/rehearsal_mismatch_parts.py [--plant-seed 1] [--objects o3,o7] [-n 40]
         [--workers 2]

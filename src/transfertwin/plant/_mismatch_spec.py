@@ -46,11 +46,12 @@ def _settings(geom: mujoco.MjsGeom) -> dict[str, object]:
 def add_jointed_parts(spec: mujoco.MjSpec, parts: tuple[JointedPart, ...]) -> None:
     """Move each part's hull geom into a body of its own on the part's joint."""
     core = spec.body(OBJECT_BODY)
+    degrees = bool(spec.compiler.degree)
     names: list[str] = []
     bodies: dict[int, mujoco.MjsBody] = {}
     for n, part in enumerate(parts):
         if part.hull in bodies:  # another joint of the same part (same anchor)
-            _add_joint(bodies[part.hull], f"{OBJECT_BODY}_part{n}_joint", part)
+            _add_joint(bodies[part.hull], f"{OBJECT_BODY}_part{n}_joint", part, degrees)
             continue
         old = spec.geom(object_hull(part.hull))
         settings, mesh = _settings(old), old.meshname
@@ -62,7 +63,7 @@ def add_jointed_parts(spec: mujoco.MjSpec, parts: tuple[JointedPart, ...]) -> No
         body.ipos = np.asarray(part.com) - anchor
         body.inertia = np.asarray(part.inertia)
         bodies[part.hull] = body
-        _add_joint(body, f"{OBJECT_BODY}_part{n}_joint", part)
+        _add_joint(body, f"{OBJECT_BODY}_part{n}_joint", part, degrees)
         geom = body.add_geom(name=object_hull(part.hull), type=mujoco.mjtGeom.mjGEOM_MESH,
                              meshname=mesh, pos=-anchor)  # fmt: skip
         for key, value in settings.items():
@@ -75,7 +76,7 @@ def add_jointed_parts(spec: mujoco.MjSpec, parts: tuple[JointedPart, ...]) -> No
             spec.add_exclude(bodyname1=a, bodyname2=b)
 
 
-def _add_joint(body: mujoco.MjsBody, name: str, part: JointedPart) -> None:
+def _add_joint(body: mujoco.MjsBody, name: str, part: JointedPart, degrees: bool) -> None:
     kind = getattr(mujoco.mjtJoint, f"mjJNT_{part.joint.upper()}")
     axis = np.asarray(part.axis) if part.joint != "ball" else np.array([0.0, 0.0, 1.0])
     joint = body.add_joint(name=name, type=kind, axis=axis)
@@ -84,7 +85,9 @@ def _add_joint(body: mujoco.MjsBody, name: str, part: JointedPart) -> None:
         joint.range = np.array([-part.fold_m, 0.0])
     joint.stiffness = np.array([part.stiffness, 0.0, 0.0])
     joint.damping = np.array([part.damping, 0.0, 0.0])
-    joint.springref = part.springref
+    # MjSpec reads a hinge's angles in the compiler's unit (degrees by default)
+    degree = part.joint == "hinge" and degrees
+    joint.springref = math.degrees(part.springref) if degree else part.springref
     joint.armature = part.armature
 
 

@@ -327,7 +327,7 @@ def cmd_trust(args: argparse.Namespace) -> int:
     """
     from cryptography.hazmat.primitives import hashes
 
-    from transfertwin.cps.opcua import read_certificate, trust_certificate
+    from transfertwin.cps.opcua import read_certificate, trust_certificate, trust_certificates
 
     wd = Path(args.workdir)
     if not ((wd / "cps.json").is_file() or (wd / "certs").is_dir()):
@@ -347,9 +347,11 @@ def cmd_trust(args: argparse.Namespace) -> int:
         folders = per_asset
     else:
         folders = [wd / "certs" / "trusted", *per_asset]
-    for folder in folders:
-        path = trust_certificate(folder, cert)
-    where = path if len(folders) == 1 else f"{len(folders)} trust lists ({wd})"
+    if len(folders) == 1:
+        where = trust_certificate(folders[0], cert)
+    else:  # written once, hard-linked into the others
+        trust_certificates(folders, [cert])
+        where = f"{len(folders)} trust lists ({wd})"
     print(f"trusted {cert.subject.rfc4514_string()} "
           f"(SHA-256 {cert.fingerprint(hashes.SHA256()).hex()[:16]}...): {where}")  # fmt: skip
     info = json.loads((wd / "cps.json").read_text()) if (wd / "cps.json").is_file() else {}

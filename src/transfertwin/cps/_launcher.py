@@ -38,7 +38,7 @@ from transfertwin.cps.opcua import (
     ensure_certificate,
     free_port,
     new_credentials,
-    trust_certificate,
+    trust_certificates,
     write_credentials,
 )
 
@@ -120,9 +120,8 @@ async def _certificates(workdir: Path, configs: Iterable[AssetConfig]) -> None:
     clients = [(await ensure_certificate(workdir / "certs", f"client-{r}"))[0] for r in ROLES]
     for cfg in configs:
         clients.append((await ensure_certificate(cfg.cert_dir, "client-operator"))[0])
-    for folder in {cfg.trust_dir for cfg in configs} | {workdir / "certs" / "trusted"}:
-        for cert in clients:
-            trust_certificate(folder, cert)
+    folders = [workdir / "certs" / "trusted", *sorted({cfg.trust_dir for cfg in configs})]
+    trust_certificates(folders, clients)  # each written once, hard-linked into the others
 
 
 def floor_configs(workdir: Path) -> dict[str, AssetConfig]:

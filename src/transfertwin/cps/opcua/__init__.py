@@ -16,6 +16,7 @@ from transfertwin.cps.opcua._security import (
     new_credentials,
     read_certificate,
     trust_certificate,
+    trust_certificates,
     write_credentials,
 )
 from transfertwin.cps.opcua._server import (
@@ -51,5 +52,6 @@ __all__ = [
     "node_id",
     "read_certificate",
     "trust_certificate",
+    "trust_certificates",
     "write_credentials",
 ]

@@ -24,6 +24,7 @@ import logging
 import os
 import secrets
 import socket
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -53,6 +54,7 @@ __all__ = [
     "parsed_private_key",
     "read_certificate",
     "trust_certificate",
+    "trust_certificates",
     "write_credentials",
 ]
 
@@ -219,6 +221,55 @@ def trust_certificate(trust_dir: Path, cert: Path | x509.Certificate) -> Path:
     if not path.exists():
         write_atomic(path, der)
     return path
+
+
+def trust_certificates(folders: Iterable[Path], certs: Sequence[Path | x509.Certificate]) -> int:
+    """Put every one of `certs` on every trust list in `folders`, as `trust_certificate`
+    does one by one, but each certificate is written (atomically, with its fsync) once, into
+    the first folder, and hard-linked into the others; each folder's directory is synced
+    once. The lists stay one per folder: a file removed from one folder revokes the
+    certificate there only (files are replaced, never edited in place, so the links never
+    change content). Where hard links are not possible (another file system), a copy.
+
+    Returns:
+        How many files were added (certificates already on a list count nothing).
+    """
+    folders = list(dict.fromkeys(Path(f) for f in folders))
+    if not folders or not certs:
+        return 0
+    first = folders[0]
+    had = set(os.listdir(first)) if first.is_dir() else set()
+    sources = [trust_certificate(first, c) for c in certs]
+    added = sum(p.name not in had for p in sources)
+    for folder in folders[1:]:
+        folder.mkdir(parents=True, exist_ok=True)
+        present = set(os.listdir(folder))
+        for src in sources:
+            if src.name in present:
+                continue
+            try:  # the name appears with the whole, already synced content
+                os.link(src, folder / src.name)
+            except FileExistsError:
+                continue
+            except OSError:  # no hard links here
+                write_atomic(folder / src.name, src.read_bytes())
+            added += 1
+        _sync_dir(folder)
+    return added
+
+
+def _sync_dir(folder: Path) -> None:
+    """Make the entries of `folder` durable (its directory's fsync; not on Windows)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
 
 
 class TrustList:

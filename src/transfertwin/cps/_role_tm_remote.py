@@ -15,6 +15,11 @@ operation flow of Fig. 5.9a against the module's HAL gateway instead of a simula
 - **Belts and barriers.** The module's own belts and barriers are the gateway's
   (`ModuleGateway`); the docked unit's are the unit's (its OPC UA interface: the unit's
   process writes them to its own gateway).
+- **Hand-over retries.** The virtual module's policy (`cps._hand_over`): a failed transfer
+  is taken back with both belt pairs reversed until the object sensor sees it back, the
+  module undocks and docks anew by command and tries again.
+- **PropS.** At every docking the gateway's pose is reported to PropS and the leg's
+  docking error is its fused estimate (where the floor has PropS).
 
 The transfer loop runs on the wall clock (`WallClock`), in a worker thread, each HAL call a
 request on the event loop that owns the gateway session.
@@ -222,7 +227,7 @@ def _make_skills():
             except InputError as exc:  # an error the pair cannot work with
                 await role._undock(role.aid)
                 return StepResult(False, f"docking at {leg.unit}: {exc}", info)
-            used, props = await role._docking_estimate(role.aid, leg.unit, err, pose)
+            used, props = await role._fused_error(leg.unit, err, pose)
             if props is not None:  # PropS in the loop: its fused estimate is the record's
                 info["props"] = props
                 if props["used"] == "fused":
@@ -303,16 +308,17 @@ class RemoteModuleRole(ModuleRole):
             await self._publish_pose(self.aid)
         return pose
 
-    async def _docking_estimate(self, tm: str, unit: str, error, pose):
+    async def _fused_error(self, unit: str, error, pose):
         """PropS in the loop: the module's localisation fix at the gateway (`pose`, with
         the σ of the module's navigation model) reported to PropS, and the docking error
-        taken from its fused estimate. No unit camera is seen from here (a unit on real
-        hardware would report its own)."""
+        taken from its fused estimate ((error used, the record's ``props``), as
+        `ModuleRole._docking_estimate` does with a simulated fix). No unit camera is seen
+        from here (a unit on real hardware would report its own)."""
         from transfertwin.cps._role_tm import _props_docking_estimate
 
         noise = self.robot.cfg.noise
         own = (*(float(v) for v in pose), noise.loc_xy_sd_m, noise.loc_theta_sd_rad)
-        return await _props_docking_estimate(self, tm, unit, error, lambda: (own, None),
+        return await _props_docking_estimate(self, self.aid, unit, error, lambda: (own, None),
                                              measured="gateway")  # fmt: skip
 
     async def _poll_pose(self) -> None:

@@ -49,3 +49,17 @@ def test_without_hard_links_each_list_gets_a_copy(tmp_path, certs, monkeypatch):
     copy = next((tmp_path / "b").iterdir())
     assert copy.stat().st_nlink == 1
     assert all(TrustList(folders[1]).is_trusted(c.read_bytes()) for c in certs)
+
+
+def test_cps_trust_for_the_whole_floor_links_one_copy_into_every_list(tmp_path, certs, capsys):
+    from transfertwin.cli import main
+
+    wd = tmp_path / "w"
+    lists = [wd / "certs" / "trusted", *(wd / "assets" / a / "trusted" for a in ("KG", "TU_A"))]
+    for folder in lists:
+        folder.mkdir(parents=True)
+    assert main(["cps", "trust", str(certs[0]), "--workdir", str(wd)]) == 0
+    assert "3 trust lists" in capsys.readouterr().out
+    files = [next(f.iterdir()) for f in lists]
+    assert all(TrustList(f).is_trusted(certs[0].read_bytes()) for f in lists)
+    assert {p.stat().st_ino for p in files} == {files[0].stat().st_ino}

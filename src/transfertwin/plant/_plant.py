@@ -198,7 +198,10 @@ class _PlantSystem(VirtualTransferSystem):
         )  # fmt: skip
 
 
-    def _spec(self, hulls, mass_kg, com_m, inertia_kg_m2, cfg, feature_hulls):  # type: ignore[no-untyped-def]
+    def _spec(self, hulls: tuple[np.ndarray, ...], mass_kg: float, com_m: np.ndarray,
+              inertia_kg_m2: np.ndarray, cfg: SceneConfig,
+              feature_hulls: int) -> mujoco.MjSpec:  # fmt: skip
+        """The scene's spec with the mismatch's jointed parts and sagging decks."""
         spec = super()._spec(hulls, mass_kg, com_m, inertia_kg_m2, cfg, feature_hulls)
         if self._parts:
             add_jointed_parts(spec, self._parts)

@@ -181,8 +181,8 @@ class _PlantSystem(VirtualTransferSystem):
         super().__init__(hulls, mass.mass_kg * obj.mass_scale, com, inertia, cfg,
                          feature_hulls=features)  # fmt: skip
         # Every joint but the object's free one (jointed parts, slats): set at rest on placing.
-        free = self.model.joint(OBJECT_JOINT).id
         m = self.model
+        free = m.joint(OBJECT_JOINT).id
         rest = [(j, int(m.jnt_type[j])) for j in range(m.njnt) if j != free]
         self._rest_q = [int(m.jnt_qposadr[j]) + i for j, t in rest for i in range(_QSIZE[t])]
         self._rest_v = [int(m.jnt_dofadr[j]) + i for j, t in rest for i in range(_VSIZE[t])]
@@ -196,7 +196,6 @@ class _PlantSystem(VirtualTransferSystem):
                          ms.right_belt_skew[k])
             for k, unit in enumerate(("tm", "tu"))
         )  # fmt: skip
-
 
     def _spec(self, hulls: tuple[np.ndarray, ...], mass_kg: float, com_m: np.ndarray,
               inertia_kg_m2: np.ndarray, cfg: SceneConfig,

@@ -68,7 +68,7 @@ PLANT_KINDS = ("in-class", "mismatch")
 
 #: Parts of the mismatch that can be switched off one by one (ablation, benchmark):
 #: shape (knobs, dents), mass (inertia, centre of mass), belts (ripple, skew), contact
-#: (solver and contact model), appendage (the loose strip on its hinge), compliant (the
+#: (solver and contact model), appendage (the loose strip on its joints), compliant (the
 #: elastic part on its ball joint), sag (sagging, compliant belt decks).
 MISMATCH_PARTS = ("shape", "mass", "belts", "contact", "appendage", "compliant", "sag")
 
@@ -77,9 +77,6 @@ SAG_SEGMENTS = 4
 
 #: The belts of a sagging plant, in the order of `MismatchScene.sag`: (unit, belt).
 SAG_BELTS = (("tm", "left"), ("tm", "right"), ("tu", "left"), ("tu", "right"))
-
-#: The plant's base physics step (s): the armatures keep the joints stable at it.
-_STEP_S = 0.005
 
 
 @dataclass(frozen=True)
@@ -239,10 +236,15 @@ def _cube(centre: np.ndarray, edge: float, quat: np.ndarray) -> np.ndarray:
     return centre + (corners * edge / 2) @ rot.T
 
 
+def strip_side(d: np.ndarray) -> np.ndarray:
+    """The width axis of a strip along unit `d`: horizontal unless `d` is vertical."""
+    return _unit(np.cross(d, [0.0, 0.0, 1.0]) if abs(d[2]) < 0.99 else np.cross(d, [1.0, 0, 0]))
+
+
 def _strip(root: np.ndarray, d: np.ndarray, length: float, width: float,
            thick: float) -> np.ndarray:  # fmt: skip
     """The 8 corners of a strip from `root` along unit `d` (its width horizontal)."""
-    side = _unit(np.cross(d, [0.0, 0.0, 1.0]) if abs(d[2]) < 0.99 else np.cross(d, [1.0, 0, 0]))
+    side = strip_side(d)
     up = np.cross(side, d)
     return np.array([root + a * length * d + b * width / 2 * side + c * thick / 2 * up
                      for a in (0, 1) for b in (-1, 1) for c in (-1, 1)])  # fmt: skip
@@ -278,102 +280,3 @@ def mismatched_inertia(inertia: np.ndarray, m: MismatchObject) -> np.ndarray:
         vals = np.minimum(vals, (vals.sum() - vals) * 0.999)
     return (vecs * vals) @ vecs.T
 
-
-@dataclass(frozen=True)
-class JointedPart:
-    """A part of the plant object on a joint of its own (F_O, metres, kilograms).
-
-    Attributes:
-        hull: Index of its hull among `mismatched_hulls`' hulls.
-        joint: 'hinge' (the appendage, about `axis`), 'slide' (the appendage folding
-            along `axis`, by at most `fold_m`) or 'ball' (the compliant part). A second
-            part on the same hull is a second joint of the same body.
-        anchor: The joint's position (the part's root).
-        axis: The hinge's axis (unit; unused for a ball joint).
-        stiffness, damping, springref, armature: The joint's spring (N·m/rad), damping
-            (N·m·s/rad), rest angle (rad; a hinge's) and rotor inertia (kg·m²).
-        mass: The part's mass (taken out of the core's, so the object's stays).
-        com: Its centre of mass.
-        inertia: Its principal moments about its centre of mass (its bounding box's).
-    """
-
-    hull: int
-    joint: str
-    anchor: tuple[float, float, float]
-    axis: tuple[float, float, float]
-    stiffness: float
-    damping: float
-    springref: float
-    armature: float
-    mass: float
-    com: tuple[float, float, float]
-    inertia: tuple[float, float, float]
-    fold_m: float = 0.0
-
-
-#: Densities of the appendage (nylon) and of the compliant part (a plastic housing).
-_NYLON, _HOUSING = 1150.0, 1500.0
-#: Undamped period of a joint, in base physics steps, below which an armature slows it.
-_MIN_PERIOD_STEPS = 12
-#: Least effective mass of a jointed part at its far end (kg), by its joint's armature.
-_MIN_TIP_KG = 0.05
-
-
-def _part(hull: int, joint: str, verts: np.ndarray, anchor: np.ndarray, axis: np.ndarray,
-          stiffness: float, ratio: float, springref: float,
-          density: float) -> JointedPart:  # fmt: skip
-    from scipy.spatial import ConvexHull
-
-    mass = density * float(ConvexHull(verts).volume)
-    com = verts.mean(axis=0)
-    ext = np.ptp(verts, axis=0)
-    inertia = mass / 12 * np.array([ext[1] ** 2 + ext[2] ** 2, ext[0] ** 2 + ext[2] ** 2,
-                                    ext[0] ** 2 + ext[1] ** 2])  # fmt: skip
-    arm = com - anchor
-    if joint == "hinge":  # about the axis through the anchor
-        i_joint = float(axis**2 @ inertia) + mass * float(arm @ arm - (arm @ axis) ** 2)
-    elif joint == "slide":
-        i_joint = mass
-    else:
-        i_joint = float(inertia.mean()) + mass * float(arm @ arm)
-    # At its far end a part moves as at least _MIN_TIP_KG would: MuJoCo's soft contacts
-    # scale their stiffness by the effective mass, and a 0.4 g strip is pushed centimetres
-    # into a belt by its own weak spring.
-    reach2 = 1.0 if joint == "slide" else float(np.max(np.sum((verts - anchor) ** 2, axis=1)))
-    armature = max(0.0, stiffness * (_MIN_PERIOD_STEPS * _STEP_S / (2 * math.pi)) ** 2 - i_joint,
-                   _MIN_TIP_KG * reach2 - i_joint)  # fmt: skip
-    damping = ratio * 2 * math.sqrt(stiffness * (i_joint + armature))
-    return JointedPart(hull, joint, tuple(float(v) for v in anchor),  # type: ignore[arg-type]
-                       tuple(float(v) for v in axis), stiffness, damping, springref, armature,  # type: ignore[arg-type]
-                       mass, tuple(float(v) for v in com), tuple(float(v) for v in inertia))  # type: ignore[arg-type]  # fmt: skip
-
-
-def jointed_parts(m: MismatchObject, hulls: tuple[np.ndarray, ...], in_class_hulls: int,
-                  in_class_features: int) -> tuple[JointedPart, ...]:  # fmt: skip
-    """The parts of `m` on joints of their own, over `hulls` = `mismatched_hulls`' hulls of
-    an in-class object of `in_class_hulls` hulls, the last `in_class_features` features."""
-    parts = []
-    if m.appendage is not None and m.appendage_joint is not None:
-        a = np.asarray(m.appendage, dtype=float)
-        d = a[3:6]
-        side = _unit(np.cross(d, [0.0, 0.0, 1.0]) if abs(d[2]) < 0.99 else np.cross(d, [1.0, 0, 0]))
-        k, ratio, ref = m.appendage_joint
-        verts = np.asarray(hulls[-1], dtype=float)
-        # A strip bends about its width axis; about its thickness axis (w/t)² times stiffer.
-        parts.append(_part(len(hulls) - 1, "hinge", verts, a[:3], side, k, ratio, ref, _NYLON))
-        parts.append(_part(len(hulls) - 1, "hinge", verts, a[:3], np.cross(side, d),
-                           k * (a[7] / a[8]) ** 2, ratio, 0.0, _NYLON))  # fmt: skip
-        # Pushed along its length it buckles and folds flat (a load no hinge can take):
-        # a weak spring along it, down to its whole length.
-        fold = _part(len(hulls) - 1, "slide", verts, a[:3], d, 10 * k / a[6] ** 2, ratio, 0.0,
-                     _NYLON)  # fmt: skip
-        parts.append(dataclasses.replace(fold, fold_m=a[6]))
-    if m.compliant is not None:
-        core = in_class_hulls - in_class_features
-        k_in = int(m.compliant[0])
-        idx = k_in if k_in < core else k_in + len(m.bumps)  # the knobs follow the core
-        k, ratio = m.compliant[4], m.compliant[5]
-        parts.append(_part(idx, "ball", np.asarray(hulls[idx], dtype=float),
-                           np.asarray(m.compliant[1:4]), np.zeros(3), k, ratio, 0.0,
-                           _HOUSING))  # fmt: skip
-    return tuple(parts)

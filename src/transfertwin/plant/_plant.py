@@ -35,17 +35,21 @@ from transfertwin.plant._mismatch import (
     MISMATCH_PARTS,
     PLANT_KINDS,
     SAG_SEGMENTS,
-    JointedPart,
     MismatchObject,
     MismatchScene,
     draw_mismatch_object,
     draw_mismatch_scene,
-    jointed_parts,
     mismatched_hulls,
     mismatched_inertia,
     without_parts,
 )
-from transfertwin.plant._mismatch_spec import add_jointed_parts, add_sagging_decks, slat_name
+from transfertwin.plant._mismatch_spec import (
+    JointedPart,
+    add_jointed_parts,
+    add_sagging_decks,
+    jointed_parts,
+    slat_name,
+)
 from transfertwin.plant._recording import PlantRecording, _CameraTrack
 from transfertwin.plant._truth import (
     PLANT_TAG,

@@ -16,6 +16,7 @@ o3 and o7, K = 40 calibration experiments, R = 2, 10 validation runs per best/wo
 With several K (``-k 25,50,100``) it runs one rehearsal per K and prints the curve.
 
     python benchmarks/rehearsal.py [--plant-seed 1] [--plant-kind in-class|mismatch]
+        [--mismatch-off PART,...]
         [--objects o3,o7] [-k 40] [--runs 2]
         [--validation-runs 10] [--test-experiments 0] [--workers 2] [--tune-trials 0]
         [--ablate mass,stability,compliance] [--operations 20] [--out DIR]
@@ -124,6 +125,8 @@ def main() -> None:
     ap.add_argument("--plant-seed", type=int, default=1)
     ap.add_argument("--plant-kind", default="in-class", choices=("in-class", "mismatch"),
                     help="mismatch: a plant outside the twin's model class")  # fmt: skip
+    ap.add_argument("--mismatch-off", default="",
+                    help="mismatch parts switched off, e.g. sag (a rehearsal per ablated part)")
     ap.add_argument("--objects", default="o3,o7")
     ap.add_argument("-k", "--calibration-experiments", default="40")
     ap.add_argument("--runs", type=int, default=2)
@@ -148,6 +151,7 @@ def main() -> None:
             tune_trials=args.tune_trials, seed=args.seed,
             workers=args.workers, ablate=(args.ablate,) if args.ablate else (),
             operations=args.operations, plant_kind=args.plant_kind,
+            mismatch_off=tuple(p for p in args.mismatch_off.split(",") if p),
         )  # fmt: skip
         where = out if len(ks) == 1 else out / f"K{k}"
         t0 = time.perf_counter()

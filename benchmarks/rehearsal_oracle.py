@@ -74,7 +74,8 @@ def oracle(folder: Path, n: int, workers: int) -> dict[str, object]:
     else:  # the split `rehearse` made of the K experiments (ids 0..K-1)
         _, test = holdout_split(rows, float(cfg["holdout"]), seed)
         design = calibration_design(objects, k, seed)
-    plant = EmulatedPlant(int(cfg["plant_seed"]), kind=cfg.get("plant_kind", "in-class"))
+    plant = EmulatedPlant(int(cfg["plant_seed"]), kind=cfg.get("plant_kind", "in-class"),
+                          mismatch_off=tuple(cfg.get("mismatch_off", ())))  # fmt: skip
     jobs = plant._jobs(design)
     by_id = {j.experiment_id: j for j in jobs}
     for r in rows:  # the rebuilt jobs are the plant's: same state and logged docking error

@@ -6,13 +6,14 @@ table (`PLANT_COLUMNS`). The package sits above `transfertwin.study` in the laye
 calibration, study or validation code can import it; `transfertwin.rehearsal` drives both.
 """
 
-from transfertwin.plant._mismatch import PLANT_KINDS
+from transfertwin.plant._mismatch import MISMATCH_PARTS, PLANT_KINDS
 from transfertwin.plant._physics import PlantPhysics
 from transfertwin.plant._plant import PLANT_COLUMNS, EmulatedPlant, MassReading, PlantRequest
 from transfertwin.plant._recording import CAMERA_RESOLUTION, PlantRecording
 
 __all__ = [
     "CAMERA_RESOLUTION",
+    "MISMATCH_PARTS",
     "PLANT_COLUMNS",
     "PLANT_KINDS",
     "EmulatedPlant",

@@ -37,7 +37,13 @@ from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
 from transfertwin.objects import PROXY_SUFFIX, ProxySpec, builtin_ids, write_proxy
 from transfertwin.ots import FACES, THETA_SINGLE, experiment_states, filter_theta_step
-from transfertwin.plant import PLANT_COLUMNS, PLANT_KINDS, EmulatedPlant, PlantRequest
+from transfertwin.plant import (
+    MISMATCH_PARTS,
+    PLANT_COLUMNS,
+    PLANT_KINDS,
+    EmulatedPlant,
+    PlantRequest,
+)
 from transfertwin.rehearsal._operations import run_operations
 from transfertwin.rehearsal._thresholded import majority_scores
 from transfertwin.sim import DockingError, SceneConfig
@@ -184,6 +190,8 @@ class RehearsalConfig:
         plant_kind: 'in-class' (a plant of the twin's model class with hidden values) or
             'mismatch' (structural differences the twin cannot represent), see
             `transfertwin.plant.EmulatedPlant`.
+        mismatch_off: Parts of the mismatch plant switched off (`MISMATCH_PARTS`; a
+            rehearsal per ablated part, docs/fidelity.md); only with 'mismatch'.
     """
 
     plant_seed: int
@@ -203,12 +211,20 @@ class RehearsalConfig:
     ablate: tuple[str, ...] = ()
     operations: int = 0
     plant_kind: str = "in-class"
+    mismatch_off: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "ablate", parse_ablations(self.ablate))
         if self.plant_kind not in PLANT_KINDS:
             raise InputError(
                 f"--plant-kind must be one of {', '.join(PLANT_KINDS)}, got {self.plant_kind!r}"
+            )
+        object.__setattr__(self, "mismatch_off", tuple(self.mismatch_off))
+        bad = sorted(set(self.mismatch_off) - set(MISMATCH_PARTS))
+        if bad or (self.mismatch_off and self.plant_kind != "mismatch"):
+            raise InputError(
+                f"--mismatch-off takes parts of the mismatch plant ({', '.join(MISMATCH_PARTS)}) "
+                f"with --plant-kind mismatch, got {', '.join(self.mismatch_off)}"
             )
         if self.operations < 0:
             raise InputError("--operations must be >= 0")
@@ -253,6 +269,8 @@ def _config_record(cfg: RehearsalConfig) -> dict[str, object]:
         del out["proxy_positions"]
     if cfg.plant_kind == "in-class":
         del out["plant_kind"]
+    if not cfg.mismatch_off:
+        del out["mismatch_off"]
     return out
 
 
@@ -596,7 +614,7 @@ def rehearse(
     stage = on_stage or (lambda name: None)
     progress = on_progress or (lambda done, total: None)
     cfg, t0 = config, time.perf_counter()
-    plant = EmulatedPlant(cfg.plant_seed, kind=cfg.plant_kind)
+    plant = EmulatedPlant(cfg.plant_seed, kind=cfg.plant_kind, mismatch_off=cfg.mismatch_off)
     out.mkdir(parents=True, exist_ok=True)
 
     test_rows: list[dict[str, object]] = []

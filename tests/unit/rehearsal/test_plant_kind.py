@@ -20,6 +20,17 @@ def test_plant_kind_is_checked_and_recorded_only_when_it_is_the_mismatch() -> No
         RehearsalConfig(**base, plant_kind="drake")
 
 
+def test_mismatch_parts_switched_off_are_checked_and_recorded() -> None:
+    base = {"plant_seed": 1, "objects": ("o3",), "calibration_experiments": 20}
+    cfg = RehearsalConfig(**base, plant_kind="mismatch", mismatch_off=["sag"])
+    assert cfg.mismatch_off == ("sag",) and _config_record(cfg)["mismatch_off"] == ("sag",)
+    assert "mismatch_off" not in _config_record(RehearsalConfig(**base, plant_kind="mismatch"))
+    with pytest.raises(InputError, match="--mismatch-off"):
+        RehearsalConfig(**base, plant_kind="mismatch", mismatch_off=("gravity",))
+    with pytest.raises(InputError, match="--mismatch-off"):  # the in-class plant has no parts
+        RehearsalConfig(**base, mismatch_off=("sag",))
+
+
 def test_rehearse_refuses_an_unknown_plant_kind(tmp_path, monkeypatch, capfd) -> None:
     monkeypatch.chdir(tmp_path)
     code = main(["rehearse", "--plant-seed", "1", "--plant-kind", "sapien", "--objects", "o3",

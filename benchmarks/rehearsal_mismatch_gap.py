@@ -27,25 +27,15 @@ from __future__ import annotations
 
 import argparse
 import csv
-import dataclasses
 import json
-import multiprocessing as mp
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
 
-from transfertwin.plant import EmulatedPlant
-from transfertwin.plant._mismatch import MISMATCH_PARTS
-from transfertwin.plant._plant import _run_job  # ORACLE: private plant machinery
+from rehearsal_oracle import _f05, rerun_wins  # ORACLE: reruns the plant's private jobs
+from transfertwin.plant import MISMATCH_PARTS, EmulatedPlant
 from transfertwin.rehearsal import calibration_design
-
-
-def _f05(pred: np.ndarray, y: np.ndarray) -> float:
-    pred, y = pred.astype(bool), y.astype(bool)
-    tp, fp, fn = (pred & y).sum(), (pred & ~y).sum(), (~pred & y).sum()
-    return 0.0 if tp == 0 else float(1.25 * tp / (1.25 * tp + 0.25 * fn + fp))
 
 
 def _shares(plant: EmulatedPlant, design, ids: list[tuple[int, tuple[str, int]]], seed: int,
@@ -53,17 +43,10 @@ def _shares(plant: EmulatedPlant, design, ids: list[tuple[int, tuple[str, int]]]
     """Each held-out row's (id, (face, θ)) success share over `n` reruns on `plant` (no
     flips)."""
     by_id = {j.experiment_id: j for j in plant._jobs(design)}
-    reruns = []
-    for eid, (face, theta) in ids:
-        j = by_id[eid]
-        assert (j.request.face, j.request.theta_deg) == (face, theta)  # the logged state
-        for i in range(n):
-            ss = np.random.SeedSequence([0x47415050, seed, eid, i])
-            seeds = tuple(int(w) for w in ss.generate_state(len(j.seeds)))
-            reruns.append(dataclasses.replace(j, seeds=seeds, flip_u=1.0))
-    with ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn")) as pool:
-        wins = [int(row["success"]) for row, _ in pool.map(_run_job, reruns)]
-    return np.array(wins, dtype=float).reshape(len(ids), n).mean(axis=1)
+    jobs = [by_id[eid] for eid, _ in ids]
+    for j, (_, (face, theta)) in zip(jobs, ids, strict=True):  # the logged state
+        assert (j.request.face, j.request.theta_deg) == (face, theta)
+    return rerun_wins(jobs, 0x47415050, seed, n, workers).mean(axis=1)
 
 
 def main() -> None:

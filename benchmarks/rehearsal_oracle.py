@@ -61,6 +61,20 @@ def _f05(pred: np.ndarray, y: np.ndarray) -> float:
     return 0.0 if tp == 0 else float(1.25 * tp / (1.25 * tp + 0.25 * fn + fp))
 
 
+def rerun_wins(jobs, tag: int, plant_seed: int, n: int, workers: int) -> np.ndarray:
+    """(len(jobs), n) outcomes of each plant job run `n` times again with fresh placement
+    seeds (from `tag`, the plant seed, the experiment id and the rerun) and no outcome flip."""
+    reruns = []
+    for j in jobs:
+        for i in range(n):
+            ss = np.random.SeedSequence([tag, plant_seed, j.experiment_id, i])
+            seeds = tuple(int(w) for w in ss.generate_state(len(j.seeds)))
+            reruns.append(dataclasses.replace(j, seeds=seeds, flip_u=1.0))
+    with ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn")) as pool:
+        wins = [int(row["success"]) for row, _ in pool.map(_run_job, reruns)]
+    return np.array(wins).reshape(len(jobs), n)
+
+
 def oracle(folder: Path, n: int, workers: int) -> dict[str, object]:
     doc = json.loads((folder / "rehearsal.json").read_text())
     cfg = doc["config"]
@@ -88,15 +102,7 @@ def oracle(folder: Path, n: int, workers: int) -> dict[str, object]:
     flip_p = test_jobs[0].scene.flip_p
     flipped = np.array([j.flip_u < flip_p for j in test_jobs])
     y = np.array([int(r["success"]) for r in test])
-    reruns = []
-    for j in test_jobs:
-        for i in range(n):
-            ss = np.random.SeedSequence([0x4F52434C, int(cfg["plant_seed"]), j.experiment_id, i])
-            seeds = tuple(int(w) for w in ss.generate_state(len(j.seeds)))
-            reruns.append(dataclasses.replace(j, seeds=seeds, flip_u=1.0))
-    with ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn")) as pool:
-        wins = [int(row["success"]) for row, _ in pool.map(_run_job, reruns)]
-    per_run = np.array(wins).reshape(len(test), n).T  # (N, n)
+    per_run = rerun_wins(test_jobs, 0x4F52434C, int(cfg["plant_seed"]), n, workers).T  # (N, n)
     majority = (per_run.mean(axis=0) >= 0.5).astype(int)[None, :]
     exact = np.where(flipped, 1 - y, y)[None, :]  # the plant's physics before the flip
     ci = f05_intervals({"oracle": per_run, "majority": majority, "exact": exact}, y)

@@ -51,8 +51,9 @@ class PlantGateway:
         secure: (gateway cert, key, trust folder) for Basic256Sha256 SignAndEncrypt only;
             None: NoSecurity.
         jam: The module's belt drive trips once: its belts stand still from the first time
-            they are commanded to run until they are next commanded to stop (then it is
-            reset and runs as commanded).
+            either is commanded to run until both are next commanded to stop (then it is
+            reset and runs as commanded). Both belts count: the module writes them one at
+            a time, and a tick can read the first written and the second not yet.
     """
 
     def __init__(self, port: int, module: str, units: dict[str, str], obj: str, at: str,
@@ -72,6 +73,7 @@ class PlantGateway:
         self.log = PlantLog()
         self._jam = "armed" if jam else "off"  # armed -> jammed -> reset
         self._jam_t0 = 0.0
+        self._commanded: dict[str, float] = {}  # the module's belt -> its commanded speed
         self._loop: asyncio.AbstractEventLoop | None = None
         self._thread: threading.Thread | None = None
         self._ready = threading.Event()
@@ -187,13 +189,14 @@ class PlantGateway:
         vtype = ua.VariantType.Double if isinstance(value, float | list) else None
         await self.nodes[key].write_value(ua.Variant(value, vtype) if vtype else value)
 
-    def _drive(self, asset: str, speed: float) -> float:
-        """The speed `asset`'s belt runs at when commanded `speed` (the jam, if armed)."""
+    def _drive(self, asset: str, belt: str, speed: float) -> float:
+        """The speed `asset`'s `belt` runs at when commanded `speed` (the jam, if armed)."""
         if asset != self.module or self._jam == "off":
             return speed
+        self._commanded[belt] = speed
         if self._jam == "armed" and speed:
             self._jam, self._jam_t0 = "jammed", time.monotonic()
-        if self._jam == "jammed" and not speed:  # stopped: the drive is reset
+        if self._jam == "jammed" and not any(self._commanded.values()):  # both stopped: reset
             self._jam = "off"
             self.log.jammed_s = time.monotonic() - self._jam_t0
         return 0.0 if self._jam == "jammed" else speed
@@ -266,7 +269,7 @@ class PlantGateway:
                         self.log.belts[key] = max(self.log.belts.get(key, 0.0), abs(speed))
                         if speed:
                             self.log.signs.setdefault(key, set()).add(1 if speed > 0 else -1)
-                        hal.set_belt_speed(belt, self._drive(who, speed))
+                        hal.set_belt_speed(belt, self._drive(who, belt, speed))
                 target = time.monotonic() - wall0  # real time: the physics keeps pace
                 steps = int((target - sim_t) / self.env.scene.physics.timestep_s)
                 if steps > 0:

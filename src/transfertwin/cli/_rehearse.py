@@ -83,6 +83,7 @@ def cmd_rehearse(args: argparse.Namespace) -> int:
             tune_trials=args.tune_trials, seed=args.seed, workers=worker_count(args.workers),
             scene=scene, ablate=tuple(args.ablate or ()), operations=args.operations,
             plant_kind=args.plant_kind,
+            mismatch_off=tuple(p.strip() for p in args.mismatch_off.split(",") if p.strip()),
         )
         for k in ks
     ]  # fmt: skip
@@ -142,6 +143,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="in-class (default): a plant of the twin's own model class with hidden values; "
         "mismatch: structural differences the twin cannot represent (shape outside the proxy "
         "family, 3-D mass, belt ripple and skew, another contact model and solver)",
+    )
+    p.add_argument(
+        "--mismatch-off",
+        default="",
+        metavar="PART,...",
+        help="with --plant-kind mismatch: parts of the mismatch switched off (shape, mass, "
+        "belts, contact, appendage, compliant, sag), a rehearsal per ablated part",
     )
     p.add_argument("--objects", required=True, metavar="IDS", help="built-in cores, e.g. o3,o7")
     p.add_argument(

@@ -63,12 +63,14 @@ def _read_seed(path: Path) -> int:
     return int(text)
 
 
-def _plant_beside(table: Path) -> tuple[int, str, str] | None:
-    """(seed, kind, where) of the plant that wrote `table`: a plant floor's ``plant.secret``
-    beside it, else the ``rehearsal.json`` beside it or one folder up."""
+def _plant_beside(table: Path) -> tuple[int, str, str, tuple[str, ...]] | None:
+    """(seed, kind, where, mismatch parts switched off) of the plant that wrote `table`: a
+    plant floor's ``plant.secret`` beside it, else the ``rehearsal.json`` beside it or one
+    folder up."""
     secret = table.parent / "plant.secret"
     if secret.is_file():
-        return _read_seed(secret), "in-class", f"the plant of {table.parent.name}/plant.secret"
+        return (_read_seed(secret), "in-class", f"the plant of {table.parent.name}/plant.secret",
+                ())  # fmt: skip
     for folder in (table.parent, table.parent.parent):
         path = folder / "rehearsal.json"
         if not path.is_file():
@@ -77,12 +79,13 @@ def _plant_beside(table: Path) -> tuple[int, str, str] | None:
             config = json.loads(path.read_text(encoding="utf-8"))["config"]
             seed = config["plant_seed"]
             kind = str(config.get("plant_kind", "in-class"))
+            off = tuple(str(p) for p in config.get("mismatch_off", ()))
         except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError) as exc:
             raise InputError(f"{path}: not a rehearsal's record ({type(exc).__name__}: "
                              f"{exc})") from None  # fmt: skip
         if isinstance(seed, bool) or not isinstance(seed, int):
             raise InputError(f"{path}: its config has no plant seed")
-        return seed, kind, f"the plant of {folder.name}/rehearsal.json"
+        return seed, kind, f"the plant of {folder.name}/rehearsal.json", off
     return None
 
 
@@ -129,7 +132,14 @@ def plant_row(
     kind = plant_kind or (found[1] if found is not None else "in-class")
     if kind not in PLANT_KINDS:
         raise InputError(f"--plant-kind must be one of {', '.join(PLANT_KINDS)}, got {kind!r}")
-    return PlantRow(rows[index], index, path.name, EmulatedPlant(seed, kind), f"{note} ({kind})")
+    # the parts a rehearsal switched off, when the plant is that rehearsal's
+    off = found[3] if found is not None and found[1] == kind and seed == found[0] else ()
+    try:
+        plant = EmulatedPlant(seed, kind, mismatch_off=off)
+    except InputError as exc:  # a record naming parts this version does not know
+        raise InputError(f"{note}: {exc}") from None
+    what = kind + (f" without {', '.join(off)}" if off else "")
+    return PlantRow(rows[index], index, path.name, plant, f"{note} ({what})")
 
 
 def _spec(recording: PlantRecording) -> ExperimentSpec:

@@ -40,6 +40,18 @@ def test_rehearse_refuses_an_unknown_plant_kind(tmp_path, monkeypatch, capfd) ->
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("kind,off", [("mismatch", "sag,gravity"), ("in-class", "sag")])
+def test_rehearse_passes_mismatch_off_on_and_refuses_what_it_cannot_switch_off(
+    tmp_path, monkeypatch, capfd, kind, off
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    code = main(["rehearse", "--plant-seed", "1", "--plant-kind", kind, "--mismatch-off", off,
+                 "--objects", "o3", "--calibration-experiments", "20", "--out", "r"])  # fmt: skip
+    err = capfd.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "--mismatch-off" in err[0]
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_majority_scores_threshold_each_row_and_pair_before_with_after() -> None:
     from transfertwin.rehearsal import majority_scores
 

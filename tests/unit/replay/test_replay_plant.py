@@ -147,6 +147,26 @@ def test_the_rehearsal_beside_the_table_names_the_plant(table, tmp_path):
     assert plant_row(copy, 1).note == "the plant of K10/plant.secret (in-class)"
 
 
+def test_a_rehearsal_with_mismatch_parts_off_names_that_plant(table, tmp_path):
+    path, _ = table
+    copy = tmp_path / "plant_calibration.csv"
+    copy.write_bytes(path.read_bytes())
+    config = {"plant_seed": SEED, "plant_kind": "mismatch", "mismatch_off": ["sag", "contact"]}
+    (tmp_path / "rehearsal.json").write_text(json.dumps({"config": config}))
+    found = plant_row(copy, 0)
+    where = f"the plant of {tmp_path.name}/rehearsal.json"
+    assert found.note == f"{where} (mismatch without sag, contact)"
+    assert repr(found.plant) == (f"EmulatedPlant(seed={SEED}, kind='mismatch', "
+                                 "mismatch_off=('contact', 'sag'))")  # fmt: skip
+    # another kind or seed named by hand: that plant, whole
+    assert plant_row(copy, 0, plant_kind="in-class").plant.kind == "in-class"
+    assert "mismatch_off" not in repr(plant_row(copy, 0, plant_seed=SEED + 1).plant)
+    config["mismatch_off"] = ["gravity"]
+    (tmp_path / "rehearsal.json").write_text(json.dumps({"config": config}))
+    with pytest.raises(InputError, match=r"rehearsal\.json: mismatch parts"):
+        plant_row(copy, 0)
+
+
 def test_an_mp4_holds_the_frames(replayed, tmp_path):
     import imageio_ffmpeg
 

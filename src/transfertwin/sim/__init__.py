@@ -27,7 +27,7 @@ from transfertwin.sim._names import (
     object_hull,
 )
 from transfertwin.sim._render import group_frames, render_strip, strip_camera, strip_pixels
-from transfertwin.sim._scene import build_spec
+from transfertwin.sim._scene import BARRIERS, BELTS, UNITS, UnitGeometry, build_spec, unit_layout
 from transfertwin.sim._system import (
     MujocoUnitHAL,
     SimClock,
@@ -39,11 +39,14 @@ from transfertwin.sim._system import (
 )
 
 __all__ = [
+    "BARRIERS",
+    "BELTS",
     "MULTICCD_HULLS",
     "OBJECT_BODY",
     "OBJECT_JOINT",
     "PROFILES",
     "TU_BODY",
+    "UNITS",
     "DockingError",
     "GapAreaLayout",
     "LayoutConfig",
@@ -54,6 +57,7 @@ __all__ = [
     "SimClock",
     "SimulationUnstable",
     "TrackingClock",
+    "UnitGeometry",
     "VirtualTransferSystem",
     "barrier_sensor",
     "belt_geom",
@@ -71,4 +75,5 @@ __all__ = [
     "strip_pixels",
     "tu_pose_in_tip_frame",
     "tu_quat",
+    "unit_layout",
 ]

@@ -36,6 +36,7 @@ __all__ = [
     "build_spec",
     "configure_physics",
     "pulley_prism",
+    "unit_layout",
 ]
 
 UNITS = ("tm", "tu")
@@ -196,6 +197,17 @@ def add_light_barrier(
     sensor.intprm[0] = 1 << int(mujoco.mjtRayDataField.mjRAYDATA_DIST)
 
 
+def unit_layout(layout: LayoutConfig, unit: str) -> tuple[UnitGeometry, float, float]:
+    """A unit's belt span along its own x axis and the x of its 'near' and 'far' light
+    barriers (m), in the unit's frame: TM belts span [-tm_length, 0] of F_T, the TU's
+    [0, tu_length] of the TU frame. Every engine's scene takes its geometry from here."""
+    if unit == "tm":
+        span = UnitGeometry(-layout.tm_length_m, 0.0)
+        return span, span.x_end - layout.barrier_inset_m, span.x_start + layout.barrier_inset_m
+    span = UnitGeometry(0.0, layout.tu_length_m)
+    return span, span.x_start + layout.barrier_inset_m, span.x_end - layout.barrier_inset_m
+
+
 def add_unit(
     spec: mujoco.MjSpec,
     unit: str,
@@ -208,14 +220,8 @@ def add_unit(
     TM's belts span x in [-tm_length, 0] of F_T; the TU's span [0, tu_length] of the TU
     frame, whose pose in F_T is set per experiment through ``data.mocap_pos/quat``.
     """
-    if unit == "tm":
-        parent = spec.worldbody
-        span = UnitGeometry(-layout.tm_length_m, 0.0)
-        near, far = span.x_end - layout.barrier_inset_m, span.x_start + layout.barrier_inset_m
-    else:
-        parent = spec.worldbody.add_body(name=TU_BODY, mocap=True)
-        span = UnitGeometry(0.0, layout.tu_length_m)
-        near, far = span.x_start + layout.barrier_inset_m, span.x_end - layout.barrier_inset_m
+    parent = spec.worldbody if unit == "tm" else spec.worldbody.add_body(name=TU_BODY, mocap=True)
+    span, near, far = unit_layout(layout, unit)
     for belt in BELTS:
         add_belt(parent, unit, belt, span, layout, mu, physics, spec)
     add_light_barrier(parent, spec, unit, "near", near, layout)

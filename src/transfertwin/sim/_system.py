@@ -297,6 +297,12 @@ class VirtualTransferSystem:
         self._z_top = -math.inf
         self._energy: float | None = None
 
+    @property
+    def timestep_s(self) -> float:
+        """The physics step (s): what a clock wait is counted in (engine-neutral; an
+        emulated plant's other engine has it too)."""
+        return self._opt.timestep
+
     # -- set-up ---------------------------------------------------------------------------
     def reset(self, docking_error: DockingError) -> None:
         """Stop all belts, clear the state and dock the TU with `docking_error`."""

@@ -227,7 +227,7 @@ def settle(system: VirtualTransferSystem, scene: SceneConfig) -> None:
     if placement.rest_speed_m_s is None:
         system.clock.wait(placement.settle_time_s)
         return
-    dt = system.model.opt.timestep
+    dt = system.timestep_s
     total = max(1, round(placement.settle_time_s / dt))
     done = min(total, max(1, round(placement.min_settle_time_s / dt)))
     check = max(1, round(placement.rest_check_s / dt))

@@ -15,7 +15,7 @@ o3 and o7, K = 40 calibration experiments, R = 2, 10 validation runs per best/wo
 
 With several K (``-k 25,50,100``) it runs one rehearsal per K and prints the curve.
 
-    python benchmarks/rehearsal.py [--plant-seed 1] [--plant-kind in-class|mismatch]
+    python benchmarks/rehearsal.py [--plant-seed 1] [--plant-kind in-class|mismatch|bullet]
         [--mismatch-off PART,...]
         [--objects o3,o7] [-k 40] [--runs 2]
         [--validation-runs 10] [--test-experiments 0] [--workers 2] [--tune-trials 0]
@@ -123,8 +123,9 @@ def _report(doc: dict, cfg: RehearsalConfig) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--plant-seed", type=int, default=1)
-    ap.add_argument("--plant-kind", default="in-class", choices=("in-class", "mismatch"),
-                    help="mismatch: a plant outside the twin's model class")  # fmt: skip
+    ap.add_argument("--plant-kind", default="in-class", choices=("in-class", "mismatch", "bullet"),
+                    help="mismatch: a plant outside the twin's model class; bullet: the "
+                    "in-class plant in PyBullet")  # fmt: skip
     ap.add_argument("--mismatch-off", default="",
                     help="mismatch parts switched off, e.g. sag (a rehearsal per ablated part)")
     ap.add_argument("--objects", default="o3,o7")

@@ -142,7 +142,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="KIND",
         help="in-class (default): a plant of the twin's own model class with hidden values; "
         "mismatch: structural differences the twin cannot represent (shape outside the proxy "
-        "family, 3-D mass, belt ripple and skew, another contact model and solver)",
+        "family, 3-D mass, belt ripple and skew, another contact model and solver); "
+        "bullet: the in-class plant simulated in another physics engine, PyBullet",
     )
     p.add_argument(
         "--mismatch-off",

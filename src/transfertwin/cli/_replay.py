@@ -225,7 +225,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="with --plant-rows: a file holding the plant's seed (a plant floor's "
                    "plant.secret)")  # fmt: skip
     p.add_argument("--plant-kind", metavar="KIND",
-                   help="with --plant-rows: in-class or mismatch (default: the rehearsal's)")
+                   help="with --plant-rows: in-class or mismatch (default: the rehearsal's; "
+                   "a bullet plant's rows cannot be replayed)")
     p.add_argument("--object", help="object id (o1..o37) or a mesh path")
     p.add_argument("--units", default="m", help="length unit of a mesh file: m, cm, mm, in")
     p.add_argument("--face", help="front or back")

@@ -47,7 +47,8 @@ its own spring). So a strip bends back in a few tenths of a second rather than a
 The plant's pose readout (a camera) follows the core body and sees the jointed parts where
 they were drawn; their mass is taken out of the core's.
 
-Not modelled (missed, see docs/fidelity.md): a second physics engine.
+A second physics engine is a plant kind of its own, 'bullet' (`transfertwin.plant._bullet`:
+the in-class plant in PyBullet), not a part of this mismatch.
 """
 
 from __future__ import annotations
@@ -63,8 +64,10 @@ from transfertwin.plant._truth import PLANT_TAG
 
 __all__: list[str] = []  # private to transfertwin.plant
 
-#: Plant kinds: today's plant of the twin's own model class, and the structural mismatch.
-PLANT_KINDS = ("in-class", "mismatch")
+#: Plant kinds: today's plant of the twin's own model class, the structural mismatch, and
+#: the in-class plant's hidden object and scene simulated in another engine, PyBullet
+#: (`transfertwin.plant._bullet`: the engine itself is the structural difference).
+PLANT_KINDS = ("in-class", "mismatch", "bullet")
 
 #: Parts of the mismatch that can be switched off one by one (ablation, benchmark):
 #: shape (knobs, dents), mass (inertia, centre of mass), belts (ripple, skew), contact

@@ -31,6 +31,7 @@ import numpy as np
 from transfertwin._errors import InputError
 from transfertwin.objects import ProxySpec, builtin_ids, load_builtin, proxy_model
 from transfertwin.ots import state_index
+from transfertwin.plant._bullet import BulletTransferSystem
 from transfertwin.plant._mismatch import (
     MISMATCH_PARTS,
     PLANT_KINDS,
@@ -285,9 +286,11 @@ class _Job:
     seeds: tuple[int, ...]
     flip_u: float
     mismatch: _Mismatch | None = None
+    engine: str = "mujoco"
 
 
 _SYSTEMS: dict[tuple[object, ...], _PlantSystem] = {}
+_BULLET_SYSTEMS: dict[tuple[object, ...], BulletTransferSystem] = {}
 
 #: Timestep halvings tried when the plant's guard marks a run implausible.
 _REFINE = 2
@@ -310,6 +313,27 @@ def _system(obj: ObjectTruth, scene: SceneTruth, refine: int = 0,
     return _SYSTEMS[key]
 
 
+def _bullet_system(obj: ObjectTruth, scene: SceneTruth, refine: int = 0,
+                   mismatch: _Mismatch | None = None) -> BulletTransferSystem:  # fmt: skip
+    """The in-class plant's system of `obj` in PyBullet (kind 'bullet'), cached as
+    `_system`'s: the same hidden object (hulls, mass, centre of mass, inertia), scene
+    (μ, gap, TU height step and pitch, belt-speed error, placement noise) and guard."""
+    assert mismatch is None, "the Bullet plant is the in-class plant in another engine"
+    key = (obj, scene, refine)
+    if key not in _BULLET_SYSTEMS:
+        if len(_BULLET_SYSTEMS) >= 4:
+            _BULLET_SYSTEMS.clear()
+        model = _object_model(obj)
+        mass = model.mass
+        com = np.asarray(mass.com_m) + np.asarray(obj.com_offset_m)
+        _BULLET_SYSTEMS[key] = BulletTransferSystem(
+            model.hulls, mass.mass_kg * obj.mass_scale, com,
+            np.asarray(mass.inertia_kg_m2) * obj.mass_scale, _scene_config(scene, obj, refine),
+            scene.belt_speed_scale,
+        )  # fmt: skip
+    return _BULLET_SYSTEMS[key]
+
+
 @functools.lru_cache(maxsize=64)
 def _mismatch_object(seed: int, object_id: str) -> MismatchObject:
     model = _object_model(draw_object(seed, object_id))
@@ -318,11 +342,14 @@ def _mismatch_object(seed: int, object_id: str) -> MismatchObject:
 
 
 def _run_job(
-    job: _Job, systems: Callable[..., VirtualTransferSystem] = _system
+    job: _Job, systems: Callable[..., VirtualTransferSystem] | None = None
 ) -> tuple[dict[str, object], float]:
     """One E^P: simulate in the hidden scene (at finer steps after an implausible event,
     placing again if needed), record, maybe flip. `systems` hands out the plant system of
-    each run (`_system`'s cache, or a camera's recording ones)."""
+    each run (None: the job's engine's cache, `_system` or `_bullet_system`; or a camera's
+    recording ones)."""
+    if systems is None:
+        systems = _bullet_system if job.engine == "bullet" else _system
     req = job.request
     error = DockingError.from_mm_deg(*job.error_mm_deg)
     success, t_end = 0, math.nan
@@ -363,7 +390,13 @@ class EmulatedPlant:
         seed: Plant seed (non-negative integer): draws every hidden parameter.
         kind: 'in-class' (default): a plant of the twin's own model class with hidden
             values; 'mismatch': the same plant with structural differences the twin cannot
-            represent (`transfertwin.plant._mismatch`).
+            represent (`transfertwin.plant._mismatch`); 'bullet': the in-class plant of the
+            same seed (the same hidden objects, scene, docking errors and outcome flips)
+            simulated in PyBullet instead of MuJoCo (`transfertwin.plant._bullet`), the
+            engine being the structural difference. A kind, not an engine argument: the
+            plant a rehearsal runs against is one named thing, and the mismatch's parts
+            are MuJoCo models. A 'bullet' plant cannot be `observe`d (the recordings
+            replay in MuJoCo).
     """
 
     __slots__ = ("__docking", "__kind", "__mismatch", "__next_id", "__off", "__scene", "__seed")
@@ -396,7 +429,7 @@ class EmulatedPlant:
 
     @property
     def kind(self) -> str:
-        """'in-class' or 'mismatch' (a setting, not a hidden value)."""
+        """'in-class', 'mismatch' or 'bullet' (a setting, not a hidden value)."""
         return self.__kind
 
     def __reduce__(self) -> None:  # type: ignore[override]
@@ -425,6 +458,8 @@ class EmulatedPlant:
         if self.__mismatch is not None:
             parts += [asdict(self.__mismatch), sorted(self.__off)]
             parts += [asdict(self.__mismatch_of(o)[0]) for o in object_ids]
+        if self.__kind == "bullet":
+            parts.append("engine: pybullet")
         return hashlib.sha256(repr(parts).encode()).hexdigest()
 
     def __mismatch_of(self, object_id: str) -> _Mismatch:
@@ -479,6 +514,7 @@ class EmulatedPlant:
         return _Job(
             eid, req, draw_object(self.__seed, req.object_id), self.__scene, units[0],
             tuple(round(float(v), 2) for v in err), tuple(words[2:]), flip_u, mismatch,
+            "bullet" if self.__kind == "bullet" else "mujoco",
         )  # fmt: skip
 
     def observe(self, row: Mapping[str, object]) -> PlantRecording:
@@ -497,8 +533,12 @@ class EmulatedPlant:
             InputError: The row lacks a column or does not come from this plant: its
                 transfer unit, docking error or outcome differ from this plant's
                 experiment of that id (another plant seed; another kind draws the same
-                unit and error, and shows only where the outcome differs).
+                unit and error, and shows only where the outcome differs). Or the plant
+                is a 'bullet' one: its camera recordings are not supported.
         """
+        if self.__kind == "bullet":
+            raise InputError("a 'bullet' plant cannot be observed: its experiments run in "
+                             "PyBullet, the camera recordings and replays in MuJoCo")  # fmt: skip
         try:
             eid = int(str(row["experiment_id"]))
             req = PlantRequest(str(row["object_id"]), str(row["face"]), str(row["conveyor"]),

@@ -187,9 +187,9 @@ class RehearsalConfig:
             extra twin variants that reuse the plant's calibration rows.
         operations: Orders per policy in the operational comparison (0: none), see
             `run_operations`.
-        plant_kind: 'in-class' (a plant of the twin's model class with hidden values) or
-            'mismatch' (structural differences the twin cannot represent), see
-            `transfertwin.plant.EmulatedPlant`.
+        plant_kind: 'in-class' (a plant of the twin's model class with hidden values),
+            'mismatch' (structural differences the twin cannot represent) or 'bullet' (the
+            in-class plant simulated in PyBullet), see `transfertwin.plant.EmulatedPlant`.
         mismatch_off: Parts of the mismatch plant switched off (`MISMATCH_PARTS`; a
             rehearsal per ablated part, docs/fidelity.md); only with 'mismatch'.
     """

@@ -6,10 +6,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import pickle
 
 import numpy as np
 import pytest
 
+from transfertwin._errors import InputError
+from transfertwin.plant import PLANT_COLUMNS, EmulatedPlant, PlantRequest
 from transfertwin.plant._bullet import BulletTransferSystem
 from transfertwin.plant._plant import _object_model, _scene_config, _system
 from transfertwin.plant._truth import draw_object, draw_scene
@@ -83,3 +86,72 @@ def test_a_transfer_runs_unchanged_and_gives_the_same_bits_for_the_same_inputs()
     for result in (again, fresh):
         assert result == first and result.t_end_s == first.t_end_s
         assert result.state_end_2 == first.state_end_2
+
+
+REQUESTS = [PlantRequest("o7", "front", "left", 0), PlantRequest("o3", "back", "both", 90)]
+
+
+def test_the_bullet_plant_is_the_in_class_plant_in_another_engine() -> None:
+    plant, in_class = EmulatedPlant(2, kind="bullet"), EmulatedPlant(2)
+    jobs, same = plant._jobs(REQUESTS), in_class._jobs(REQUESTS)
+    assert [j.engine for j in jobs] == ["bullet", "bullet"]
+    assert [j.engine for j in same] == ["mujoco", "mujoco"]
+    # the same hidden object, scene, station, docking error, placement seeds and flip
+    assert [dataclasses.replace(j, engine="mujoco") for j in jobs] == same
+    with pytest.raises(InputError, match="--plant-kind"):
+        EmulatedPlant(2, kind="Bullet")
+    with pytest.raises(InputError, match="mismatch plant"):
+        EmulatedPlant(2, kind="bullet", mismatch_off=("sag",))
+
+
+def test_the_bullet_plant_hides_its_values_like_the_in_class_one() -> None:
+    plant = EmulatedPlant(3, kind="bullet")
+    public = {n for n in dir(plant) if not n.startswith("_")}
+    assert public == {n for n in dir(EmulatedPlant(3)) if not n.startswith("_")}
+    assert not hasattr(plant, "__dict__")
+    assert repr(plant) == "EmulatedPlant(seed=3, kind='bullet')" and plant.kind == "bullet"
+    with pytest.raises(TypeError):
+        pickle.dumps(plant)
+    fp = plant.fingerprint(["o3"])
+    assert len(fp) == 64 and fp != EmulatedPlant(3).fingerprint(["o3"])
+    assert fp == EmulatedPlant(3, kind="bullet").fingerprint(["o3"])
+    scene, obj = draw_scene(3), draw_object(3, "o3")
+    hidden = [scene.mu, scene.gap_m, scene.belt_speed_scale, obj.mass_scale, *obj.com_offset_m]
+    shown = fp + repr(plant) + str(plant.weigh("o3"))
+    assert not any(str(v) in shown or f"{v:.4g}" in fp for v in hidden)
+    assert plant.weigh("o3") == EmulatedPlant(3).weigh("o3")  # the same objects
+
+
+def test_a_bullet_plant_runs_valid_reproducible_rows_and_operates() -> None:
+    rows = EmulatedPlant(1, kind="bullet").run(REQUESTS)
+    assert rows == EmulatedPlant(1, kind="bullet").run(REQUESTS)
+    assert [tuple(r) for r in rows] == [PLANT_COLUMNS] * 2
+    assert all(r["success"] in (0, 1) for r in rows)
+    assert [r["experiment_id"] for r in rows] == [0, 1]
+    in_class = EmulatedPlant(1).run(REQUESTS)
+    drawn = [c for c in PLANT_COLUMNS if c != "success"]
+    assert [[r[c] for c in drawn] for r in rows] == [[r[c] for c in drawn] for r in in_class]
+    plant = EmulatedPlant(1, kind="bullet")
+    ops = plant.operate(REQUESTS[:1])
+    assert set(ops[0]) == {*PLANT_COLUMNS, "transfer_time_s"}
+    assert ops[0]["transfer_time_s"] > 0 and ops[0]["success"] == rows[0]["success"]
+    with pytest.raises(InputError, match="cannot be observed"):
+        plant.observe(ops[0])
+
+
+@pytest.mark.slow
+def test_a_bullet_plant_gives_the_same_rows_with_any_number_of_workers() -> None:
+    requests = [*REQUESTS, PlantRequest("o12", "back", "right", 180)]
+    one = EmulatedPlant(1, kind="bullet").run(requests)
+    assert EmulatedPlant(1, kind="bullet").run(requests, workers=2) == one
+
+
+def test_a_rehearsal_takes_the_bullet_plant() -> None:
+    from transfertwin.rehearsal import RehearsalConfig
+
+    cfg = RehearsalConfig(plant_seed=1, objects=("o3",), calibration_experiments=20,
+                          plant_kind="bullet")  # fmt: skip
+    assert cfg.plant_kind == "bullet"
+    with pytest.raises(InputError, match="--mismatch-off"):
+        RehearsalConfig(plant_seed=1, objects=("o3",), calibration_experiments=20,
+                        plant_kind="bullet", mismatch_off=("sag",))  # fmt: skip

@@ -37,7 +37,7 @@ REQUESTS = [PlantRequest("o3", "back", "both", 90), PlantRequest("o3", "front", 
 
 
 def test_kind_is_chosen_by_name_and_in_class_stays_todays_plant() -> None:
-    assert PLANT_KINDS == ("in-class", "mismatch")
+    assert PLANT_KINDS == ("in-class", "mismatch", "bullet")
     with pytest.raises(InputError, match="--plant-kind"):
         EmulatedPlant(1, kind="pybullet")
     today, named = EmulatedPlant(2), EmulatedPlant(2, kind="in-class")

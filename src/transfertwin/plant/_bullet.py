@@ -153,8 +153,8 @@ def _outer_vertices(verts: np.ndarray) -> np.ndarray:
         return verts
 
 
-def _hull_obj(hulls: tuple[np.ndarray, ...], path: Path) -> None:
-    """Write the hulls as one Wavefront OBJ of one object per hull (PyBullet makes a
+def _hull_obj(hulls: tuple[np.ndarray, ...]) -> str:
+    """The hulls as one Wavefront OBJ text of one object per hull (PyBullet makes a
     compound of convex hulls of it)."""
     from scipy.spatial import ConvexHull
 
@@ -165,7 +165,7 @@ def _hull_obj(hulls: tuple[np.ndarray, ...], path: Path) -> None:
         lines += [f"f {a + first} {b + first} {c + first}"
                   for a, b, c in ConvexHull(verts).simplices.tolist()]  # fmt: skip
         first += len(verts)
-    path.write_text("\n".join(lines) + "\n")
+    return "\n".join(lines) + "\n"
 
 
 class _BulletHAL:
@@ -256,7 +256,7 @@ class BulletTransferSystem:
         self._hulls = tuple(np.asarray(h, dtype=float) for h in hulls)
         # Hull vertices in the body frame (the principal frame at the centre of mass):
         # v_B = A^T (v_O - c); Bullet's base pose is that frame's.
-        self._body_hulls = tuple((h - com) @ self._axes for h in self._hulls)
+        self._obj_text = _hull_obj(tuple((h - com) @ self._axes for h in self._hulls))
         self._verts = np.concatenate(self._hulls, axis=0)
         self._outer = _outer_vertices(self._verts)  # the AABB's points: the hull's corners
         self.tu_pose = (cfg.gap_m, 0.0, 0.0)
@@ -343,7 +343,7 @@ class BulletTransferSystem:
         pb, c = self._pb, self._client
         with tempfile.TemporaryDirectory(prefix="transfertwin-bullet-") as tmp:
             path = Path(tmp) / "object.obj"
-            _hull_obj(self._body_hulls, path)
+            path.write_text(self._obj_text)
             shape = pb.createCollisionShape(pb.GEOM_MESH, fileName=str(path), physicsClientId=c)
         body = pb.createMultiBody(self._mass, shape, basePosition=[0.0, 0.0, 0.5],
                                   physicsClientId=c)  # fmt: skip

@@ -15,7 +15,9 @@ turn, a fixed seed) on a fresh plant of each kind, one process each, and prints
   runs are run again at finer steps and 'invalid' ones placed again, as the plant does).
 
     PYTHONPATH=src .venv/bin/python benchmarks/plant_engines.py \
-        [--plant-seed 1] [--objects o3,o7,o12] [-k 60] [--seed 0]
+        [--plant-seed 1] [--objects o1,o3,o7,o12,o20,o29] [-k 120] [--seed 0]
+
+(docs/fidelity.md, "The same plant in a second engine": seeds 1 and 2 with the defaults.)
 """
 
 from __future__ import annotations
@@ -53,8 +55,8 @@ def _counting(statuses: collections.Counter):
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--plant-seed", type=int, default=1)
-    ap.add_argument("--objects", default="o3,o7,o12")
-    ap.add_argument("-k", type=int, default=60, help="experiments per plant")
+    ap.add_argument("--objects", default="o1,o3,o7,o12,o20,o29")
+    ap.add_argument("-k", type=int, default=120, help="experiments per plant")
     ap.add_argument("--seed", type=int, default=0, help="seed of the design (the states)")
     args = ap.parse_args()
     objects = [o.strip() for o in args.objects.split(",") if o.strip()]

@@ -343,13 +343,15 @@ def f05_intervals(
     replicates: int = BOOTSTRAP_REPLICATES,
     seed: int = 0,
     alpha: float = 0.05,
+    differences: Sequence[tuple[str, str]] = (),
 ) -> dict[str, list[float]]:
     """Paired percentile-bootstrap intervals of F0.5 on the held-out rows.
 
     Each resample draws the held-out rows with replacement once and scores every predictor
     on the same rows (the mean over runs of each run's F0.5, as ``f05_*``), and the
     always-success predictor ('base_rate'). With 'before' and 'after' it adds their paired
-    difference 'after_minus_before'.
+    difference 'after_minus_before'; each pair (a, b) of `differences` adds 'a_minus_b'
+    (e.g. an oracle's F0.5 minus the twin's: the gap, paired row by row).
 
     Args:
         predictions: Name → virtual outcomes per run and held-out row, (R, n) of 0/1.
@@ -364,6 +366,9 @@ def f05_intervals(
     act = np.asarray(actual, dtype=bool)
     if act.ndim != 1 or act.size == 0:
         raise InputError("f05_intervals: need at least one held-out row")
+    unknown = sorted({n for pair in differences for n in pair} - set(predictions))
+    if unknown:
+        raise InputError(f"f05_intervals: differences name no predictor: {', '.join(unknown)}")
     idx = np.random.default_rng([seed, 0x424F4F54]).integers(0, act.size, (replicates, act.size))
     a = act[idx]
     stats: dict[str, np.ndarray] = {"base_rate": _f05_rows(np.ones_like(a), a)}
@@ -374,6 +379,8 @@ def f05_intervals(
         stats[name] = np.mean([_f05_rows(run[idx], a) for run in pred], axis=0)
     if "before" in stats and "after" in stats:
         stats["after_minus_before"] = stats["after"] - stats["before"]
+    for a_name, b_name in differences:
+        stats[f"{a_name}_minus_{b_name}"] = stats[a_name] - stats[b_name]
     q = (alpha / 2, 1 - alpha / 2)
     return {k: [float(v) for v in np.quantile(x, q)] for k, x in stats.items()}
 

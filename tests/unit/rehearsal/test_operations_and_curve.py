@@ -102,6 +102,16 @@ def test_f05_intervals_are_paired_and_hold_the_point_estimate() -> None:
     assert f05_intervals({"after": after}, y) == {k: ci[k] for k in ("after", "base_rate")}
     with pytest.raises(InputError):
         f05_intervals({"after": after[:, :5]}, y)
+    # any paired difference: an oracle's F0.5 minus the twin's, the same resamples
+    oracle = y[None, :]
+    gap = f05_intervals({"oracle": oracle, "after": after}, y,
+                        differences=[("oracle", "after")])  # fmt: skip
+    assert gap["after"] == ci["after"] and gap["oracle"] == [1.0, 1.0]
+    low, high = gap["oracle_minus_after"]
+    # the twin: 9 true positives, 2 false positives, 1 false negative
+    assert 0 <= low <= 1 - 11.25 / 13.5 <= high and high > 0.2
+    with pytest.raises(InputError, match="differences name no predictor: twin"):
+        f05_intervals({"after": after}, y, differences=[("after", "twin")])
 
 
 def test_curve_points_carry_the_intervals(tmp_path) -> None:

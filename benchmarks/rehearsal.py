@@ -66,7 +66,9 @@ def _report(doc: dict, cfg: RehearsalConfig) -> None:
     print("target F0.5 after >= 0.90:", "met" if doc["f05_after"] >= 0.90 else "NOT met")
     t = doc.get("thresholded")
     if t:
-        print(f"one decision per row (success iff P >= 0.5), as calibrate evaluate scores: F0.5 "
+        print(f"one decision per row (success iff P >= t; t before "
+              f"{t.get('threshold_before', 0.5):.3g}, after {t.get('threshold_after', 0.5):.3g}: "
+              f"{t.get('threshold_source', '0.5')}), as calibrate evaluate scores: F0.5 "
               f"before {t['f05_before']:.3f} [{t['f05_before_ci'][0]:.2f}, "
               f"{t['f05_before_ci'][1]:.2f}], after {t['f05_after']:.3f} "
               f"[{t['f05_after_ci'][0]:.2f}, {t['f05_after_ci'][1]:.2f}], after - before "

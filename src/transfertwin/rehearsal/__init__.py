@@ -30,7 +30,7 @@ from transfertwin.rehearsal._rehearse import (
     rehearse,
     twin_scene,
 )
-from transfertwin.rehearsal._thresholded import majority_scores
+from transfertwin.rehearsal._thresholded import majority_scores, training_threshold
 
 __all__ = [
     "COUNTER_MEASURES",
@@ -53,5 +53,6 @@ __all__ = [
     "parse_object_list",
     "rehearse",
     "run_operations",
+    "training_threshold",
     "twin_scene",
 ]

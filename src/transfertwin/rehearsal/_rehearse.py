@@ -45,7 +45,7 @@ from transfertwin.plant import (
     PlantRequest,
 )
 from transfertwin.rehearsal._operations import run_operations
-from transfertwin.rehearsal._thresholded import majority_scores
+from transfertwin.rehearsal._thresholded import majority_scores, training_threshold
 from transfertwin.sim import DockingError, SceneConfig
 from transfertwin.store import DOCKING_ERROR_COLUMNS
 from transfertwin.study.calibration import (
@@ -601,6 +601,20 @@ def _twin(run: _Run, measures: frozenset[str], out: Path) -> dict[str, object]:
     }
 
 
+def _thresholds(run: _Run, main: Mapping[str, object]) -> tuple[tuple[float, float], str]:
+    """The decision thresholds of the twin before and after calibration, chosen on the
+    training rows as `calibrate evaluate` chooses them (its replays of them: R runs a row);
+    with R = 1 every threshold in (0, 1] gives the same decisions: 0.5, no replay."""
+    if run.cfg.runs == 1 or not run.train:
+        return (0.5, 0.5), "0.5 (R = 1: P is 0 or 1, every threshold gives the same decisions)"
+    y = [int(r["success"]) for r in run.train]
+    run.stage("decision thresholds: replay of the training experiments before and after")
+    p_before = _predictions(run.replay(run.train, run.cfg.scene)).mean(axis=0)
+    p_after = _predictions(run.replay(run.train, main["_scene"], main["_object_map"]))
+    tb, ta = training_threshold(p_before, y), training_threshold(p_after.mean(axis=0), y)
+    return (tb, ta), f"chosen on the {len(y)} training rows (best F0.5 there)"
+
+
 def rehearse(
     config: RehearsalConfig,
     out: Path,
@@ -671,6 +685,7 @@ def rehearse(
         )  # fmt: skip
         write_atomic(out / "operations.json", json.dumps(operations, indent=2) + "\n")
 
+    thresholds, source = _thresholds(run, main)
     ci = f05_intervals({"before": before_pred, "after": main["_after_predictions"]}, y_test)
     held = [{**r, "p_before": float(np.mean(before_pred[:, i])),
              "p_after": float(np.mean(main["_after_predictions"][:, i]))}
@@ -684,7 +699,8 @@ def rehearse(
         "f05_base_rate_ci": ci["base_rate"],
         "f05_delta_ci": ci["after_minus_before"],
         "thresholded": majority_scores([h["p_before"] for h in held],
-                                       [h["p_after"] for h in held], y_test, seed=cfg.seed),
+                                       [h["p_after"] for h in held], y_test, seed=cfg.seed,
+                                       thresholds=thresholds, threshold_source=source),
         **{k: v for k, v in main.items() if not k.startswith("_")},
         "plant_experiments": len(plant_rows)
         + len(test_rows)

@@ -65,3 +65,22 @@ def test_majority_scores_threshold_each_row_and_pair_before_with_after() -> None
     assert s["brier_before"] == pytest.approx(0.25)
     assert s["f05_delta"] > 0 and s["brier_delta"] == pytest.approx(-0.25)
     assert s["brier_delta_ci"][1] < 0  # the same rows for both: never worse
+    assert (s["threshold_before"], s["threshold_after"]) == (0.5, 0.5)
+    # a threshold above the coin's P: every row 'failure' before (F0.5 0)
+    t = majority_scores(coin, perfect, y, n_resamples=200, thresholds=(0.75, 0.5),
+                        threshold_source="chosen on the training rows")  # fmt: skip
+    assert t["f05_before"] == 0.0 and t["f05_after"] == 1.0
+    assert t["threshold_source"] == "chosen on the training rows"
+
+
+def test_the_training_threshold_maximises_f05_on_the_training_rows() -> None:
+    from transfertwin.rehearsal import training_threshold
+
+    # R = 4: shares 0, 0.25, ..., 1; the failures sit at 0.25 and 0.5, successes at 0.75+
+    p = [0.0, 0.25, 0.5, 0.5, 0.75, 1.0, 1.0, 0.75]
+    y = [0, 0, 0, 0, 1, 1, 1, 1]
+    assert training_threshold(p, y) == 0.75  # 0.5 would let two failures through
+    assert training_threshold([1.0, 1.0], [1, 0]) == 1.0  # constant: 'success'
+    assert training_threshold([], []) == 0.5
+    with pytest.raises(ValueError, match="training_threshold"):
+        training_threshold([0.5], [1, 0])

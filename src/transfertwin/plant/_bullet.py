@@ -70,6 +70,7 @@ from transfertwin.sim import (
     SimulationUnstable,
     VirtualTransferSystem,
     object_quat,
+    outer_vertices,
     tu_pose_in_tip_frame,
     tu_quat,
     unit_layout,
@@ -141,16 +142,6 @@ def _principal(inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     if np.linalg.det(axes) < 0:
         axes[:, 2] = -axes[:, 2]
     return moments, axes
-
-
-def _outer_vertices(verts: np.ndarray) -> np.ndarray:
-    """The vertices of the convex hull of `verts` (all of them if qhull cannot build one)."""
-    from scipy.spatial import ConvexHull, QhullError
-
-    try:
-        return verts[ConvexHull(verts).vertices]
-    except (QhullError, ValueError):
-        return verts
 
 
 def _hull_obj(hulls: tuple[np.ndarray, ...]) -> str:
@@ -258,7 +249,7 @@ class BulletTransferSystem:
         # v_B = A^T (v_O - c); Bullet's base pose is that frame's.
         self._obj_text = _hull_obj(tuple((h - com) @ self._axes for h in self._hulls))
         self._verts = np.concatenate(self._hulls, axis=0)
-        self._outer = _outer_vertices(self._verts)  # the AABB's points: the hull's corners
+        self._outer = outer_vertices(self._verts)  # the AABB's points: the hull's corners
         self.tu_pose = (cfg.gap_m, 0.0, 0.0)
         self._speed_of: dict[tuple[str, str], float] = {(u, b): 0.0 for u in UNITS for b in BELTS}
         self._guard = bool(cfg.physics.guard)

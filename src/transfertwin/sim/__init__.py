@@ -35,6 +35,7 @@ from transfertwin.sim._system import (
     TrackingClock,
     VirtualTransferSystem,
     object_quat,
+    outer_vertices,
     tu_quat,
 )
 
@@ -69,6 +70,7 @@ __all__ = [
     "group_frames",
     "object_hull",
     "object_quat",
+    "outer_vertices",
     "render_strip",
     "scene_profile",
     "strip_camera",

@@ -28,6 +28,7 @@ __all__ = [
     "SimulationUnstable",
     "VirtualTransferSystem",
     "object_quat",
+    "outer_vertices",
     "tu_quat",
 ]
 
@@ -39,7 +40,7 @@ _PULLEYS = ("pulley_start", "pulley_end")
 _MAX = np.maximum.reduce
 
 
-def _outer_vertices(verts: np.ndarray) -> np.ndarray:
+def outer_vertices(verts: np.ndarray) -> np.ndarray:
     """The vertices of the convex hull of `verts` (all of them if qhull cannot build one)."""
     from scipy.spatial import ConvexHull, QhullError
 
@@ -239,7 +240,7 @@ class VirtualTransferSystem:
         # negatives (R(-v) = -(Rv) exactly, so one max-reduction gives both ends of the
         # box); then the COM (R c) and the body's x axis (R e_x: the first column of R,
         # whose yaw is θ).
-        outer = _outer_vertices(self._verts)
+        outer = outer_vertices(self._verts)
         self._n_outer = len(outer)
         self._readout_t = np.ascontiguousarray(
             np.vstack([outer, -outer, self._com, (1.0, 0.0, 0.0)]).T

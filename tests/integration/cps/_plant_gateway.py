@@ -38,6 +38,9 @@ class PlantLog:
     commands: list[str] = field(default_factory=list)
     signs: dict[str, set[int]] = field(default_factory=dict)  # node -> directions it ran
     jammed_s: float = 0.0  # how long the module's belts stood jammed (wall)
+    #: The module's drive as the gateway saw it, on every change: (wall s since start,
+    #: belt, commanded speed, speed run) — what a failed hand-over test shows.
+    drive: list[tuple[float, str, float, float]] = field(default_factory=list)
 
 
 class PlantGateway:
@@ -51,9 +54,11 @@ class PlantGateway:
         secure: (gateway cert, key, trust folder) for Basic256Sha256 SignAndEncrypt only;
             None: NoSecurity.
         jam: The module's belt drive trips once: its belts stand still from the first time
-            either is commanded to run until both are next commanded to stop (then it is
-            reset and runs as commanded). Both belts count: the module writes them one at
-            a time, and a tick can read the first written and the second not yet.
+            either is commanded to run until neither is commanded to run that way any more
+            (both stopped or reversed; then it is reset and runs as commanded). Both belts
+            count: the module writes them one at a time, and a tick can read the first
+            written and the second not yet; a reversal counts as well as a stop, because
+            the tick samples the nodes and may miss a stop between two runs.
     """
 
     def __init__(self, port: int, module: str, units: dict[str, str], obj: str, at: str,
@@ -74,6 +79,8 @@ class PlantGateway:
         self._jam = "armed" if jam else "off"  # armed -> jammed -> reset
         self._jam_t0 = 0.0
         self._commanded: dict[str, float] = {}  # the module's belt -> its commanded speed
+        self._jam_sign = 1.0  # the direction the drive tripped in
+        self._t_start = time.monotonic()
         self._loop: asyncio.AbstractEventLoop | None = None
         self._thread: threading.Thread | None = None
         self._ready = threading.Event()
@@ -191,15 +198,24 @@ class PlantGateway:
 
     def _drive(self, asset: str, belt: str, speed: float) -> float:
         """The speed `asset`'s `belt` runs at when commanded `speed` (the jam, if armed)."""
-        if asset != self.module or self._jam == "off":
+        if asset != self.module:
             return speed
+        changed = self._commanded.get(belt) != speed
         self._commanded[belt] = speed
         if self._jam == "armed" and speed:
             self._jam, self._jam_t0 = "jammed", time.monotonic()
-        if self._jam == "jammed" and not any(self._commanded.values()):  # both stopped: reset
+            self._jam_sign = math.copysign(1.0, speed)
+        # reset once neither belt is commanded to run the jammed way any more (stopped or
+        # reversed): the tick samples the nodes, and a stop between two runs may be missed
+        if self._jam == "jammed" and not any(
+            v * self._jam_sign > 0 for v in self._commanded.values()
+        ):
             self._jam = "off"
             self.log.jammed_s = time.monotonic() - self._jam_t0
-        return 0.0 if self._jam == "jammed" else speed
+        run = 0.0 if self._jam == "jammed" else speed
+        if changed:
+            self.log.drive.append((round(time.monotonic() - self._t_start, 3), belt, speed, run))
+        return run
 
     def _in_pair(self) -> bool:
         return self.docked is not None and self.holder in (self.module, self.docked)

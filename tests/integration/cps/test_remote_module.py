@@ -80,7 +80,7 @@ def _delivered(plant: PlantGateway, scenario) -> dict:
     finally:
         plant.stop()
     result = out["result"]
-    assert result["status"] == "delivered", result
+    assert result["status"] == "delivered", (result, plant.log.drive, plant.log.jammed_s)
     assert (result["y_pickup"], result["y_delivery"]) == (1, 1)
     return out
 

@@ -30,9 +30,11 @@ def _floor_spec(name: str):
 
 def cmd_up_floor(args: argparse.Namespace) -> int:
     """Start one process per asset of the floor; wait until the knowledge graph knows them
-    all; then stay until SIGINT/SIGTERM (stopping the floor) or, with --detach, exit and
-    leave the floor running."""
+    all; then stay until SIGINT/SIGTERM (stopping the floor) or until no asset process of
+    the floor runs any more (`cps down` from another shell, or each one stopped), or, with
+    --detach, exit and leave the floor running."""
     from transfertwin.cps import (
+        asset_pids,
         check_workdir,
         launch,
         prepare_floor,
@@ -82,15 +84,24 @@ def cmd_up_floor(args: argparse.Namespace) -> int:
     if args.detach:
         return 0
     stop = _stop_event()
+    ended, tick = False, 0
     try:
         while not stop["set"]:
             time.sleep(0.2)
+            tick += 1
+            if tick % 5 == 0:  # once a second: reap the ended children, then look at all
+                for p in procs.values():  # (an asset restarted by hand keeps the floor up)
+                    p.poll()
+                if not asset_pids(wd):
+                    ended = True
+                    break
     finally:
         stop_floor(wd)
         for p in procs.values():
             with contextlib.suppress(Exception):
                 p.wait(15)
-    print("floor down", flush=True)
+    print("floor down" + (": no asset process of it runs any more" if ended else ""),
+          flush=True)  # fmt: skip
     return 0
 
 

@@ -169,10 +169,7 @@ class _PlantSystem(VirtualTransferSystem):
 
     def __init__(self, obj: ObjectTruth, scene: SceneTruth, cfg: SceneConfig,
                  mismatch: _Mismatch | None = None) -> None:  # fmt: skip
-        model = _object_model(obj)
-        mass = model.mass
-        com = np.asarray(mass.com_m) + np.asarray(obj.com_offset_m)
-        inertia = np.asarray(mass.inertia_kg_m2) * obj.mass_scale
+        model, mass_kg, com, inertia = _hidden_body(obj)
         hulls, features = model.hulls, model.feature_hulls
         self._parts: tuple[JointedPart, ...] = ()
         self._sag: tuple[tuple[float, float, float], ...] = ()
@@ -183,8 +180,7 @@ class _PlantSystem(VirtualTransferSystem):
             self._parts = jointed_parts(mismatch[0], hulls, len(model.hulls),
                                         model.feature_hulls)  # fmt: skip
             self._sag = mismatch[1].sag
-        super().__init__(hulls, mass.mass_kg * obj.mass_scale, com, inertia, cfg,
-                         feature_hulls=features)  # fmt: skip
+        super().__init__(hulls, mass_kg, com, inertia, cfg, feature_hulls=features)
         # Every joint but the object's free one (jointed parts, slats): set at rest on placing.
         m = self.model
         free = m.joint(OBJECT_JOINT).id
@@ -230,6 +226,16 @@ _VSIZE = {0: 6, 1: 3, 2: 1, 3: 1}
 def _object_model(obj: ObjectTruth):
     base = load_builtin(obj.object_id, features=False)
     return proxy_model(base, ProxySpec(obj.object_id, obj.object_id, obj.protrusions))
+
+
+def _hidden_body(obj: ObjectTruth):
+    """The plant object's model and its hidden mass properties in F_O, as every engine
+    takes them: (model, mass (kg), centre of mass (m), inertia about it (kg·m²))."""
+    model = _object_model(obj)
+    mass = model.mass
+    com = np.asarray(mass.com_m) + np.asarray(obj.com_offset_m)
+    inertia = np.asarray(mass.inertia_kg_m2) * obj.mass_scale
+    return model, mass.mass_kg * obj.mass_scale, com, inertia
 
 
 def _scene_config(scene: SceneTruth, obj: ObjectTruth, refine: int = 0,
@@ -289,8 +295,9 @@ class _Job:
     engine: str = "mujoco"
 
 
-_SYSTEMS: dict[tuple[object, ...], _PlantSystem] = {}
-_BULLET_SYSTEMS: dict[tuple[object, ...], BulletTransferSystem] = {}
+#: Compiled plant systems of either engine, by ('mujoco' | 'bullet', object, scene, refine,
+#: mismatch); a few at a time (a worker runs one object's jobs in a row).
+_SYSTEMS: dict[tuple[object, ...], _PlantSystem | BulletTransferSystem] = {}
 
 #: Timestep halvings tried when the plant's guard marks a run implausible.
 _REFINE = 2
@@ -303,35 +310,36 @@ def _fresh_system(obj: ObjectTruth, scene: SceneTruth, refine: int = 0,
     return _PlantSystem(obj, scene, _scene_config(scene, obj, refine, ms), mismatch)
 
 
-def _system(obj: ObjectTruth, scene: SceneTruth, refine: int = 0,
-            mismatch: _Mismatch | None = None) -> _PlantSystem:  # fmt: skip
-    key = (obj, scene, refine, mismatch)
+def _fresh_bullet_system(obj: ObjectTruth, scene: SceneTruth,
+                         refine: int = 0) -> BulletTransferSystem:  # fmt: skip
+    """The in-class plant's system of `obj` in PyBullet (kind 'bullet'), newly built: the
+    same hidden object (hulls, mass, centre of mass, inertia), scene (μ, gap, TU height
+    step and pitch, belt-speed error, placement noise) and guard as `_fresh_system`'s."""
+    model, mass_kg, com, inertia = _hidden_body(obj)
+    return BulletTransferSystem(model.hulls, mass_kg, com, inertia,
+                                _scene_config(scene, obj, refine), scene.belt_speed_scale)
+
+
+def _cached(key: tuple[object, ...], make: Callable[[], object]):
     if key not in _SYSTEMS:
         if len(_SYSTEMS) >= 4:
             _SYSTEMS.clear()
-        _SYSTEMS[key] = _fresh_system(obj, scene, refine, mismatch)
+        _SYSTEMS[key] = make()
     return _SYSTEMS[key]
+
+
+def _system(obj: ObjectTruth, scene: SceneTruth, refine: int = 0,
+            mismatch: _Mismatch | None = None) -> _PlantSystem:  # fmt: skip
+    return _cached(("mujoco", obj, scene, refine, mismatch),
+                   lambda: _fresh_system(obj, scene, refine, mismatch))  # fmt: skip
 
 
 def _bullet_system(obj: ObjectTruth, scene: SceneTruth, refine: int = 0,
                    mismatch: _Mismatch | None = None) -> BulletTransferSystem:  # fmt: skip
-    """The in-class plant's system of `obj` in PyBullet (kind 'bullet'), cached as
-    `_system`'s: the same hidden object (hulls, mass, centre of mass, inertia), scene
-    (μ, gap, TU height step and pitch, belt-speed error, placement noise) and guard."""
+    """`_fresh_bullet_system`, cached with `_system`'s."""
     assert mismatch is None, "the Bullet plant is the in-class plant in another engine"
-    key = (obj, scene, refine)
-    if key not in _BULLET_SYSTEMS:
-        if len(_BULLET_SYSTEMS) >= 4:
-            _BULLET_SYSTEMS.clear()
-        model = _object_model(obj)
-        mass = model.mass
-        com = np.asarray(mass.com_m) + np.asarray(obj.com_offset_m)
-        _BULLET_SYSTEMS[key] = BulletTransferSystem(
-            model.hulls, mass.mass_kg * obj.mass_scale, com,
-            np.asarray(mass.inertia_kg_m2) * obj.mass_scale, _scene_config(scene, obj, refine),
-            scene.belt_speed_scale,
-        )  # fmt: skip
-    return _BULLET_SYSTEMS[key]
+    return _cached(("bullet", obj, scene, refine, None),
+                   lambda: _fresh_bullet_system(obj, scene, refine))  # fmt: skip
 
 
 @functools.lru_cache(maxsize=64)

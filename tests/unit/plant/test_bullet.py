@@ -14,7 +14,7 @@ import pytest
 from transfertwin._errors import InputError
 from transfertwin.plant import PLANT_COLUMNS, EmulatedPlant, PlantRequest
 from transfertwin.plant._bullet import BulletTransferSystem
-from transfertwin.plant._plant import _object_model, _scene_config, _system
+from transfertwin.plant._plant import _fresh_bullet_system, _scene_config, _system
 from transfertwin.plant._truth import draw_object, draw_scene
 from transfertwin.sim import DockingError, SceneConfig
 from transfertwin.study.experiment import ExperimentSpec, run_experiment
@@ -23,15 +23,9 @@ BOX = np.array([[x, y, z] for x in (-0.05, 0.05) for y in (-0.04, 0.04) for z in
 
 
 def _plant_system(seed: int, object_id: str) -> tuple[BulletTransferSystem, SceneConfig]:
-    """The in-class plant's hidden object and scene of `seed`, in Bullet."""
+    """The in-class plant's hidden object and scene of `seed`, in Bullet (a new system)."""
     obj, scene = draw_object(seed, object_id), draw_scene(seed)
-    model = _object_model(obj)
-    cfg = _scene_config(scene, obj)
-    com = np.asarray(model.mass.com_m) + np.asarray(obj.com_offset_m)
-    inertia = np.asarray(model.mass.inertia_kg_m2) * obj.mass_scale
-    system = BulletTransferSystem(model.hulls, model.mass.mass_kg * obj.mass_scale, com,
-                                  inertia, cfg, scene.belt_speed_scale)  # fmt: skip
-    return system, cfg
+    return _fresh_bullet_system(obj, scene), _scene_config(scene, obj)
 
 
 def test_a_running_belt_carries_an_object_at_belt_speed_and_cuts_the_barriers() -> None:

@@ -75,14 +75,17 @@ def rerun_wins(jobs, tag: int, plant_seed: int, n: int, workers: int) -> np.ndar
     return np.array(wins).reshape(len(jobs), n)
 
 
-def _twin_decisions(folder: Path, test: list[dict[str, object]]) -> np.ndarray | None:
-    """The calibrated twin's one decision per held-out row (``p_after >= 0.5`` in
-    ``held_out_predictions.csv``), (1, n) in the order of `test`; None without the file."""
+def _twin_decisions(folder: Path, doc: dict, test: list[dict[str, object]]) -> np.ndarray | None:
+    """The calibrated twin's one decision per held-out row (``p_after >= t`` in
+    ``held_out_predictions.csv``, t the threshold the rehearsal recorded for it: chosen on
+    the training rows for R > 1, else 0.5), (1, n) in the order of `test`; None without
+    the file."""
     path = folder / "held_out_predictions.csv"
     if not path.is_file():
         return None
+    t = float((doc.get("thresholded") or {}).get("threshold_after", 0.5))
     p = {int(r["experiment_id"]): float(r["p_after"]) for r in csv.DictReader(path.open())}
-    return np.array([[int(p[int(r["experiment_id"])] >= 0.5) for r in test]])
+    return np.array([[int(p[int(r["experiment_id"])] >= t) for r in test]])
 
 
 def oracle(folder: Path, n: int, workers: int) -> dict[str, object]:
@@ -116,7 +119,7 @@ def oracle(folder: Path, n: int, workers: int) -> dict[str, object]:
     majority = (per_run.mean(axis=0) >= 0.5).astype(int)[None, :]
     exact = np.where(flipped, 1 - y, y)[None, :]  # the plant's physics before the flip
     preds = {"oracle": per_run, "majority": majority, "exact": exact}
-    twin = _twin_decisions(folder, test)
+    twin = _twin_decisions(folder, doc, test)
     if twin is not None:
         preds["twin"] = twin
     ci = f05_intervals(preds, y, differences=[("majority", "twin")] if twin is not None else [])

@@ -8,6 +8,7 @@ import multiprocessing as mp
 import tempfile
 from pathlib import Path
 
+from _stress import WriteRecorder, rss_kib
 from transfertwin.cps.aas._demo import demo_descriptors
 from transfertwin.cps.aas._representation import build_representation, externally_synced
 from transfertwin.cps.opcua import (
@@ -18,7 +19,6 @@ from transfertwin.cps.opcua import (
     new_credentials,
     trust_certificate,
 )
-from transfertwin.cps.opcua._stress import WriteRecorder, rss_kib
 
 PROP = ("OperationalData", "PossessedObjects")
 

@@ -18,10 +18,10 @@ import time
 from collections import Counter
 
 from _cps_server import ChildServer
+from _stress import fuzz
 from transfertwin.cps.aas._demo import demo_descriptors
 from transfertwin.cps.aas._representation import build_representation, externally_synced
 from transfertwin.cps.opcua import connect
-from transfertwin.cps.opcua._stress import fuzz
 
 
 def main() -> None:

@@ -17,8 +17,8 @@ import asyncio
 import time
 
 from _cps_server import PROP, ChildServer
+from _stress import paced_writes
 from transfertwin.cps.opcua import connect
-from transfertwin.cps.opcua._stress import paced_writes
 
 
 async def _sequential(op, seconds: float) -> float:

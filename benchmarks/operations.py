@@ -13,7 +13,7 @@ the unit of the leg that lost it (`Locate`) before its next order. ``predictive`
 object in the twin's best state from a study store of the floor's cores (made first,
 ``--runs`` runs per state of the 28-state grid, docking errors from the fitted generator),
 ``nearest-idle`` in the default state. ``predictive`` also learns from the floor's own
-transfers (`cps._learn`: each finished transfer updates the twin's per-state shares of its
+transfers (`cps.dispatch._learn`: each finished transfer updates the twin's per-state shares of its
 object, pick-up and delivery); ``twin-only`` is the same policy with ``learn = false``, the
 ablation that shows what the twin's study alone is worth on this plant.
 
@@ -52,12 +52,12 @@ def tt(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
 
 def make_study(floor, path: Path, runs: int, seed: int) -> None:
     """The twin's study of the floor's cores (the predictive policy's store)."""
-    from transfertwin.cps._runtime import _docking_model
+    from transfertwin.cps.apps import docking_model
     from transfertwin.store import SQLiteResultStore
     from transfertwin.study.experiment import StudyPlan, run_study
 
     objects = tuple(o for o, _ in floor.objects)
-    plan = StudyPlan(objects, 30, runs, seed, _docking_model())
+    plan = StudyPlan(objects, 30, runs, seed, docking_model())
     store = SQLiteResultStore(path)
     t0 = time.monotonic()
 

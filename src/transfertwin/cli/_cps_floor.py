@@ -207,7 +207,7 @@ def _fork_assets(paths: list[str], log_dir: str | None) -> int:
 def _serve_asset(cfg) -> None:
     """The asset process: serve `cfg`'s asset until SIGINT/SIGTERM, announce the leave,
     end the process (never returns)."""
-    from transfertwin.cps import AssetNode
+    from transfertwin.cps import asset_node
 
     logging.getLogger("transfertwin.cps").setLevel(logging.INFO)
     handler = logging.StreamHandler()
@@ -234,7 +234,7 @@ def _serve_asset(cfg) -> None:
         cfg.state_dir.mkdir(parents=True, exist_ok=True)
         pid_file.write_text(f"{os.getpid()}\n")  # before it joins: 'cps down' finds it then
         try:
-            async with AssetNode(cfg) as node:
+            async with asset_node(cfg) as node:
                 print(f"{cfg.asset_id} up at {node.server.endpoint} (pid {os.getpid()})",
                       flush=True)  # fmt: skip
                 await stop.wait()

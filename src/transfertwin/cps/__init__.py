@@ -11,50 +11,10 @@ the simulation, the study stack and rdflib/pySHACL, which a client command (`cps
 
 from typing import TYPE_CHECKING
 
-from transfertwin.cps.aas import (
-    TYPE_PROPERTIES,
-    AssetDescriptor,
-    AssetKind,
-    AssetRepresentation,
-    Capability,
-    Layer,
-    PhysicalType,
-    build_representation,
-    demo_descriptors,
-    export_aas,
-    externally_synced,
-    physical_twin,
-    read_export,
-    validate_export,
-    wire_signature,
-)
-from transfertwin.cps.opcua import (
-    AssetClient,
-    AssetServer,
-    Credentials,
-    OpcUaUnitHAL,
-    ServerConfig,
-    connect,
-    new_credentials,
-)
+from transfertwin._lazy import lazy_exports
 
 if TYPE_CHECKING:
-    from transfertwin.cps._asset_config import (
-        AssetConfig,
-        HalConfig,
-        load_asset_config,
-        write_asset_config,
-    )
-    from transfertwin.cps._floor_file import (
-        FloorSpec,
-        ModuleSpec,
-        StationSpec,
-        default_floor_spec,
-        floor_toml,
-        load_floor,
-    )
-    from transfertwin.cps._gateway import gateway_trust_dir
-    from transfertwin.cps._hal import GatewayHAL
+    from transfertwin.cps._compose import asset_node, prepare_forking
     from transfertwin.cps._launcher import (
         asset_pids,
         check_workdir,
@@ -64,8 +24,6 @@ if TYPE_CHECKING:
         stop_floor,
         write_floor_info,
     )
-    from transfertwin.cps._lease import default_lease
-    from transfertwin.cps._node import AssetNode, prepare_forking
     from transfertwin.cps._plant_assets import (
         PHYSICAL_RECORD_EXTRA,
         PLANT_LOG,
@@ -75,61 +33,48 @@ if TYPE_CHECKING:
         plant_descriptors,
     )
     from transfertwin.cps._runtime import DOCKING_MODES, Cps, CpsConfig
+    from transfertwin.cps.aas import (
+        TYPE_PROPERTIES,
+        AssetDescriptor,
+        AssetKind,
+        AssetRepresentation,
+        Capability,
+        Layer,
+        PhysicalType,
+        build_representation,
+        demo_descriptors,
+        export_aas,
+        externally_synced,
+        physical_twin,
+        read_export,
+        validate_export,
+        wire_signature,
+    )
     from transfertwin.cps.apps import PoseGraph, PoseObservation
+    from transfertwin.cps.floor import (
+        AssetConfig,
+        FloorSpec,
+        HalConfig,
+        ModuleSpec,
+        StationSpec,
+        default_floor_spec,
+        floor_toml,
+        load_asset_config,
+        load_floor,
+        write_asset_config,
+    )
+    from transfertwin.cps.hal import GatewayHAL, gateway_trust_dir
     from transfertwin.cps.kg import KnowledgeGraph
-
-_LAZY = {
-    "AssetConfig": "_asset_config",
-    "HalConfig": "_asset_config",
-    "GatewayHAL": "_hal",
-    "gateway_trust_dir": "_gateway",
-    "load_asset_config": "_asset_config",
-    "write_asset_config": "_asset_config",
-    "FloorSpec": "_floor_file",
-    "ModuleSpec": "_floor_file",
-    "StationSpec": "_floor_file",
-    "default_floor_spec": "_floor_file",
-    "floor_toml": "_floor_file",
-    "load_floor": "_floor_file",
-    "default_lease": "_lease",
-    "asset_pids": "_launcher",
-    "check_workdir": "_launcher",
-    "launch": "_launcher",
-    "prepare_floor": "_launcher",
-    "start_asset": "_launcher",
-    "stop_floor": "_launcher",
-    "write_floor_info": "_launcher",
-    "AssetNode": "_node",
-    "prepare_forking": "_node",
-    "PHYSICAL_RECORD_EXTRA": "_plant_assets",
-    "PLANT_LOG": "_plant_assets",
-    "RUN_TRANSFER": "_plant_assets",
-    "check_plant_seed": "_plant_assets",
-    "physical_record": "_plant_assets",
-    "plant_descriptors": "_plant_assets",
-    "DOCKING_MODES": "_runtime",
-    "Cps": "_runtime",
-    "CpsConfig": "_runtime",
-    "KnowledgeGraph": "kg",
-    "PoseGraph": "apps",
-    "PoseObservation": "apps",
-}
-
-
-def __getattr__(name: str) -> object:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module 'transfertwin.cps' has no attribute {name!r}")
-    from importlib import import_module
-
-    value = getattr(import_module(f"transfertwin.cps.{module}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
-
+    from transfertwin.cps.node import AssetNode, default_lease
+    from transfertwin.cps.opcua import (
+        AssetClient,
+        AssetServer,
+        Credentials,
+        OpcUaUnitHAL,
+        ServerConfig,
+        connect,
+        new_credentials,
+    )
 
 __all__ = [
     "DOCKING_MODES",
@@ -160,6 +105,7 @@ __all__ = [
     "PoseObservation",
     "ServerConfig",
     "StationSpec",
+    "asset_node",
     "asset_pids",
     "build_representation",
     "check_plant_seed",
@@ -189,3 +135,5 @@ __all__ = [
     "write_asset_config",
     "write_floor_info",
 ]
+
+__getattr__, __dir__ = lazy_exports(__name__, __file__)

@@ -24,15 +24,17 @@ from pathlib import Path
 
 from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
-from transfertwin.cps._asset_config import (
+from transfertwin.cps.floor import (
+    PLANT_SEED_FILE,
     AssetConfig,
+    FloorSpec,
     HalConfig,
+    floor_toml,
     load_asset_config,
     write_asset_config,
+    write_plant_seed,
 )
-from transfertwin.cps._floor_file import FloorSpec, floor_toml
-from transfertwin.cps._hal import PLANT_SEED_FILE, write_plant_seed
-from transfertwin.cps._lease import default_lease
+from transfertwin.cps.node import default_lease
 from transfertwin.cps.opcua import (
     ROLES,
     ensure_certificate,

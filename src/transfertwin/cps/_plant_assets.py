@@ -47,6 +47,7 @@ from transfertwin.cps.aas import (
     operation,
     physical_twin,
 )
+from transfertwin.cps.floor import PROVENANCE as HAL_PROVENANCE
 from transfertwin.cps.opcua import OperationRefused
 
 if TYPE_CHECKING:
@@ -78,7 +79,7 @@ PHYSICAL_RECORD_EXTRA = ("kind", "experiment_id", "transfer_unit", "gap_area_cm2
 #: The transport module the plant's schedule docks (a plant resource, not a CPS asset).
 PLANT_TM = "TM_1_P"
 
-PROVENANCE = "emulated plant (transfertwin.plant)"
+PROVENANCE = HAL_PROVENANCE["plant"]
 
 RUN_TRANSFER = OperationSpec(
     "RunTransfer",

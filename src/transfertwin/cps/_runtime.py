@@ -13,7 +13,6 @@ OPC UA interface; PropS fuses reported poses; the knowledge graph serves SPARQL 
 from __future__ import annotations
 
 import asyncio
-import functools
 import itertools
 import json
 import logging
@@ -38,6 +37,7 @@ from transfertwin.cps.apps import (
     FloorRobot,
     ObjectLedger,
     PoseGraph,
+    docking_model,
 )
 from transfertwin.cps.kg import KnowledgeGraph
 from transfertwin.cps.opcua import (
@@ -55,7 +55,6 @@ from transfertwin.cps.opcua import (
     write_credentials,
 )
 from transfertwin.sim import SceneConfig
-from transfertwin.study.docking import GaussianCopula, measured_docking_errors
 
 __all__ = ["DOCKING_MODES", "Cps", "CpsConfig"]
 
@@ -107,13 +106,6 @@ class CpsConfig:
             check_plant_seed(self.plant_seed)
 
 
-@functools.cache
-def _docking_model() -> GaussianCopula:
-    """The docking-error generator fitted to the measured errors (deterministic; fitted once
-    per process, ~0.6 s)."""
-    return GaussianCopula.fit(measured_docking_errors())
-
-
 @dataclass
 class _Asset:
     desc: AssetDescriptor
@@ -131,7 +123,7 @@ class Cps(PhysicalAssets, AssetApplications):
         self.kg = KnowledgeGraph()
         self.env = Environment(config.scene, config.time_scale)
         self.poses = PoseGraph()
-        self._docking = _docking_model()
+        self._docking = docking_model()
         self._ops = itertools.count(1)
         self._tasks: set[asyncio.Task] = set()
         self._loop: asyncio.AbstractEventLoop | None = None

@@ -60,13 +60,13 @@ standby = true
 
 def small_study(path: Path, obj: str) -> None:
     """A real study store of `obj`: the 12 states at θ = 0, ±90 and 180, one run each."""
-    from transfertwin.cps._runtime import _docking_model
+    from transfertwin.cps.apps import docking_model
     from transfertwin.store import SQLiteResultStore
     from transfertwin.study.experiment import StudyPlan, run_study
 
     store = SQLiteResultStore(path)
     try:
-        run_study(StudyPlan((obj,), 90, 1, 0, _docking_model()), store, workers=1)
+        run_study(StudyPlan((obj,), 90, 1, 0, docking_model()), store, workers=1)
     finally:
         store.close()
 

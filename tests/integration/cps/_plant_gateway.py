@@ -91,8 +91,8 @@ class PlantGateway:
     def env(self):
         """The machines' physics (made on first use: a gateway that only serves needs none)."""
         if self._env is None:
-            from transfertwin.cps._role_tm import load_scene
             from transfertwin.cps.apps import Environment
+            from transfertwin.cps.hal import load_scene
 
             self._env = Environment(load_scene(), time_scale=0.0)
         return self._env

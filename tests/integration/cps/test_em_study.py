@@ -60,7 +60,7 @@ def _em_config(tmp_path: Path):
 
 @pytest.mark.slow
 def test_the_em_node_runs_stops_and_resumes_a_study_over_opc_ua(tmp_path):
-    from transfertwin.cps import AssetNode
+    from transfertwin.cps import asset_node
     from transfertwin.cps.opcua import OperationRefused, connect
 
     cfg = _em_config(tmp_path)
@@ -104,10 +104,10 @@ def test_the_em_node_runs_stops_and_resumes_a_study_over_opc_ua(tmp_path):
         return await until(em, lambda s: s["state"] == "finished")
 
     async def main() -> tuple[dict, dict]:
-        async with AssetNode(cfg) as node:
+        async with asset_node(cfg) as node:
             running = await session(node, first)
         # the node ended with the study running (as on SIGTERM): it resumes on its own
-        async with AssetNode(cfg) as node:
+        async with asset_node(cfg) as node:
             final = await session(node, second)
             assert await session(node, lambda em: em.read("OperationalData", "StudyProgress"))
         return running, final

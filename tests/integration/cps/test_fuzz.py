@@ -6,9 +6,9 @@ from __future__ import annotations
 import asyncio
 
 import pytest
+from benchmarks._stress import KINDS, fuzz
 
 from transfertwin.cps.opcua import connect
-from transfertwin.cps.opcua._stress import KINDS, fuzz
 
 SESSION_OK = {
     # a read of a node that does not exist, a write of the wrong type, a call with wrong

@@ -21,9 +21,9 @@ from tests.integration.cps._plant_gateway import PlantGateway
 from transfertwin.cli import main
 from transfertwin.cps import (
     AssetConfig,
-    AssetNode,
     GatewayHAL,
     HalConfig,
+    asset_node,
     connect,
     write_asset_config,
 )
@@ -93,7 +93,7 @@ def test_an_untrusted_gateway_is_refused_once_and_trusted_later_without_a_restar
     caplog.set_level(logging.INFO, logger="transfertwin.cps")
 
     async def scenario() -> tuple[str, float]:
-        async with AssetNode(cfg) as node, connect(node.server.endpoint, "TU_A",
+        async with asset_node(cfg) as node, connect(node.server.endpoint, "TU_A",
                                                    credentials=None, insecure=True) as tu:
             with pytest.raises(ua.UaStatusCodeError):  # refused, not silently taken
                 await tu.call("SetBeltSpeed", "right", 0.1)

@@ -18,7 +18,7 @@ LEASE_S = 1.5
 
 
 def test_idle_assets_renew_and_a_restarted_graph_gets_their_descriptions(tmp_path):
-    from transfertwin.cps import AssetNode, load_floor, prepare_floor
+    from transfertwin.cps import asset_node, load_floor, prepare_floor
     from transfertwin.cps.opcua import connect
 
     (tmp_path / "floor.toml").write_text(two_module_floor("lease", {"o1": "TU_A"}))
@@ -36,9 +36,9 @@ def test_idle_assets_renew_and_a_restarted_graph_gets_their_descriptions(tmp_pat
         return time.monotonic() - t0
 
     async def main():
-        kg = await AssetNode(cfg["KG"]).__aenter__()
+        kg = await asset_node(cfg["KG"]).__aenter__()
         try:
-            async with AssetNode(cfg["o1"]) as o1, AssetNode(cfg["TU_A"]) as tu:
+            async with asset_node(cfg["o1"]) as o1, asset_node(cfg["TU_A"]) as tu:
                 graph = kg.role
                 await until(lambda: {"o1", "TU_A"} <= set(graph.leases), 10.0, "both joined")
                 full = graph.beats["full"]
@@ -56,7 +56,7 @@ def test_idle_assets_renew_and_a_restarted_graph_gets_their_descriptions(tmp_pat
                 assert graph.beats["full"] == full + 1
                 # the graph restarts: it holds no lease, refuses renewals, gets descriptions
                 await kg.__aexit__(None, None, None)
-                kg = await AssetNode(cfg["KG"]).__aenter__()
+                kg = await asset_node(cfg["KG"]).__aenter__()
                 t = await until(lambda: {"o1", "TU_A"} <= set(kg.role.leases), 10.0,
                                 "both back in the restarted graph")  # fmt: skip
                 assert kg.role.info["o1"]["location"] == "TM_1"  # from o1's description

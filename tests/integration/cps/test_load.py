@@ -8,9 +8,9 @@ from __future__ import annotations
 import asyncio
 
 import pytest
+from benchmarks._stress import WriteRecorder, paced_writes, rss_kib
 
 from transfertwin.cps.opcua import connect
-from transfertwin.cps.opcua._stress import WriteRecorder, paced_writes, rss_kib
 
 N_WRITES = 1000
 

@@ -75,7 +75,7 @@ def _wait_finished(wd: Path, op_id: str, timeout_s: float = 120) -> dict:
 
 def test_an_order_by_destination_group_is_auctioned_and_loaded_in_the_twins_best_state(
         floor, capfd):  # fmt: skip
-    from transfertwin.cps._predict import study_predictions
+    from transfertwin.cps.dispatch._predict import study_predictions
 
     res = run_main(capfd, "cps", "order", "--workdir", str(floor), "--object", "o1",
                    "--to", "out")  # fmt: skip

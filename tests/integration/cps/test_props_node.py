@@ -17,7 +17,7 @@ from tests.integration.cps.test_em_study import FLOOR
 
 
 def test_props_fuses_a_modules_fix_and_a_camera_observation_into_the_docking_error(tmp_path):
-    from transfertwin.cps import AssetNode, load_floor, prepare_floor
+    from transfertwin.cps import asset_node, load_floor, prepare_floor
     from transfertwin.cps.apps import Pose2D
     from transfertwin.cps.opcua import connect
     from transfertwin.navigation import CharucoRig
@@ -33,7 +33,7 @@ def test_props_fuses_a_modules_fix_and_a_camera_observation_into_the_docking_err
     module = goal.compose(Pose2D(*truth))
 
     async def main():
-        async with AssetNode(cfg) as node, connect(node.server.endpoint, "PropS",
+        async with asset_node(cfg) as node, connect(node.server.endpoint, "PropS",
                                                   credentials=None, insecure=True) as ps:
             fused = json.loads(await ps.read("OperationalData", "FusedPosesJson"))
             assert fused["TU_A"]["x"] == pytest.approx(goal.x, abs=1e-6)  # from the floor

@@ -16,8 +16,8 @@ from asyncua import ua
 from tests.integration.cps._plant_gateway import PlantGateway
 from transfertwin.cps import (
     AssetConfig,
-    AssetNode,
     HalConfig,
+    asset_node,
     connect,
     default_floor_spec,
     floor_toml,
@@ -55,7 +55,7 @@ def test_a_remote_unit_drives_its_belts_and_reads_its_barriers_at_the_gateway(tm
 
     async def scenario() -> None:
         try:
-            async with AssetNode(cfg) as node, connect(node.server.endpoint, "TU_A",
+            async with asset_node(cfg) as node, connect(node.server.endpoint, "TU_A",
                                                        credentials=None, insecure=True) as tu:
                 # a belt command reaches the hardware, and the unit publishes it
                 assert await tu.call("SetBeltSpeed", "left", 0.25) is True

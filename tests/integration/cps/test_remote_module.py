@@ -24,6 +24,7 @@ from transfertwin.cps import (
     AssetConfig,
     AssetNode,
     HalConfig,
+    asset_node,
     connect,
     default_floor_spec,
     floor_toml,
@@ -93,8 +94,8 @@ def test_a_remote_module_transfers_through_its_gateway_end_to_end(tmp_path):
     cfgs = _configs(tmp_path, plant.url)
 
     async def scenario() -> dict:
-        async with AssetNode(cfgs["TU_A"]) as tu_a, AssetNode(cfgs["TU_B"]) as tu_b, \
-                AssetNode(cfgs["TM_1"]) as tm:
+        async with asset_node(cfgs["TU_A"]) as tu_a, asset_node(cfgs["TU_B"]) as tu_b, \
+                asset_node(cfgs["TM_1"]) as tm:
             for unit in (tu_a, tu_b):
                 tm.learn(unit.desc.asset_id, unit.server.endpoint)
             async with connect(tm.server.endpoint, "TM_1", credentials=None,
@@ -173,8 +174,8 @@ def test_a_failed_pickup_is_taken_back_and_retried_through_the_gateway_with_prop
                                         state_dir=tmp_path / "PropS" / "state")  # fmt: skip
 
     async def scenario() -> dict:
-        async with AssetNode(cfgs["TU_A"]) as tu_a, AssetNode(cfgs["TU_B"]) as tu_b, \
-                AssetNode(cfgs["PropS"]) as props, AssetNode(cfgs["TM_1"]) as tm:
+        async with asset_node(cfgs["TU_A"]) as tu_a, asset_node(cfgs["TU_B"]) as tu_b, \
+                asset_node(cfgs["PropS"]) as props, asset_node(cfgs["TM_1"]) as tm:
             for peer in (tu_a, tu_b, props):
                 tm.learn(peer.desc.asset_id, peer.server.endpoint)
             async with connect(tm.server.endpoint, "TM_1", credentials=None,

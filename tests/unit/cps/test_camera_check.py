@@ -69,8 +69,8 @@ def test_a_far_end_hidden_on_the_unit_is_matched_on_width_and_height():
 def test_the_modules_camera_sees_a_core_in_the_middle_of_the_unit_as_the_ledger_says():
     """A real scan (MuJoCo depth frames, the perception pipeline): o9 where a pick-up puts it
     is seen short at its far end and still matched."""
-    from transfertwin.cps._role_tm import load_scene
     from transfertwin.cps.apps._environment import system_for
+    from transfertwin.cps.hal import load_scene
     from transfertwin.perception import CameraIntrinsics, DepthCamera, Workspace, workspace_scan
     from transfertwin.sim import DockingError
 

@@ -1,4 +1,4 @@
-"""An asset's HAL (cps._hal): a plant floor's module simulates its docked pair with the
+"""An asset's HAL (cps.hal._local): a plant floor's module simulates its docked pair with the
 plant's hidden physics, its controller keeps the twin's scene; the seed file."""
 
 from __future__ import annotations
@@ -7,7 +7,8 @@ import pytest
 
 from transfertwin._errors import InputError
 from transfertwin.cps import AssetConfig, HalConfig
-from transfertwin.cps._hal import environment_for, read_plant_seed, write_plant_seed
+from transfertwin.cps.floor import read_plant_seed, write_plant_seed
+from transfertwin.cps.hal import environment_for
 
 
 def _cfg(tmp_path, hal: HalConfig) -> AssetConfig:
@@ -18,7 +19,7 @@ def _cfg(tmp_path, hal: HalConfig) -> AssetConfig:
 
 
 def test_a_plant_module_steps_the_plants_hidden_system_with_the_twins_controller_scene(tmp_path):
-    from transfertwin.cps._role_tm import load_scene
+    from transfertwin.cps.hal import load_scene
     from transfertwin.plant import PlantPhysics
     from transfertwin.study.experiment import system_for
 
@@ -52,8 +53,7 @@ def test_the_seed_file_and_hal_kinds_refuse_what_cannot_work(tmp_path):
 
 
 def test_a_remote_module_simulates_nothing_its_world_is_at_the_gateway(tmp_path):
-    from transfertwin.cps._role_tm import load_scene
-    from transfertwin.cps._role_tm_remote import GatewayWorld, WallClock
+    from transfertwin.cps.hal import GatewayWorld, WallClock, load_scene
 
     remote = HalConfig("remote", endpoint="opc.tcp://127.0.0.1:4840", insecure=True)
     scene = load_scene()

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from scipy.stats import beta
 
-from transfertwin.cps._kpis import kpis
+from transfertwin.cps.dispatch._kpis import kpis
 
 
 def _op(i, submitted, assigned, finished, status, module="TM_1", steps=(), floor_s=100.0,

@@ -1,10 +1,10 @@
-"""The floor's own transfers update the twin's per-state predictions (`cps._learn`)."""
+"""The floor's own transfers update the twin's per-state predictions (`cps.dispatch._learn`)."""
 
 from __future__ import annotations
 
 import pytest
 
-from transfertwin.cps._learn import (
+from transfertwin.cps.dispatch._learn import (
     FACE_POOL,
     PRIOR_RUNS,
     fallback,

@@ -1,4 +1,4 @@
-"""The lease's arithmetic and an asset's side of it (`cps._lease`): the default lease by floor
+"""The lease's arithmetic and an asset's side of it (`cps.node._lease`): the default lease by floor
 size, the renewal sent when nothing changed, the directory sent only when it changed, the
 jitter, and the gossip period stretched with the number of peers."""
 
@@ -9,7 +9,7 @@ import json
 import pytest
 
 from transfertwin.cps import default_lease
-from transfertwin.cps._lease import (
+from transfertwin.cps.node._lease import (
     DEFAULT_LEASE_S,
     HEARTBEATS_PER_S,
     Renewal,

@@ -9,7 +9,7 @@ import pytest
 
 from transfertwin._errors import InputError
 from transfertwin.cps import default_floor_spec, floor_toml, load_floor
-from transfertwin.cps._floor_file import OperationSpec
+from transfertwin.cps.floor._floor_file import OperationSpec
 
 
 def _with(tmp_path, table: str):

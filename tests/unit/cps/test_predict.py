@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import pytest
 
-from transfertwin.cps._dispatch import Bid, choose
-from transfertwin.cps._predict import rank_states
+from transfertwin.cps.dispatch._auction import Bid, choose
+from transfertwin.cps.dispatch._predict import rank_states
 
 
 def _rows(obj, face, conveyor, theta, outcomes, status="ok"):

@@ -11,8 +11,16 @@ from transfertwin._lazy import lazy_exports
 
 if TYPE_CHECKING:
     from transfertwin.cps.apps._applications import AssetApplications, VirtualTransport
+    from transfertwin.cps.apps._docking import docking_model
     from transfertwin.cps.apps._environment import Environment, ScaledClock
     from transfertwin.cps.apps._floor import HOME_POSE, FloorRobot, LegResult
+    from transfertwin.cps.apps._hand_over import (
+        DELIVERY_RETRIES,
+        PICKUP_RETRIES,
+        HandOverRetries,
+        state_text,
+        take_back,
+    )
     from transfertwin.cps.apps._ledger import ObjectLedger
     from transfertwin.cps.apps._props import (
         Pose2D,
@@ -43,12 +51,15 @@ if TYPE_CHECKING:
     )
 
 __all__ = [
+    "DELIVERY_RETRIES",
     "HOME_POSE",
+    "PICKUP_RETRIES",
     "STEPS",
     "STUDY_INDEX",
     "AssetApplications",
     "Environment",
     "FloorRobot",
+    "HandOverRetries",
     "Leg",
     "LegResult",
     "ObjectLedger",
@@ -63,13 +74,16 @@ __all__ = [
     "StudyRequest",
     "TransportSkills",
     "VirtualTransport",
+    "docking_model",
     "form_ots",
     "fuse_poses",
     "legs_of",
     "record_store",
     "run_transport_operation",
+    "state_text",
     "study_opcua_values",
     "study_stores",
+    "take_back",
     "transfer_step",
     "wrap_angle",
 ]

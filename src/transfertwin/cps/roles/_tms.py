@@ -24,10 +24,10 @@ import logging
 import time
 from typing import TYPE_CHECKING, Any
 
-from transfertwin.cps._roles import Role
+from transfertwin.cps.node import Role
 
 if TYPE_CHECKING:
-    from transfertwin.cps._node import AssetNode
+    from transfertwin.cps.node import AssetNode
 
 __all__ = ["TmsRole", "order_view"]
 
@@ -194,7 +194,7 @@ class TmsRole(Role):
         return json.dumps(self._kpi_doc())
 
     def _kpi_doc(self) -> dict[str, Any]:
-        from transfertwin.cps._kpis import kpis
+        from transfertwin.cps.dispatch import kpis
 
         doc = kpis(self.ops.values(), [m.asset_id for m in self.node.floor.modules],
                    self.node.floor.units, time.time())  # fmt: skip
@@ -263,7 +263,7 @@ class TmsRole(Role):
     async def _allocate(self, op_id: str) -> tuple[str, str, dict[str, Any]]:
         """Run the auction for `op_id` (`_dispatch`) until a module wins; claim it.
         Returns (module, target unit, the bids' record)."""
-        from transfertwin.cps._dispatch import Bid, choose
+        from transfertwin.cps.dispatch import Bid, choose
 
         op = self.ops[op_id]
         p = (op.get("plan") or {}).get("prediction") or {}
@@ -338,7 +338,7 @@ class TmsRole(Role):
                     "note": "no prediction for this object: default state"}  # fmt: skip
         keys = ("face", "conveyor", "theta_deg")
         if self.node.floor.operation.learn:
-            from transfertwin.cps._learn import fallback, rerank
+            from transfertwin.cps.dispatch import fallback, rerank
 
             evidence = self.state.data.setdefault("evidence", {}).get(op["object"], {})
             ranked = rerank(preds, evidence)
@@ -355,7 +355,7 @@ class TmsRole(Role):
     async def _predictions(self, obj: str, op_id: str) -> list[dict[str, Any]]:
         """The twin's ranked states for `obj`: cached; else the study store; else the
         Experiment Manager's on-the-fly experiments (not cached when it cannot answer)."""
-        from transfertwin.cps._predict import study_predictions
+        from transfertwin.cps.dispatch import study_predictions
 
         cache = self.state.data.setdefault("predictions", {})
         if obj in cache:
@@ -483,7 +483,7 @@ class TmsRole(Role):
                                                "operation": op_id}  # fmt: skip
             self._pending |= {self.ledger.location(obj), obj}
         self.ledger.release(op_id, obj)
-        from transfertwin.cps._learn import record
+        from transfertwin.cps.dispatch import record
 
         record(self.state.data.setdefault("evidence", {}), obj,
                (op.get("plan") or {}).get("state"), result)  # fmt: skip

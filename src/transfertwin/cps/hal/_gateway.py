@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from asyncua import Client
 
-    from transfertwin.cps._asset_config import AssetConfig
+    from transfertwin.cps.floor import AssetConfig
 
 __all__ = ["GatewayError", "GatewayLink", "gateway_refusal", "gateway_trust_dir", "open_gateway",
            "poll_gateway"]

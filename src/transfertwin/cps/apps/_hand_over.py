@@ -1,7 +1,7 @@
 """A transport module's hand-over policy (docs/architecture.md, "Operation"): a transfer
 that failed from a valid start state is taken back and tried again. One loop for every
-module (`HandOverRetries`): the virtual or plant module (`cps._role_tm`, its simulation of
-the docked pair) and the module on real hardware (`cps._role_tm_remote`, its HAL gateway)
+module (`HandOverRetries`): the virtual or plant module (`cps.roles._module`, its simulation of
+the docked pair) and the module on real hardware (`cps.roles._remote_module`, its HAL gateway)
 differ only in how they take an object back (`take_back` with their own belts, sensor
 and clock) and how they dock anew (their `dock` skill).
 """

@@ -26,10 +26,10 @@ import math
 from typing import TYPE_CHECKING, Any
 
 from transfertwin._errors import InputError
-from transfertwin.cps._roles import Role
+from transfertwin.cps.node import Role
 
 if TYPE_CHECKING:
-    from transfertwin.cps._node import AssetNode
+    from transfertwin.cps.node import AssetNode
 
 __all__ = ["UNIT_SIGMA_THETA_RAD", "UNIT_SIGMA_XY_M", "PropsRole"]
 

@@ -9,53 +9,36 @@ gateway (docs/architecture.md, "Deployment"; the ``[hal]`` table of ``ASSET.toml
   file, nor a status, nor a log holds it or anything drawn from it.
 - ``remote``: real hardware. The asset writes belt speeds to and reads its light barriers
   from a HAL gateway, an OPC UA server next to the machine (a PLC's, or a small bridge),
-  at ``endpoint`` (`GatewayHAL`; the session, secure by default: `cps._gateway`). A
+  at ``endpoint`` (`GatewayHAL`; the session, secure by default: `cps.hal._gateway`). A
   transport module also drives, localises and senses the object there
-  (`cps._role_tm_remote`).
+  (`cps.roles._remote_module`).
 """
 
 from __future__ import annotations
 
+import functools
 import logging
-import os
-import stat
-from pathlib import Path
 from typing import TYPE_CHECKING
 
-from transfertwin._errors import InputError
-from transfertwin.cps._gateway import GatewayError, GatewayLink, gateway_refusal
+from transfertwin.cps.floor import read_plant_seed
+from transfertwin.cps.hal._gateway import GatewayError, GatewayLink, gateway_refusal
+from transfertwin.cps.hal._gateway_module import GatewayWorld
 
 if TYPE_CHECKING:
-    from transfertwin.cps._asset_config import AssetConfig
+    from transfertwin.cps.floor import AssetConfig
     from transfertwin.sim import SceneConfig
 
-__all__ = ["GatewayHAL", "environment_for", "read_plant_seed", "write_plant_seed"]
+__all__ = ["GatewayHAL", "environment_for", "load_scene"]
 
 log = logging.getLogger("transfertwin.cps")
 
-#: What the plant seed file is called in a floor's work folder.
-PLANT_SEED_FILE = "plant.secret"
 
+@functools.cache
+def load_scene():
+    """The virtual models' scene (the built-in defaults)."""
+    from transfertwin.sim import SceneConfig
 
-def write_plant_seed(path: Path, seed: int) -> Path:
-    """Write the plant seed to `path`, readable by its owner only."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
-    with os.fdopen(fd, "w") as fh:
-        fh.write(f"{int(seed)}\n")
-    os.chmod(path, stat.S_IRUSR | stat.S_IWUSR)
-    return path
-
-
-def read_plant_seed(path: Path) -> int:
-    """The plant seed in `path` (InputError: missing or not a non-negative integer)."""
-    try:
-        text = Path(path).read_text().strip()
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read the plant seed file ({exc.strerror})") from None
-    if not text.isdigit():
-        raise InputError(f"{path}: the plant seed file must hold a non-negative integer")
-    return int(text)
+    return SceneConfig()
 
 
 def environment_for(cfg: AssetConfig, scene: SceneConfig):
@@ -69,8 +52,6 @@ def environment_for(cfg: AssetConfig, scene: SceneConfig):
     if cfg.hal.kind == "virtual":
         return Environment(scene, cfg.time_scale)
     if cfg.hal.kind == "remote":  # the hardware is the world: nothing is simulated
-        from transfertwin.cps._role_tm_remote import GatewayWorld
-
         return GatewayWorld(scene)
     from transfertwin.plant import PlantPhysics
 
@@ -92,7 +73,7 @@ def environment_for(cfg: AssetConfig, scene: SceneConfig):
 
 class GatewayHAL:
     """A remote transfer unit's belts and light barriers at its HAL gateway (an OPC UA
-    server; the session: `cps._gateway`).
+    server; the session: `cps.hal._gateway`).
 
     Belt speeds (m/s, Double) are written to the gateway's belt nodes; the barriers
     (Boolean, True: interrupted) are read from its barrier nodes. A belt command the

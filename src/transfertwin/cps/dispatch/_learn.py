@@ -99,7 +99,7 @@ def _pooled(cells: Mapping[str, Sequence[int]], key: str) -> tuple[float, float]
 
 def posterior(pred: Mapping[str, Any], evidence: Mapping[str, Any]) -> dict[str, float]:
     """p_pickup, p_delivery and their product p for the state of `pred` (a ranked state of
-    `transfertwin.cps._predict`: face, conveyor, theta_deg, k, n) given one object's
+    `transfertwin.cps.dispatch._predict`: face, conveyor, theta_deg, k, n) given one object's
     evidence (leg -> state key -> [k, n])."""
     key = state_key(pred)
     n_v = float(pred["n"])

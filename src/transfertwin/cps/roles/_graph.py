@@ -1,11 +1,6 @@
-"""What each asset does in its own process (`AssetNode`): transfer units, objects and the
-knowledge graph. The transport module and the TMS, which carry the transport operations,
-are in `_role_tm` and `_role_tms`; PropS in `_role_props`, the Experiment Manager in
-`_role_em`.
-
-Every role offers `handlers()` (the OPC UA operations), `writable()` (properties others
-may write besides the externally synchronised ones), `live()` (its part of the heartbeat),
-`start()` and `stop()`.
+"""The knowledge graph's asset (`GraphRole`): it holds the graph (`KnowledgeGraph`), answers
+SPARQL queries, keeps every asset's lease from its heartbeats and publishes the floor's
+directory of endpoints.
 """
 
 from __future__ import annotations
@@ -14,184 +9,21 @@ import asyncio
 import contextlib
 import json
 import logging
+import os
 import time
 from typing import TYPE_CHECKING, Any
 
 from transfertwin._errors import InputError
-from transfertwin.cps._lease import NO_LEASE, directory_reply
-from transfertwin.cps._node import NodeState
+from transfertwin.cps.aas import AssetDescriptor, AssetKind, Capability, PhysicalType
+from transfertwin.cps.node import NO_LEASE, Role, directory_reply
 from transfertwin.cps.opcua import OperationRefused
 
 if TYPE_CHECKING:
-    from transfertwin.cps._node import AssetNode
+    from transfertwin.cps.node import AssetNode
 
-__all__ = ["Role", "role_for"]
+__all__ = ["GraphRole"]
 
 log = logging.getLogger("transfertwin.cps")
-
-
-class Role:
-    """The default role: serve the AAS, nothing else."""
-
-    def __init__(self, node: AssetNode) -> None:
-        self.node = node
-        self.aid = node.desc.asset_id
-        self.state = NodeState(node.cfg.state_dir / f"{self.aid}.json", self.initial())
-
-    def initial(self) -> dict[str, Any]:
-        """The persisted state before the first save."""
-        return {}
-
-    def handlers(self) -> dict[str, Any]:
-        return {}
-
-    def writable(self) -> set[str]:
-        return set()
-
-    async def start(self) -> None:
-        pass
-
-    async def stop(self) -> None:
-        pass
-
-    async def live(self) -> dict[str, Any]:
-        """This asset's live state for the heartbeat."""
-        return {"state": "idle"}
-
-    async def set(self, prop: str, value: object) -> None:
-        """Set one of this asset's OperationalData properties."""
-        await self.node.server.set("OperationalData", prop, value)
-
-    async def get(self, prop: str) -> Any:
-        return await self.node.server.get("OperationalData", prop)
-
-
-#: How often a unit tells PropS its pose again, s.
-POSE_REPORT_S = 60.0
-
-
-class UnitRole(Role):
-    """A transfer unit (type D/E): belt drives, possession kept by others.
-
-    With a virtual or plant HAL its light barriers are written by the environment that
-    simulates it (the docked module's process). With a remote HAL (`GatewayHAL`) its belt
-    commands go to the hardware's gateway and its barriers are read from there every
-    ``poll_s`` and published; nobody else may write them.
-    """
-
-    def __init__(self, node: AssetNode) -> None:
-        super().__init__(node)
-        self.gateway = None
-        if node.cfg.hal.kind == "remote":
-            from transfertwin.cps._hal import GatewayHAL
-
-            self.gateway = GatewayHAL(node.cfg)
-
-    def initial(self) -> dict[str, Any]:
-        return {"possessed": [], "docked": ""}
-
-    def handlers(self) -> dict[str, Any]:
-        return {"SetBeltSpeed": self._set_belt, "SetPossessedObjects": self._set_possessed}
-
-    def writable(self) -> set[str]:
-        if self.gateway is not None:
-            return set()  # the hardware's barriers: read from its gateway only
-        return {"BarrierNearInterrupted", "BarrierFarInterrupted"}
-
-    async def start(self) -> None:
-        await self.set("PossessedObjects", ",".join(self.state.data["possessed"]))
-        await self.set("DockedTransportModule", self.state.data["docked"])
-        self.node.server.on_client_write(self._written)
-        if self.gateway is not None:
-            self.node.spawn(self._poll_barriers())
-        if "PropS" in self.node.floor.logical:
-            self.node.spawn(self._report_pose())
-
-    async def _report_pose(self) -> None:
-        """Tell PropS where this unit stands (its surveyed docking goal on the floor), and
-        again every `POSE_REPORT_S` (a restarted PropS hears it then)."""
-        from transfertwin.cps._role_props import UNIT_SIGMA_THETA_RAD, UNIT_SIGMA_XY_M
-
-        floor = self.node.floor
-        spec = next(s for s in floor.stations if s.unit == self.aid)
-        x, y, theta = (float(v) for v in floor.shop_floor().station(spec.name).goal_pose())
-        while True:
-            try:
-                await asyncio.wait_for(self.node.peers.call(
-                    "PropS", "ReportPose", self.aid, self.aid, x, y, theta, UNIT_SIGMA_XY_M,
-                    UNIT_SIGMA_THETA_RAD), 10.0)  # fmt: skip
-                delay = POSE_REPORT_S
-            except Exception as exc:  # PropS not (yet) there: try again soon
-                log.debug("%s: PropS not answering (%s)", self.aid, exc)
-                delay = 2.0
-            await asyncio.sleep(delay)
-
-    async def stop(self) -> None:
-        if self.gateway is not None:
-            await self.gateway.close()
-
-    async def _poll_barriers(self) -> None:
-        """Publish the gateway's barriers as they change (a gateway away: said once, kept
-        trying; the last values stay)."""
-        from transfertwin.cps._gateway import poll_gateway
-
-        shown: dict[str, bool] | None = None
-
-        async def publish(now: dict[str, bool]) -> None:
-            nonlocal shown
-            if now != shown:
-                await self.set("BarrierNearInterrupted", now["near"])
-                await self.set("BarrierFarInterrupted", now["far"])
-                shown = now
-
-        await poll_gateway(self.aid, self.gateway.barriers, self.node.cfg.hal.poll_s, publish)
-
-    def _written(self, submodel: str, prop: str, value: object) -> None:
-        if prop == "PossessedObjects":
-            self.state.data["possessed"] = [o for o in str(value).split(",") if o]
-            self.state.save()
-        elif prop == "DockedTransportModule":
-            self.state.data["docked"] = str(value)
-            self.state.save()
-
-    async def _set_belt(self, belt: str, speed: float) -> bool:
-        if belt not in ("left", "right"):
-            raise ValueError(f"unknown belt {belt!r}")
-        if self.gateway is not None:  # the drive first: publish what the hardware was told
-            await self.gateway.set_belt(belt, float(speed))
-        await self.set(f"BeltSpeed{belt.capitalize()}", float(speed))
-        return True
-
-    async def _set_possessed(self, objects: str) -> bool:
-        ids = [o for o in objects.split(",") if o]
-        await self.set("PossessedObjects", ",".join(ids))
-        self.state.data["possessed"] = ids
-        self.state.save()
-        return True
-
-    async def live(self) -> dict[str, Any]:
-        docked = await self.get("DockedTransportModule")
-        return {"state": "docked" if docked else "idle", "docked": docked or None,
-                "possesses": self.state.data["possessed"]}  # fmt: skip
-
-
-class ObjectRole(Role):
-    """A virtual object (type B): others keep its state; it persists what they wrote."""
-
-    def initial(self) -> dict[str, Any]:
-        return {"possessed_by": self.node.floor.placement().get(self.aid, "")}
-
-    async def start(self) -> None:
-        await self.set("PossessedBy", self.state.data["possessed_by"])
-        self.node.server.on_client_write(self._written)
-
-    def _written(self, submodel: str, prop: str, value: object) -> None:
-        if prop == "PossessedBy":
-            self.state.data["possessed_by"] = str(value)
-            self.state.save()
-
-    async def live(self) -> dict[str, Any]:
-        return {"state": "idle", "location": self.state.data["possessed_by"] or None}
 
 
 class GraphRole(Role):
@@ -223,7 +55,7 @@ class GraphRole(Role):
                 "Status": self._status}  # fmt: skip
 
     async def start(self) -> None:
-        from transfertwin.cps.kg import KnowledgeGraph
+        from transfertwin.cps.kg import KnowledgeGraph  # rdflib: only the graph's process
 
         srv = self.node.server
         self.kg = KnowledgeGraph(self.aid, endpoint=srv.endpoint,
@@ -232,8 +64,6 @@ class GraphRole(Role):
 
     async def beat_self(self) -> None:
         """The graph's own lease (it is an asset like any other)."""
-        import os
-
         srv = self.node.server
         self.info[self.aid] = {"id": self.aid, "kind": "logical", "class": "knowledge_graph",
                                "endpoint": srv.endpoint, "pid": os.getpid(), "state": "idle",
@@ -262,8 +92,6 @@ class GraphRole(Role):
         return json.dumps(self.kg.query(sparql))
 
     async def _heartbeat(self, payload: str) -> str:
-        from transfertwin.cps.aas import AssetDescriptor, AssetKind, Capability, PhysicalType
-
         d = json.loads(payload)
         aid = d["id"]
         held = d.pop("directory", None)
@@ -390,28 +218,3 @@ def _state_word(state: object) -> str | None:
     return word or None
 
 
-def role_for(node: AssetNode) -> Role:
-    """The role of the node's asset class."""
-    cls = node.desc.asset_class
-    if cls == "transport_module":
-        if node.cfg.hal.kind == "remote":  # on real hardware, behind its HAL gateway
-            from transfertwin.cps._role_tm_remote import RemoteModuleRole
-
-            return RemoteModuleRole(node)
-        from transfertwin.cps._role_tm import ModuleRole
-
-        return ModuleRole(node)
-    if cls == "transport_module_system":
-        from transfertwin.cps._role_tms import TmsRole
-
-        return TmsRole(node)
-    if cls == "props":
-        from transfertwin.cps._role_props import PropsRole
-
-        return PropsRole(node)
-    if cls == "experiment_manager":
-        from transfertwin.cps._role_em import ExperimentRole
-
-        return ExperimentRole(node)
-    roles = {"transfer_unit": UnitRole, "object": ObjectRole, "knowledge_graph": GraphRole}
-    return roles.get(cls, Role)(node)

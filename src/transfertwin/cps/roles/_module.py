@@ -27,14 +27,14 @@ from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from asyncua import ua
 
-from transfertwin.cps._roles import Role
+from transfertwin.cps.hal import MirroredUnitHAL, load_scene
+from transfertwin.cps.node import Role
 
 if TYPE_CHECKING:
-    from transfertwin.cps._node import AssetNode
+    from transfertwin.cps.node import AssetNode
 
-__all__ = ["MirroredUnitHAL", "ModuleRole", "load_scene"]
+__all__ = ["CAMERA_SIGMA_THETA_RAD", "CAMERA_SIGMA_XY_M", "UNCERTAIN_STEPS", "ModuleRole"]
 
 log = logging.getLogger("transfertwin.cps")
 
@@ -43,69 +43,13 @@ log = logging.getLogger("transfertwin.cps")
 UNCERTAIN_STEPS = frozenset({"transferring"})
 
 
-@functools.cache
-def load_scene():
-    """The virtual models' scene (the built-in defaults)."""
-    from transfertwin.sim import SceneConfig
-
-    return SceneConfig()
-
-
-class MirroredUnitHAL:
-    """A remote virtual unit's HAL whose physics runs here.
-
-    Belt commands go to the unit (it records and publishes them) and into the local
-    simulation; the light barriers are read from the simulation and written to the unit
-    when they change (a virtual unit's sensors are synchronised by the environment that
-    simulates it).
-
-    Args:
-        remote: `OpcUaUnitHAL` of the unit.
-        local: The simulated unit's HAL (`VirtualTransferSystem.tu`).
-        loop: The event loop that owns the unit's session.
-    """
-
-    def __init__(self, remote, local, loop: asyncio.AbstractEventLoop) -> None:
-        self.name = remote.name
-        self._remote, self._local, self._loop = remote, local, loop
-        self._published: dict[str, bool] | None = None
-
-    def set_belt_speed(self, belt: str, speed_m_s: float) -> None:
-        self._remote.set_belt_speed(belt, speed_m_s)
-        self._local.set_belt_speed(belt, speed_m_s)
-
-    def belt_speed(self, belt: str) -> float:
-        return self._local.belt_speed(belt)
-
-    def barriers(self) -> dict[str, bool]:
-        now = self._local.barriers()
-        if now != self._published:
-            self._remote_write(now)
-            self._published = dict(now)
-        return now
-
-    def _remote_write(self, barriers: dict[str, bool]) -> None:
-        client = self._remote._client
-
-        async def write() -> None:
-            await client.write("OperationalData", "BarrierNearInterrupted", barriers["near"])
-            await client.write("OperationalData", "BarrierFarInterrupted", barriers["far"])
-
-        try:
-            asyncio.run_coroutine_threadsafe(write(), self._loop).result(10)
-        except ua.UaStatusCodeError as exc:  # a unit on real hardware reads its own barriers
-            if exc.code not in (ua.StatusCodes.BadUserAccessDenied, ua.StatusCodes.BadNotWritable):
-                raise
-            self._remote_write = lambda barriers: None  # type: ignore[method-assign]
-
-
 class ModuleRole(Role):
     """A virtual transport module (type E)."""
 
     def __init__(self, node: AssetNode) -> None:
         super().__init__(node)
-        from transfertwin.cps._hal import environment_for
         from transfertwin.cps.apps import HOME_POSE, FloorRobot
+        from transfertwin.cps.hal import environment_for
 
         spec = node.floor.module(self.aid)
         self.robot = FloorRobot(node.floor.shop_floor(), home=spec.home or HOME_POSE)
@@ -184,7 +128,7 @@ class ModuleRole(Role):
     async def _bid(self, order: str) -> str:
         """This module's bid for an order (`_dispatch`): expected seconds per candidate
         target from where it stands, by its own planner."""
-        from transfertwin.cps._dispatch import estimate
+        from transfertwin.cps.dispatch import estimate
 
         doc = json.loads(order)
         units = self.node.floor.units
@@ -287,7 +231,7 @@ class ModuleRole(Role):
         result["docking"] = self.node.cfg.docking
         result["loaded_state"] = skills.load_state  # a retried pick-up may have changed it
         with contextlib.suppress(Exception):  # modelled floor time, for the KPIs
-            from transfertwin.cps._dispatch import floor_seconds
+            from transfertwin.cps.dispatch import floor_seconds
 
             result["floor_s"] = await asyncio.to_thread(
                 floor_seconds, result, self.robot, op.get("start_pose") or self.robot.pose,
@@ -339,12 +283,12 @@ class ModuleRole(Role):
         return await _props_docking_estimate(self, tm, unit, error, observed)  # PropS in the loop
 
     def _error(self, source: str, target: str, obj: str, leg: int):
-        from transfertwin.cps._runtime import _docking_model
+        from transfertwin.cps.apps import docking_model
         from transfertwin.study.experiment import experiment_seeds
 
         key = f"{obj}:{source}:{target}:{self._op_id}:{self._attempt}"
         seed, _ = experiment_seeds(self.node.cfg.seed, key, leg, 0)
-        return _docking_model().sample(seed)
+        return docking_model().sample(seed)
 
     def _locked(self, fn, *args):
         with self.env.lock:
@@ -425,8 +369,8 @@ class ModuleRole(Role):
 
     async def _take_back(self, unit: str, to_unit: bool = False) -> bool:
         """Reverse both belt pairs (the unit's through its interface) in the simulation
-        until the object is back (`cps._hand_over.take_back`)."""
-        from transfertwin.cps._hand_over import take_back
+        until the object is back (`cps.apps._hand_over.take_back`)."""
+        from transfertwin.cps.apps import take_back
 
         hal = await self._unit_hal(unit)
         system = self.env.system
@@ -523,14 +467,13 @@ async def _props_docking_estimate(role, tm: str, unit: str, error, observed,
 
 def _warm_up() -> None:
     """Fit the docking-error generator once (about 0.6 s) before the first operation."""
-    from transfertwin.cps._runtime import _docking_model
+    from transfertwin.cps.apps import docking_model
 
-    _docking_model()
+    docking_model()
 
 
 def _make_transport():
-    from transfertwin.cps._hand_over import HandOverRetries
-    from transfertwin.cps.apps import VirtualTransport
+    from transfertwin.cps.apps import HandOverRetries, VirtualTransport
 
     class ModuleTransport(HandOverRetries, VirtualTransport):
         """The skills of `VirtualTransport` with the hand-over policy (`HandOverRetries`:

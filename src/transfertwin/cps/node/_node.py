@@ -1,5 +1,6 @@
-"""One asset, one process: the node that serves a single asset of a floor (Ch. 3,
-docs/architecture.md "Deployment").
+"""One asset, one node: the node that serves a single asset of a floor (Ch. 3,
+docs/architecture.md "Deployment"). A floor runs one node per process, or all of its nodes
+in one event loop (`cps up --single-process`): the node is the same.
 
 A node starts the asset's secure OPC UA server (its AAS), joins the network through its
 seed peers (decentralised discovery, `Discovery`), and keeps a **lease** at the knowledge
@@ -7,11 +8,9 @@ graph: every ``lease_s / 3`` seconds (jittered) it sends a heartbeat (`Heartbeat
 description and live state when they changed, a small renewal otherwise (`_lease`); a graph
 that hears nothing for ``lease_s`` marks it offline (DDS liveliness: a missed lease is a
 leave, no goodbye needed). On SIGINT/SIGTERM it announces its leave and exits. What the
-asset does is its role (`transfertwin.cps._roles`); what must survive a crash is written
-atomically to its state folder (`NodeState`).
-
-Sessions to peers are kept open and reopened on failure (`Peers`): a secure handshake
-costs far more than a call.
+asset does is its role, made by the factory the node is handed (`transfertwin.cps.roles`
+holds the registry); what must survive a crash is written atomically to its state folder
+(`NodeState`). Sessions to peers are kept open and reopened on failure (`Peers`).
 """
 
 from __future__ import annotations
@@ -23,20 +22,15 @@ import logging
 import os
 import time
 from collections.abc import Awaitable, Callable
-from pathlib import Path
 from typing import Any
 
-from asyncua import ua
-
-from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
-from transfertwin.cps._asset_config import AssetConfig
-from transfertwin.cps._floor_file import FloorSpec, load_floor
-from transfertwin.cps._lease import NO_LEASE, Renewal, heartbeat_period
-from transfertwin.cps._plant_assets import PROVENANCE as PLANT_PROVENANCE
 from transfertwin.cps.aas import AssetDescriptor, build_representation, externally_synced
+from transfertwin.cps.floor import PROVENANCE, AssetConfig, FloorSpec, load_floor
+from transfertwin.cps.node._lease import NO_LEASE, Renewal, heartbeat_period
+from transfertwin.cps.node._peers import Peers
+from transfertwin.cps.node._role import Role
 from transfertwin.cps.opcua import (
-    AssetClient,
     AssetServer,
     Discovery,
     OperationRefused,
@@ -45,119 +39,12 @@ from transfertwin.cps.opcua import (
     load_credentials,
 )
 
-__all__ = ["AssetNode", "NodeState", "Peers", "heartbeat_payload", "prepare_forking"]
+__all__ = ["AssetNode", "RoleFactory", "heartbeat_payload"]
 
 log = logging.getLogger("transfertwin.cps")
 
-#: What an asset's AAS says its data come from, by HAL (the plant's seed and parameters are
-#: not named; a remote asset's gateway is in its asset file, not in its AAS).
-PROVENANCE = {"virtual": "transfertwin virtual model (MuJoCo)",
-              "plant": PLANT_PROVENANCE,
-              "remote": "physical asset behind a HAL gateway (OPC UA)"}  # fmt: skip
-
-
-class NodeState:
-    """A node's persisted state: one JSON document, rewritten atomically on every change.
-
-    Args:
-        path: The file (created with its folder on the first `save`).
-        initial: The state when the file does not exist yet.
-    """
-
-    def __init__(self, path: Path, initial: dict[str, Any]) -> None:
-        self.path = path
-        self.data: dict[str, Any] = dict(initial)
-        if path.is_file():
-            self.data.update(json.loads(path.read_text()))
-
-    def save(self) -> None:
-        """Write the whole state (readers see the old file or the new one, never a part)."""
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        write_atomic(self.path, json.dumps(self.data, indent=1, sort_keys=True) + "\n")
-
-
-class Peers:
-    """Open sessions to peer assets by id, reopened after a failure.
-
-    Args:
-        resolve: Asset id -> its endpoint URL (None: not known now).
-        open_session: (endpoint, asset id) -> an async context manager of a session.
-    """
-
-    def __init__(self, resolve: Callable[[str], str | None], open_session) -> None:
-        self._resolve = resolve
-        self._open = open_session
-        self._stacks: dict[str, tuple[str, contextlib.AsyncExitStack, AssetClient]] = {}
-        self._locks: dict[str, asyncio.Lock] = {}
-
-    async def session(self, aid: str) -> AssetClient:
-        """An open session with `aid` (ConnectionError when its endpoint is not known)."""
-        url = self._resolve(aid)
-        if url is None:
-            raise ConnectionError(f"{aid}: endpoint not known (not discovered yet)")
-        held = self._stacks.get(aid)
-        if held is not None and held[0] == url:
-            return held[2]
-        await self.drop(aid)
-        stack = contextlib.AsyncExitStack()
-        try:
-            client = await stack.enter_async_context(self._open(url, aid))
-        except BaseException:
-            await stack.aclose()
-            raise
-        self._stacks[aid] = (url, stack, client)
-        return client
-
-    async def open(self, aid: str) -> None:
-        """Open the session with `aid` now if it is not open (as `call` would)."""
-        lock = self._locks.setdefault(aid, asyncio.Lock())
-        async with lock:
-            try:
-                await self.session(aid)
-            except BaseException:
-                await self.drop(aid)
-                raise
-
-    async def call(self, aid: str, operation: str, *args: object,
-                   keep_if_slow: bool = False) -> Any:  # fmt: skip
-        """Call `operation` on `aid`; a broken session is dropped and the error raised.
-        With `keep_if_slow`, a call that ran out of time (the session's request timeout)
-        keeps the session: the peer is busy, and a new handshake would cost it more."""
-        lock = self._locks.setdefault(aid, asyncio.Lock())
-        async with lock:
-            try:
-                return await (await self.session(aid)).call(operation, *args)
-            except ua.UaStatusCodeError:  # the server answered: the session is fine
-                raise
-            except TimeoutError:
-                if not keep_if_slow:
-                    await self.drop(aid)
-                raise
-            except BaseException:
-                await self.drop(aid)
-                raise
-
-    async def write(self, aid: str, prop: str, value: object) -> None:
-        """Write an externally synchronised OperationalData property of `aid`."""
-        lock = self._locks.setdefault(aid, asyncio.Lock())
-        async with lock:
-            try:
-                await (await self.session(aid)).write("OperationalData", prop, value)
-            except Exception:
-                await self.drop(aid)
-                raise
-
-    async def drop(self, aid: str) -> None:
-        """Close the session with `aid`, if any."""
-        held = self._stacks.pop(aid, None)
-        if held is not None:
-            with contextlib.suppress(Exception):
-                await asyncio.wait_for(held[1].aclose(), 2.0)
-
-    async def close(self) -> None:
-        """Close every session, all at once (peers stopping at the same time as this one
-        may each take the 2 s limit of `drop`)."""
-        await asyncio.gather(*(self.drop(aid) for aid in list(self._stacks)))
+#: Makes the role of a node's asset (`transfertwin.cps.roles.role_for`).
+RoleFactory = Callable[["AssetNode"], Role]
 
 
 def heartbeat_payload(desc: AssetDescriptor, endpoint: str, policy: str,
@@ -178,10 +65,12 @@ class AssetNode:
 
     Args:
         cfg: The asset's configuration file, parsed.
+        roles: Makes the asset's role (`transfertwin.cps.roles.role_for`).
         floor: The floor (None: read ``cfg.floor_file``).
     """
 
-    def __init__(self, cfg: AssetConfig, floor: FloorSpec | None = None) -> None:
+    def __init__(self, cfg: AssetConfig, roles: RoleFactory,
+                 floor: FloorSpec | None = None) -> None:  # fmt: skip
         self.cfg = cfg
         self.floor = load_floor(cfg.floor_file, check_cores=False) if floor is None else floor
         by_id = {d.asset_id: d for d in self.floor.descriptors()}
@@ -197,7 +86,7 @@ class AssetNode:
         self._tasks: set[asyncio.Task] = set()
         self._beating: asyncio.Task | None = None
         self._known: dict[str, str] = {}  # asset id -> endpoint, from seeds and the graph
-        self.role = _role_for(self)
+        self.role = roles(self)
         self.lease = Renewal(cfg.asset_id, os.getpid())
         self.started = time.monotonic()
 
@@ -330,26 +219,3 @@ class AssetNode:
                 self._known.update(endpoints)
             return
         raise ConnectionError("the graph refused the full heartbeat too")
-
-
-def prepare_forking() -> None:
-    """Make this process the parent of asset processes forked from it: import what every
-    asset needs (the node, the roles of units, objects and the graph; not the simulation,
-    which only a module imports), build the OPC UA standard address space's template, and
-    move all of it out of the collector's reach (`gc.freeze`), so that the forked processes
-    share those pages copy-on-write instead of each building its own (about 60 of the
-    90 MB of an object's process). Must run before any event loop or thread starts."""
-    import gc
-
-    from transfertwin.cps import _roles  # noqa: F401  (imported for the children)
-    from transfertwin.cps.opcua import build_standard_address_space
-
-    build_standard_address_space()
-    gc.collect()
-    gc.freeze()
-
-
-def _role_for(node: AssetNode):
-    from transfertwin.cps import _roles
-
-    return _roles.role_for(node)

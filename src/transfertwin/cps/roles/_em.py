@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from transfertwin._errors import InputError
-from transfertwin.cps._roles import Role
+from transfertwin.cps.node import Role
 
 __all__ = ["ExperimentRole"]
 
@@ -53,7 +53,7 @@ class ExperimentRole(Role):
 
     async def _predict(self, obj: str, runs: int, seed: int) -> str:
         """The twin's ranked states for `obj` from virtual experiments (the TMS asks when
-        its study store has no answer; `cps._predict.virtual_predictions`). They take longer
+        its study store has no answer; `cps.dispatch.virtual_predictions`). They take longer
         than a request may: the first call starts them and answers '' (running), a later
         call with the same arguments answers the JSON list once they are done."""
         if obj not in {o for o, _ in self.node.floor.objects}:
@@ -73,8 +73,8 @@ class ExperimentRole(Role):
         return job.result()
 
     async def _predict_now(self, obj: str, runs: int, seed: int) -> str:
-        from transfertwin.cps._predict import virtual_predictions
-        from transfertwin.cps._role_tm import load_scene
+        from transfertwin.cps.dispatch import virtual_predictions
+        from transfertwin.cps.hal import load_scene
 
         await self.set("State", "predicting")
         try:
@@ -200,8 +200,8 @@ class ExperimentRole(Role):
     # -- single experiments ---------------------------------------------------------------
     async def _run(self, unit: str, obj: str, face: str, conveyor: str, theta_deg: int,
                    seed: int) -> str:  # fmt: skip
-        from transfertwin.cps._role_tm import MirroredUnitHAL, load_scene
         from transfertwin.cps.opcua import OpcUaUnitHAL
+        from transfertwin.cps.roles._module import MirroredUnitHAL, load_scene
         from transfertwin.study.experiment import ExperimentSpec, run_experiment, system_for
 
         if unit not in self.node.floor.units:

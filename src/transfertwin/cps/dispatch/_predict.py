@@ -90,12 +90,12 @@ def virtual_predictions(obj: str, runs: int, seed: int, scene=None,
     grid, `runs` runs each, docking errors from the fitted generator; in this process, or
     on `workers` worker processes); best first. Deterministic in `seed` (the same rows
     whatever `workers`)."""
-    from transfertwin.cps._runtime import _docking_model
+    from transfertwin.cps.apps import docking_model
     from transfertwin.store import MemoryResultStore
     from transfertwin.study.experiment import StudyPlan, run_study
 
     kwargs = {} if scene is None else {"scene": scene}
-    plan = StudyPlan((obj,), ON_THE_FLY_THETA_STEP, runs, seed, _docking_model(), **kwargs)
+    plan = StudyPlan((obj,), ON_THE_FLY_THETA_STEP, runs, seed, docking_model(), **kwargs)
     store = MemoryResultStore()
     run_study(plan, store, workers=workers)
     return rank_states(store.rows(), obj, f"virtual experiments ({runs} runs per state)")

@@ -57,10 +57,17 @@ from pathlib import Path
 from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
 
-__all__ = ["HAL_KINDS", "AssetConfig", "HalConfig", "load_asset_config", "write_asset_config"]
+__all__ = ["HAL_KINDS", "PROVENANCE", "AssetConfig", "HalConfig", "load_asset_config",
+           "write_asset_config"]  # fmt: skip
 
 #: What an asset's hardware abstraction layer may be.
 HAL_KINDS = ("virtual", "plant", "remote")
+
+#: What an asset's AAS says its data come from, by HAL (the plant's seed and parameters are
+#: not named; a remote asset's gateway is in its asset file, not in its AAS).
+PROVENANCE = {"virtual": "transfertwin virtual model (MuJoCo)",
+              "plant": "emulated plant (transfertwin.plant)",
+              "remote": "physical asset behind a HAL gateway (OPC UA)"}  # fmt: skip
 
 #: The HAL gateway's nodes a remote asset uses, and their default NodeIds ({id}: asset id).
 #: A unit uses the belts and barriers; a transport module also its pose (localisation,

@@ -15,7 +15,7 @@ operation flow of Fig. 5.9a against the module's HAL gateway instead of a simula
 - **Belts and barriers.** The module's own belts and barriers are the gateway's
   (`ModuleGateway`); the docked unit's are the unit's (its OPC UA interface: the unit's
   process writes them to its own gateway).
-- **Hand-over retries.** The virtual module's policy (`cps._hand_over`): a failed transfer
+- **Hand-over retries.** The virtual module's policy (`cps.apps._hand_over`): a failed transfer
   is taken back with both belt pairs reversed until the object sensor sees it back, the
   module undocks and docks anew by command and tries again.
 - **PropS.** At every docking the gateway's pose is reported to PropS and the leg's
@@ -31,156 +31,28 @@ import asyncio
 import contextlib
 import logging
 import math
-import threading
 import time
-from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from transfertwin.cps._gateway import GatewayError, GatewayLink, gateway_refusal, poll_gateway
-from transfertwin.cps._role_tm import ModuleRole
+from transfertwin.cps.hal import (
+    GatewayError,
+    ModuleGateway,
+    ThreadHAL,
+    WallClock,
+    gateway_refusal,
+    poll_gateway,
+)
+from transfertwin.cps.roles._module import ModuleRole
 
-if TYPE_CHECKING:
-    from transfertwin.cps._asset_config import AssetConfig
-    from transfertwin.sim import SceneConfig
-
-__all__ = ["GatewayWorld", "ModuleGateway", "RemoteModuleRole", "WallClock"]
+__all__ = ["RemoteModuleRole"]
 
 log = logging.getLogger("transfertwin.cps")
-
-#: How long a drive command may take at the gateway before the step fails, s.
-COMMAND_TIMEOUT_S = 120.0
-
-
-class ModuleGateway(GatewayLink):
-    """A remote transport module's nodes at its HAL gateway (async)."""
-
-    def __init__(self, cfg: AssetConfig) -> None:
-        super().__init__(cfg)
-        self._seq = time.time_ns() // 1_000_000 % 1_000_000_000  # fresh after a restart
-
-    async def set_belt(self, belt: str, speed_m_s: float) -> None:
-        """Command the module's `belt` ('left' or 'right')."""
-        from asyncua import ua
-
-        if belt not in ("left", "right"):
-            raise ValueError(f"unknown belt {belt!r}")
-        await self.write(f"belt_{belt}", float(speed_m_s), ua.VariantType.Double)
-
-    async def barriers(self) -> dict[str, bool]:
-        """The module's light barriers."""
-        near, far = await self.read("barrier_near", "barrier_far")
-        return {"near": bool(near), "far": bool(far)}
-
-    async def pose(self) -> np.ndarray:
-        """The module's pose (x m, y m, θ rad) as its localisation reports it."""
-        return np.array([float(v) for v in await self.read("pose_x", "pose_y", "pose_theta")])
-
-    async def object_state(self) -> np.ndarray | None:
-        """What the module's object sensor sees: (8,) in F_T, None when nothing."""
-        (value,) = await self.read("object_state")
-        s = np.asarray(value, dtype=float)
-        if s.shape != (8,):
-            raise GatewayError(f"HAL gateway {self.endpoint}: object_state must hold 8 "
-                               f"numbers, got {s.shape}")  # fmt: skip
-        return None if np.isnan(s).all() else s
-
-    async def command(self, verb: str, station: str = "",
-                      timeout_s: float = COMMAND_TIMEOUT_S) -> tuple[bool, str]:  # fmt: skip
-        """Have the module `verb` ('navigate', 'dock', 'undock') `station`; (done, why not)."""
-        from asyncua import ua
-
-        self._seq += 1
-        seq = str(self._seq)
-        await self.write("command", f"{seq} {verb} {station}".strip(), ua.VariantType.String)
-        t0 = time.monotonic()
-        poll = max(self.cfg.hal.poll_s, 0.01)
-        while time.monotonic() - t0 < timeout_s:
-            (state,) = await self.read("command_state")
-            head, _, rest = str(state or "").partition(" ")
-            if head == seq and rest == "done":
-                return True, ""
-            if head == seq and rest.startswith("failed"):
-                return False, f"{verb} {station}: {rest.removeprefix('failed').lstrip(': ')}"
-            await asyncio.sleep(poll)
-        return False, f"{verb} {station}: no answer from the module within {timeout_s:.0f} s"
-
-
-class WallClock:
-    """`transfertwin.control.Clock` of a real machine: wall time, waits on a fixed grid
-    (a late sample does not shift the ones after it). Time starts with the first wait
-    after `start`, when the belts run: what is observed before it (the pre-transfer state
-    of Eq. 5.7, t = 0) is at t0."""
-
-    def __init__(self) -> None:
-        self._t0: float | None = None
-        self._next = 0.0
-
-    def now(self) -> float:
-        return 0.0 if self._t0 is None else time.monotonic() - self._t0
-
-    def start(self) -> None:
-        self._t0 = None
-
-    def wait(self, dt_s: float) -> None:
-        if self._t0 is None:
-            self._t0 = self._next = time.monotonic()
-        self._next += dt_s
-        time.sleep(max(0.0, self._next - time.monotonic()))
-
-
-class _ThreadHAL:
-    """The module's belts and barriers (`UnitHAL`) and its object sensor (`ObjectSensor`)
-    for the controller's thread: each call a request on the loop that owns the session."""
-
-    def __init__(self, name: str, gw: ModuleGateway, loop: asyncio.AbstractEventLoop) -> None:
-        self.name, self._gw, self._loop = name, gw, loop
-        self._speeds = {"left": 0.0, "right": 0.0}
-
-    def _run(self, coro: Any) -> Any:
-        return asyncio.run_coroutine_threadsafe(coro, self._loop).result(10.0)
-
-    def set_belt_speed(self, belt: str, speed_m_s: float) -> None:
-        self._run(self._gw.set_belt(belt, speed_m_s))
-        self._speeds[belt] = float(speed_m_s)
-
-    def belt_speed(self, belt: str) -> float:
-        return self._speeds[belt]
-
-    def barriers(self) -> dict[str, bool]:
-        return self._run(self._gw.barriers())
-
-    def sensed(self) -> np.ndarray | None:
-        """What the object sensor sees (None: nothing)."""
-        return self._run(self._gw.object_state())
-
-    def observe(self) -> np.ndarray:
-        s = self.sensed()
-        if s is None:
-            raise RuntimeError(f"{self.name}'s object sensor lost the object")
-        return s
-
-
-class GatewayWorld:
-    """What a remote module's process knows of its world: the twin's scene (its own
-    configuration: belt speed, thresholds, timing) and the unit it is docked at. Nothing
-    is simulated; `object_ref` stays None."""
-
-    def __init__(self, scene: SceneConfig) -> None:
-        self.scene = scene
-        self.object_ref: str | None = None
-        self.docked_unit: str | None = None
-        self.lock = threading.RLock()
-
-    def undock(self) -> None:
-        """The module left its unit."""
-        self.docked_unit = None
 
 
 def _make_skills():
     from transfertwin._errors import InputError
-    from transfertwin.cps._hand_over import HandOverRetries
-    from transfertwin.cps.apps import StepResult, form_ots, transfer_step
+    from transfertwin.cps.apps import HandOverRetries, StepResult, form_ots, transfer_step
     from transfertwin.navigation import relative
     from transfertwin.ots import BeltThresholds, TransferDirection
     from transfertwin.perception import AABB
@@ -314,7 +186,7 @@ class RemoteModuleRole(ModuleRole):
         taken from its fused estimate ((error used, the record's ``props``), as
         `ModuleRole._docking_estimate` does with a simulated fix). No unit camera is seen
         from here (a unit on real hardware would report its own)."""
-        from transfertwin.cps._role_tm import _props_docking_estimate
+        from transfertwin.cps.roles._module import _props_docking_estimate
 
         noise = self.robot.cfg.noise
         own = (*(float(v) for v in pose), noise.loc_xy_sd_m, noise.loc_theta_sd_rad)
@@ -370,13 +242,13 @@ class RemoteModuleRole(ModuleRole):
 
     async def _pair(self, unit: str, work):
         """Run `work(tm, tu)` in a worker thread with the docked pair's HALs: the module's
-        at the gateway (`_ThreadHAL`) and `unit`'s OPC UA interface."""
+        at the gateway (`ThreadHAL`) and `unit`'s OPC UA interface."""
         from transfertwin.cps.opcua import OpcUaUnitHAL
 
         loop = asyncio.get_running_loop()
         session = await self.node.peers.session(unit)
         tu = OpcUaUnitHAL(session, loop, timeout_s=10)
-        tm = _ThreadHAL(self.aid, self.gateway, loop)
+        tm = ThreadHAL(self.aid, self.gateway, loop)
         try:
             return await asyncio.to_thread(work, tm, tu)
         except Exception:
@@ -397,9 +269,9 @@ class RemoteModuleRole(ModuleRole):
 
     async def _take_back(self, unit: str, to_unit: bool = False) -> bool:
         """Reverse the module's belts at the gateway and `unit`'s through its interface
-        until the object sensor sees the object back (`cps._hand_over.take_back`, on the
+        until the object sensor sees the object back (`cps.apps._hand_over.take_back`, on the
         wall clock)."""
-        from transfertwin.cps._hand_over import take_back
+        from transfertwin.cps.apps import take_back
 
         def work(tm, tu):
             return take_back(tm, tu, tm.sensed, WallClock(), self.env.scene, to_unit)

@@ -34,7 +34,7 @@ from asyncua.common.connection import SecureConnection, TransportLimits
 from asyncua.crypto.security_policies import SecurityPolicyNone
 from asyncua.ua.ua_binary import nodeid_to_binary, struct_to_binary, uatcp_to_binary
 
-from transfertwin.cps.opcua._client import AssetClient
+from transfertwin.cps.opcua import AssetClient
 
 __all__ = ["FuzzReport", "WriteCheck", "WriteRecorder", "fuzz", "paced_writes", "rss_kib"]
 

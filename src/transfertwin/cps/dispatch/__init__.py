@@ -1,0 +1,70 @@
+"""Dispatch: which module takes an order and in which state the object is put down. Bids
+and the auction's choice (`Bid`, `choose`, modelled floor time), the twin's ranked states
+(`rank_states`, from a study or virtual experiments), what the floor's own transfers teach
+(`posterior`, `rerank`, `fallback`: Beta–binomial per leg and state) and the KPIs of the
+operations (`kpis`). Pure functions; the TMS's role calls them.
+"""
+
+from typing import TYPE_CHECKING
+
+from transfertwin._lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from transfertwin.cps.dispatch._auction import (
+        DOCK_S,
+        TRANSFER_S,
+        Bid,
+        choose,
+        drive_s,
+        estimate,
+        floor_seconds,
+    )
+    from transfertwin.cps.dispatch._kpis import UNIT_STEPS, kpis
+    from transfertwin.cps.dispatch._learn import (
+        FACE_POOL,
+        LEGS,
+        PRIOR_RUNS,
+        fallback,
+        posterior,
+        record,
+        rerank,
+        state_key,
+        tries,
+    )
+    from transfertwin.cps.dispatch._predict import (
+        DEFAULT_STATE,
+        ON_THE_FLY_THETA_STEP,
+        StatePrediction,
+        rank_states,
+        study_predictions,
+        virtual_predictions,
+    )
+
+__all__ = [
+    "DEFAULT_STATE",
+    "DOCK_S",
+    "FACE_POOL",
+    "LEGS",
+    "ON_THE_FLY_THETA_STEP",
+    "PRIOR_RUNS",
+    "TRANSFER_S",
+    "UNIT_STEPS",
+    "Bid",
+    "StatePrediction",
+    "choose",
+    "drive_s",
+    "estimate",
+    "fallback",
+    "floor_seconds",
+    "kpis",
+    "posterior",
+    "rank_states",
+    "record",
+    "rerank",
+    "state_key",
+    "study_predictions",
+    "tries",
+    "virtual_predictions",
+]
+
+__getattr__, __dir__ = lazy_exports(__name__, __file__)

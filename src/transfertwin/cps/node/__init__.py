@@ -1,0 +1,42 @@
+"""The asset node: one asset's OPC UA server, its discovery, its lease at the knowledge
+graph, its sessions to peers and its persisted state (`AssetNode`), and the `Role` protocol
+through which the node runs what the asset does. The roles themselves are one layer up
+(`transfertwin.cps.roles`): the node is handed a factory that makes them.
+"""
+
+from typing import TYPE_CHECKING
+
+from transfertwin._lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from transfertwin.cps.node._lease import (
+        DEFAULT_LEASE_S,
+        HEARTBEATS_PER_S,
+        NO_LEASE,
+        Renewal,
+        default_lease,
+        directory_reply,
+        heartbeat_period,
+    )
+    from transfertwin.cps.node._node import AssetNode, RoleFactory, heartbeat_payload
+    from transfertwin.cps.node._peers import Peers
+    from transfertwin.cps.node._role import Role
+    from transfertwin.cps.node._state import NodeState
+
+__all__ = [
+    "DEFAULT_LEASE_S",
+    "HEARTBEATS_PER_S",
+    "NO_LEASE",
+    "AssetNode",
+    "NodeState",
+    "Peers",
+    "Renewal",
+    "Role",
+    "RoleFactory",
+    "default_lease",
+    "directory_reply",
+    "heartbeat_payload",
+    "heartbeat_period",
+]
+
+__getattr__, __dir__ = lazy_exports(__name__, __file__)

@@ -13,54 +13,12 @@ import signal
 from pathlib import Path
 
 from transfertwin._errors import InputError
-from transfertwin.cli._paths import out_dir
+from transfertwin.cli._cps_client import endpoint_of, load_info, run_client, text_table, workdir_of
+from transfertwin.cli._cps_floor import cmd_up_floor, floor_order, floor_status, print_floor_status
+from transfertwin.cli._cps_floor import register as register_floor
+from transfertwin.cli._cps_study import register as register_study
 
 __all__ = ["register"]
-
-
-def _workdir(path: str, must_exist: bool) -> Path:
-    if not must_exist:
-        return out_dir(path)
-    wd = Path(path)
-    if not (wd / "cps.json").is_file():
-        raise InputError(f"{path}: the CPS is not running (no cps.json); start it with "
-                         "'transfertwin cps up'")  # fmt: skip
-    return wd
-
-
-def _run_client(wd: Path, coro_fn):
-    """Run a client coroutine; a CPS that does not answer is reported in one line."""
-    from asyncua import ua
-
-    try:
-        return asyncio.run(coro_fn())
-    except (TimeoutError, ConnectionError, OSError) as exc:
-        raise InputError(
-            f"{wd}: the CPS is not running or not answering "
-            f"({type(exc).__name__}); start it with 'transfertwin cps up'"
-        ) from None
-    except ua.UaStatusCodeError as exc:
-        if exc.code != ua.StatusCodes.BadCertificateUntrusted:
-            raise
-        raise InputError(
-            f"{wd}: the CPS does not trust this client's certificate; trust it with "
-            "'transfertwin cps trust CERT --workdir WORKDIR'"
-        ) from None
-
-
-def _load(wd: Path) -> tuple[dict, object]:
-    from transfertwin.cps.opcua import load_credentials
-
-    info = json.loads((wd / "cps.json").read_text())
-    creds = None if info.get("insecure") else load_credentials(Path(info["credentials_file"]))
-    return info, creds
-
-
-def _endpoint(info: dict, asset_id: str) -> str:
-    for a in info["assets"]:
-        if a["id"] == asset_id:
-            return a["endpoint"]
-    raise InputError(f"no asset {asset_id!r} in the CPS")
 
 
 def cmd_up(args: argparse.Namespace) -> int:
@@ -72,8 +30,6 @@ def cmd_up(args: argparse.Namespace) -> int:
         raise InputError("--floor runs one process per asset; --single-process runs all "
                          "assets in one process: choose one")  # fmt: skip
     if not single:
-        from transfertwin.cli._cps_floor import cmd_up_floor
-
         if args.floor is None:
             args.floor = "demo"
         return cmd_up_floor(args)
@@ -88,7 +44,7 @@ def cmd_up(args: argparse.Namespace) -> int:
         if args.insecure:
             raise InputError("--plant-seed with --insecure: physical assets are served only "
                              "with security (drop --insecure)")  # fmt: skip
-    wd = _workdir(args.workdir, must_exist=False)
+    wd = workdir_of(args.workdir, must_exist=False)
     scene = load_profile(args.config)[1] if args.config else None
     kwargs = {"scene": scene} if scene is not None else {}
     cfg = CpsConfig(wd, host=args.host, insecure=args.insecure, time_scale=args.time_scale,
@@ -149,11 +105,9 @@ def cmd_status(args: argparse.Namespace) -> int:
     where each transport module stands on the shop floor (and the unit it is docked at)."""
     from transfertwin.cps.opcua import connect
 
-    wd = _workdir(args.workdir, must_exist=True)
-    info, creds = _load(wd)
+    wd = workdir_of(args.workdir, must_exist=True)
+    info, creds = load_info(wd)
     if info.get("mode") == "processes":
-        from transfertwin.cli._cps_floor import floor_status, print_floor_status
-
         doc = floor_status(wd)
         if args.json:
             print(json.dumps(doc, indent=2))
@@ -163,7 +117,7 @@ def cmd_status(args: argparse.Namespace) -> int:
 
     async def ask() -> list[dict]:
         async with connect(
-            _endpoint(info, "KG"),
+            endpoint_of(info, "KG"),
             "KG",
             credentials=creds,
             cert_dir=Path(info["cert_dir"]),
@@ -176,14 +130,14 @@ def cmd_status(args: argparse.Namespace) -> int:
                 r["location"] = await _floor_pose(info, creds, r["id"])
         return rows
 
-    rows = _run_client(wd, ask)
+    rows = run_client(wd, ask)
     if args.json:
         print(json.dumps({"assets": rows}, indent=2))
         return 0
     for r in rows:  # the graph's order of the classes is arbitrary
         r["class"] = "/".join(sorted(str(r.get("class", "")).split("/")))
     print("assets in the knowledge graph")
-    print(_table(rows, ("id", "class", "type", "status", "state", "location", "endpoint")))
+    print(text_table(rows, ("id", "class", "type", "status", "state", "location", "endpoint")))
     return 0
 
 
@@ -192,21 +146,12 @@ async def _floor_pose(info: dict, creds, tm: str) -> str:
     from transfertwin.cps.opcua import connect
 
     cert_dir, insecure = Path(info["cert_dir"]), info["insecure"]
-    async with connect(_endpoint(info, tm), tm, credentials=creds, role="viewer",
+    async with connect(endpoint_of(info, tm), tm, credentials=creds, role="viewer",
                        cert_dir=cert_dir, insecure=insecure) as s:  # fmt: skip
         x, y, theta, docked = [await s.read("OperationalData", p)
                                for p in ("PoseX", "PoseY", "PoseTheta", "DockedAt")]  # fmt: skip
     at = f"{docked} " if docked else ""
     return f"{at}({x:.2f}, {y:.2f}) m {math.degrees(theta):.1f}°"
-
-
-def _table(rows: list[dict], cols: tuple[str, ...]) -> str:
-    """Plain columns, nothing truncated whatever the terminal width (the endpoint last)."""
-    cells = [[str(r.get(c, "") or "") for c in cols] for r in rows]
-    widths = [max([len(c), *(len(row[i]) for row in cells)]) for i, c in enumerate(cols)]
-    lines = [cols, *cells]
-    return "\n".join("  ".join(v.ljust(w) for v, w in zip(line, widths, strict=True)).rstrip()
-                     for line in lines)  # fmt: skip
 
 
 _ASSETS_QUERY = """
@@ -252,11 +197,9 @@ def cmd_order(args: argparse.Namespace) -> int:
 
     if not 0 < args.timeout < float("inf"):
         raise InputError(f"--timeout must be a positive number of seconds, got {args.timeout}")
-    wd = _workdir(args.workdir, must_exist=True)
-    info, creds = _load(wd)
+    wd = workdir_of(args.workdir, must_exist=True)
+    info, creds = load_info(wd)
     if info.get("mode") == "processes":
-        from transfertwin.cli._cps_floor import floor_order
-
         return floor_order(wd, info, creds, args)
     if args.source is None:
         raise InputError("--from is required by the single-process CPS (a floor started with "
@@ -264,7 +207,7 @@ def cmd_order(args: argparse.Namespace) -> int:
     _check_order(info, args.source, args.target, args.object)
 
     async def order() -> dict:
-        async with connect(_endpoint(info, "TMS"), "TMS", credentials=creds,
+        async with connect(endpoint_of(info, "TMS"), "TMS", credentials=creds,
                            cert_dir=Path(info["cert_dir"]), insecure=info["insecure"],
                            timeout_s=60) as tms:  # fmt: skip
             changed = asyncio.Event()
@@ -300,7 +243,7 @@ def cmd_order(args: argparse.Namespace) -> int:
                 with contextlib.suppress(TimeoutError):
                     await asyncio.wait_for(changed.wait(), timeout=min(left, 5.0))
 
-    status = _run_client(wd, order)
+    status = run_client(wd, order)
     op = status["operation"]
     log = (wd / "cps.log").read_text().splitlines() if (wd / "cps.log").exists() else []
     start = min((i for i, line in enumerate(log) if f"TMS: {op} " in line), default=len(log))
@@ -433,12 +376,12 @@ def cmd_experiment(args: argparse.Namespace) -> int:
         raise InputError(f"--seed must be a non-negative integer, got {args.seed}")
     if args.runs < 1:
         raise InputError(f"--runs must be at least 1, got {args.runs}")
-    wd = _workdir(args.workdir, must_exist=True)
-    info, creds = _load(wd)
+    wd = workdir_of(args.workdir, must_exist=True)
+    info, creds = load_info(wd)
     unit = _experiment_unit(info, args.unit, args.physical)
 
     async def run() -> None:
-        async with connect(_endpoint(info, "EM"), "EM", credentials=creds,
+        async with connect(endpoint_of(info, "EM"), "EM", credentials=creds,
                            cert_dir=Path(info["cert_dir"]), insecure=info["insecure"],
                            timeout_s=300) as em:  # fmt: skip
             for i in range(args.runs):
@@ -449,7 +392,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
                     raise InputError(f"the Experiment Manager refused: {exc.reason}") from None
                 print(json.dumps(_as_transfer_json(json.loads(record), i)), flush=True)
 
-    _run_client(wd, run)
+    run_client(wd, run)
     return 0
 
 
@@ -560,8 +503,5 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--with-physical", action="store_true",
                    help="also the physical twins (TU_A_P, ...) of the virtual models")  # fmt: skip
     p.set_defaults(func=cmd_export)
-    from transfertwin.cli._cps_floor import register as register_floor
-    from transfertwin.cli._cps_study import register as register_study
-
     register_floor(csub)
     register_study(csub)

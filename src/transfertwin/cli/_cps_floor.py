@@ -17,6 +17,8 @@ import time
 from pathlib import Path
 
 from transfertwin._errors import InputError
+from transfertwin.cli._cps_client import call_asset, load_info, text_table
+from transfertwin.cli._cps_ops import register as register_ops
 from transfertwin.cli._paths import out_dir
 
 __all__ = ["cmd_asset", "cmd_down", "cmd_locate", "cmd_up_floor", "floor_status", "register"]
@@ -277,36 +279,14 @@ def cmd_down(args: argparse.Namespace) -> int:
     return 0
 
 
-def _info(wd: Path) -> tuple[dict, object]:
-    from transfertwin.cps.opcua import load_credentials
-
-    path = wd / "cps.json"
-    if not path.is_file():
-        raise InputError(f"{wd}: no floor there (no cps.json); start one with "
-                         "'transfertwin cps up --floor FLOOR --workdir DIR'")  # fmt: skip
-    info = json.loads(path.read_text())
-    creds = None if info.get("insecure") else load_credentials(Path(info["credentials_file"]))
-    return info, creds
-
-
-async def _call(info: dict, creds, aid: str, op: str, *args, timeout_s: float = 10.0):
-    from transfertwin.cps.opcua import connect
-
-    endpoint = next(a["endpoint"] for a in info["assets"] if a["id"] == aid)
-    async with connect(endpoint, aid, credentials=creds, role="operator",
-                       cert_dir=Path(info["cert_dir"]), insecure=info["insecure"],
-                       timeout_s=timeout_s) as s:  # fmt: skip
-        return await s.call(op, *args)
-
-
 def floor_status(wd: Path, *, with_objects: bool = True) -> dict:
     """The floor as one document: assets (id, kind, class, address, pid, online, state)
     from the knowledge graph, objects' locations from the TMS's ledger."""
-    info, creds = _info(wd)
+    info, creds = load_info(wd)
 
     async def ask() -> dict:
         try:
-            doc = json.loads(await _call(info, creds, "KG", "Status", timeout_s=5))
+            doc = json.loads(await call_asset(info, creds, "KG", "Status", timeout_s=5))
         except (OSError, TimeoutError, ConnectionError) as exc:
             raise InputError(f"{wd}: the knowledge graph is not answering "
                              f"({type(exc).__name__})") from None  # fmt: skip
@@ -322,7 +302,7 @@ def floor_status(wd: Path, *, with_objects: bool = True) -> dict:
         doc["assets"].sort(key=lambda a: a["id"])
         if with_objects:
             try:
-                ledger = json.loads(await _call(info, creds, "TMS", "Ledger", timeout_s=5))
+                ledger = json.loads(await call_asset(info, creds, "TMS", "Ledger", timeout_s=5))
             except (OSError, TimeoutError, ConnectionError) as exc:
                 doc["objects"] = None
                 doc["objects_error"] = f"the TMS is not answering ({type(exc).__name__})"
@@ -342,13 +322,11 @@ def floor_status(wd: Path, *, with_objects: bool = True) -> dict:
 
 def print_floor_status(doc: dict) -> None:
     """`cps status` for a process floor, as plain columns."""
-    from transfertwin.cli._cps import _table
-
     rows = [{**a, "online": "online" if a["online"] else "OFFLINE",
              "pid": a.get("pid") or "", "why offline": _why(a.get("offline"))}
             for a in doc["assets"]]  # fmt: skip
     print("assets (knowledge graph)")
-    print(_table(rows, ("id", "class", "online", "state", "pid", "address", "why offline")))
+    print(text_table(rows, ("id", "class", "online", "state", "pid", "address", "why offline")))
     objects = doc.get("objects")
     if objects is None:
         print(f"objects: {doc.get('objects_error', 'not known')}")
@@ -359,7 +337,7 @@ def print_floor_status(doc: dict) -> None:
                                         v["location"] + (f" (moving: {v['moving']})"
                                                          if v.get("moving") else ""))}
              for o, v in objects.items()]  # fmt: skip
-    print(_table(lines, ("object", "location")))
+    print(text_table(lines, ("object", "location")))
 
 
 def _why(offline: dict | None) -> str:
@@ -378,9 +356,9 @@ def cmd_locate(args: argparse.Namespace) -> int:
     from transfertwin.cps.opcua import OperationRefused
 
     wd = Path(args.workdir)
-    info, creds = _info(wd)
+    info, creds = load_info(wd)
     try:
-        asyncio.run(_call(info, creds, "TMS", "Locate", args.object, args.at))
+        asyncio.run(call_asset(info, creds, "TMS", "Locate", args.object, args.at))
     except OperationRefused as exc:
         raise InputError(f"the TMS refused: {exc.reason}") from None
     except (OSError, TimeoutError, ConnectionError) as exc:
@@ -407,8 +385,6 @@ def register(csub: argparse._SubParsersAction) -> None:
     p.add_argument("--object", required=True)
     p.add_argument("--at", required=True, help="transfer unit or transport module")
     p.set_defaults(func=cmd_locate)
-    from transfertwin.cli._cps_ops import register as register_ops
-
     register_ops(csub)
 
 
@@ -438,11 +414,11 @@ def floor_order(wd: Path, info: dict, creds, args: argparse.Namespace) -> int:
         source = args.source
         try:
             if source is None:  # by destination: the TMS finds the source (orders chain)
-                op = await _call(info, creds, "TMS", "OrderTo", args.object, args.target)
-                status = json.loads(await _call(info, creds, "TMS", "OperationStatus", op))
+                op = await call_asset(info, creds, "TMS", "OrderTo", args.object, args.target)
+                status = json.loads(await call_asset(info, creds, "TMS", "OperationStatus", op))
                 return op, status["source"] or f"where {args.object} is after {status['after']}"
-            op = await _call(info, creds, "TMS", "SubmitTransportOperation", source,
-                             args.target, args.object)  # fmt: skip
+            op = await call_asset(info, creds, "TMS", "SubmitTransportOperation", source,
+                                  args.target, args.object)  # fmt: skip
         except OperationRefused as exc:
             raise InputError(f"the TMS refused the order: {exc.reason}") from None
         return op, source
@@ -456,7 +432,7 @@ def floor_order(wd: Path, info: dict, creds, args: argparse.Namespace) -> int:
     shown = 0
     while True:
         try:
-            status = json.loads(asyncio.run(_call(info, creds, "TMS", "OperationStatus", op)))
+            status = json.loads(asyncio.run(call_asset(info, creds, "TMS", "OperationStatus", op)))
         except (OSError, TimeoutError, ConnectionError):
             status = None  # the TMS is restarting: the operation is in its state file
         if status is not None:

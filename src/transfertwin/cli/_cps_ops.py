@@ -10,27 +10,24 @@ import time
 from pathlib import Path
 
 from transfertwin._errors import InputError
+from transfertwin.cli._cps_client import call_asset, load_info, text_table
 
 __all__ = ["cmd_kpis", "cmd_orders", "register"]
 
 
 def _ask(wd: Path, op: str) -> object:
-    from transfertwin.cli._cps_floor import _call, _info
-
-    info, creds = _info(wd)
+    info, creds = load_info(wd)
     if info.get("mode") != "processes":
         raise InputError(f"{wd}: 'cps {op.lower()}' needs a floor of asset processes "
                          "('cps up' without --single-process)")  # fmt: skip
     try:
-        return json.loads(asyncio.run(_call(info, creds, "TMS", op, timeout_s=10)))
+        return json.loads(asyncio.run(call_asset(info, creds, "TMS", op, timeout_s=10)))
     except (OSError, TimeoutError, ConnectionError) as exc:
         raise InputError(f"{wd}: the TMS is not answering ({type(exc).__name__})") from None
 
 
 def cmd_orders(args: argparse.Namespace) -> int:
     """List the order queue: every order with its state and, when it failed, the reason."""
-    from transfertwin.cli._cps import _table
-
     orders = _ask(Path(args.workdir), "Orders")
     if args.json:
         print(json.dumps(orders, indent=2))
@@ -42,8 +39,8 @@ def cmd_orders(args: argparse.Namespace) -> int:
              "state": o["state"] + (f": {o['reason']}" if o.get("reason") else ""),
              "loaded": "/".join(str(v) for v in (o.get("loaded_state") or {}).values())}
             for o in orders]  # fmt: skip
-    print(_table(rows, ("operation", "object", "source", "to", "module", "loaded", "submitted",
-                        "state")) if rows else "no orders yet")  # fmt: skip
+    cols = ("operation", "object", "source", "to", "module", "loaded", "submitted", "state")
+    print(text_table(rows, cols) if rows else "no orders yet")
     return 0
 
 

@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 
 from transfertwin._errors import InputError
+from transfertwin.cli._cps_client import load_info
 
 __all__ = ["register"]
 
@@ -25,9 +26,7 @@ EXIT_FAILED = 3
 
 def _floor(workdir: str) -> tuple[dict, object, str]:
     """cps.json, the client credentials and the Experiment Manager's endpoint."""
-    from transfertwin.cli._cps_floor import _info
-
-    info, creds = _info(Path(workdir))
+    info, creds = load_info(Path(workdir))
     ems = [a for a in info["assets"] if a.get("class") == "experiment_manager"]
     if not ems:
         raise InputError(f"{workdir}: the floor has no Experiment Manager (add \"EM\" to "

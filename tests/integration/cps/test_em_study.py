@@ -142,10 +142,10 @@ def floor(tmp_path_factory):
 
 
 def _em_value(wd: Path, prop: str):
-    from transfertwin.cli._cps_floor import _info
+    from transfertwin.cli._cps_client import load_info
     from transfertwin.cps.opcua import connect
 
-    info, creds = _info(wd)
+    info, creds = load_info(wd)
     endpoint = next(a["endpoint"] for a in info["assets"] if a["id"] == "EM")
 
     async def read():

@@ -76,12 +76,12 @@ def module_at_work(wd: Path, obj: str, timeout_s: float = 60.0) -> dict:
     (from the TMS's ledger: the graph's view of a module's state lags by a heartbeat)."""
     import asyncio
 
-    from transfertwin.cli._cps_floor import _call, _info
+    from transfertwin.cli._cps_client import call_asset, load_info
 
-    info, creds = _info(wd)
+    info, creds = load_info(wd)
     t0 = time.monotonic()
     while time.monotonic() - t0 < timeout_s:
-        ledger = json.loads(asyncio.run(_call(info, creds, "TMS", "Ledger")))
+        ledger = json.loads(asyncio.run(call_asset(info, creds, "TMS", "Ledger")))
         for op in ledger["operations"]:
             if (op["object"] == obj and op["state"] == "running"
                     and op["phase"] in ("navigating", "docking", "scanning", "transferring")):

@@ -27,10 +27,10 @@ study = "study.sqlite"
 
 
 def _tms(wd: Path, op: str, *args):
-    from transfertwin.cli._cps_floor import _call, _info
+    from transfertwin.cli._cps_client import call_asset, load_info
 
-    info, creds = _info(wd)
-    return asyncio.run(_call(info, creds, "TMS", op, *args, timeout_s=20))
+    info, creds = load_info(wd)
+    return asyncio.run(call_asset(info, creds, "TMS", op, *args, timeout_s=20))
 
 
 @pytest.fixture(scope="module")

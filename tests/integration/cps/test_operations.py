@@ -57,10 +57,10 @@ def floor(tmp_path_factory):
 
 
 def _tms(wd: Path, op: str, *args):
-    from transfertwin.cli._cps_floor import _call, _info
+    from transfertwin.cli._cps_client import call_asset, load_info
 
-    info, creds = _info(wd)
-    return asyncio.run(_call(info, creds, "TMS", op, *args, timeout_s=20))
+    info, creds = load_info(wd)
+    return asyncio.run(call_asset(info, creds, "TMS", op, *args, timeout_s=20))
 
 
 def _wait_finished(wd: Path, op_id: str, timeout_s: float = 120) -> dict:

@@ -96,7 +96,7 @@ def test_an_order_on_a_floor_docks_with_the_fused_estimate(tmp_path):
     from pathlib import Path
 
     from tests.integration.cps._cli import tt
-    from transfertwin.cli._cps_floor import _call, _info
+    from transfertwin.cli._cps_client import call_asset, load_info
 
     (tmp_path / "floor.toml").write_text(PROPS_FLOOR)
     wd = tmp_path / "w"
@@ -107,10 +107,10 @@ def test_an_order_on_a_floor_docks_with_the_fused_estimate(tmp_path):
     try:
         order = tt("cps", "order", "--workdir", str(wd), "--object", "o1", "--to", "TU_B")
         assert order.returncode in (0, 3), order.stderr  # delivered, or failed as a transfer may
-        info, creds = _info(Path(wd))
-        op = json.loads(asyncio.run(_call(info, creds, "TMS", "OperationStatus", "op1")))
+        info, creds = load_info(Path(wd))
+        op = json.loads(asyncio.run(call_asset(info, creds, "TMS", "OperationStatus", "op1")))
         # the units told PropS where they stand (their own processes, over OPC UA)
-        units = [json.loads(asyncio.run(_call(info, creds, "PropS", "FusedPose", u)))
+        units = [json.loads(asyncio.run(call_asset(info, creds, "PropS", "FusedPose", u)))
                  for u in ("TU_A", "TU_B")]  # fmt: skip
     finally:
         tt("cps", "down", "--workdir", str(wd))

@@ -53,10 +53,10 @@ def restart(wd: Path, aid: str) -> subprocess.Popen:
 
 
 async def _tms(wd: Path, op: str, *args):
-    from transfertwin.cli._cps_floor import _call, _info
+    from transfertwin.cli._cps_client import call_asset, load_info
 
-    info, creds = _info(wd)
-    return await _call(info, creds, "TMS", op, *args)
+    info, creds = load_info(wd)
+    return await call_asset(info, creds, "TMS", op, *args)
 
 
 def pid_of(wd: Path, aid: str) -> int:

@@ -5,6 +5,9 @@ modules, the public surface (`__init__`) of a package below its own, and the roo
 helpers (`transfertwin._errors`, `_atomic`, `_layers`, `_lazy`). Anything else
 — a private module of another package, or a package at the same level or above — breaks the
 layering. `tests/unit/test_layering.py` enforces it; `scripts/import_graph.py` draws it.
+
+`import_cycles` finds the circles of the module graph: modules that import, directly or
+through others, a module that imports them back (function-level imports included).
 """
 
 from __future__ import annotations
@@ -13,7 +16,20 @@ import ast
 from collections import defaultdict
 from pathlib import Path
 
-__all__ = ["LAYERS", "ImportEdge", "imports_of", "package_graph", "package_of", "violations"]
+import networkx as nx
+
+from transfertwin._lazy import type_checking_imports
+
+__all__ = [
+    "LAYERS",
+    "ImportEdge",
+    "import_cycles",
+    "imports_of",
+    "module_graph",
+    "package_graph",
+    "package_of",
+    "violations",
+]
 
 #: Packages bottom-up; a package may import only packages listed before it (its ancestors'
 #: public surfaces included: `study.calibration` may use `study.experiment`).
@@ -120,3 +136,90 @@ def package_graph(src: Path) -> dict[str, set[str]]:
         if mine and theirs and mine != theirs:
             graph[mine].add(theirs)
     return graph
+
+
+def _module_name(path: Path, src: Path) -> str:
+    rel = path.relative_to(src.parent).with_suffix("")
+    return ".".join(rel.parts[:-1] if rel.name == "__init__" else rel.parts)
+
+
+#: The tests of `if TYPE_CHECKING:` blocks, whose imports never run.
+_TYPE_CHECKING = ("TYPE_CHECKING", "typing.TYPE_CHECKING")
+
+
+def _runtime_imports(tree: ast.AST) -> list[ast.Import | ast.ImportFrom]:
+    """The import statements executed at run time: everywhere (functions included) except
+    under `if TYPE_CHECKING:`, which type checkers read and the interpreter skips."""
+    found: list[ast.Import | ast.ImportFrom] = []
+    stack = [tree]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, ast.If) and ast.unparse(node.test) in _TYPE_CHECKING:
+            stack += node.orelse
+            continue
+        if isinstance(node, ast.Import | ast.ImportFrom):
+            found.append(node)
+        stack += ast.iter_child_nodes(node)
+    return found
+
+
+class _Modules:
+    """The modules under `src` (dotted names) and the lazy surfaces among them."""
+
+    def __init__(self, src: Path) -> None:
+        self.paths = {_module_name(p, src): p for p in sorted(src.rglob("*.py"))}
+        self.lazy = {
+            name: type_checking_imports(path)
+            for name, path in self.paths.items()
+            if path.name == "__init__.py" and "lazy_exports(" in path.read_text()
+        }
+
+    def target(self, module: str, name: str | None) -> str | None:
+        """The module that `from module import name` (or `import module`) runs: a
+        submodule `name`, else the module a lazy surface takes `name` from, else `module`."""
+        if name is not None and f"{module}.{name}" in self.paths:
+            return f"{module}.{name}"
+        if name is not None and name in self.lazy.get(module, {}):
+            return self.target(self.lazy[module][name], name)
+        return module if module in self.paths else None
+
+
+def module_graph(src: Path) -> dict[str, set[str]]:
+    """Module → the modules it imports at run time (dotted names, `transfertwin.` prefix).
+
+    `import transfertwin.a.b` points at `a.b` (not at the package `a` it passes through);
+    `from transfertwin.a import x` at `a.x` if that is a module, else at the module a lazy
+    surface (`transfertwin._lazy`) takes `x` from, else at `a`. Imports inside functions
+    count (they run when called, and a circle that waits for a call is still a circle);
+    imports under `if TYPE_CHECKING:` do not (they never run), except the re-exports of a
+    lazy surface, which run on first access and so are followed through it.
+
+    Args:
+        src: The `transfertwin` package directory.
+    """
+    modules = _Modules(src)
+    graph: dict[str, set[str]] = {m: set() for m in modules.paths}
+    for module, path in modules.paths.items():
+        for node in _runtime_imports(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.Import):
+                pairs = [(a.name, None) for a in node.names]
+            elif node.module and node.level == 0:
+                pairs = [(node.module, a.name) for a in node.names]
+            else:
+                continue
+            for target in (modules.target(m, n) for m, n in pairs):
+                if target is not None and target != module:
+                    graph[module].add(target)
+    return graph
+
+
+def import_cycles(src: Path) -> list[list[str]]:
+    """The circles of the module graph (`module_graph`): each a strongly connected component
+    of more than one module, sorted; every module in it imports, directly or through others,
+    every other. Empty when the imports form a DAG.
+
+    Args:
+        src: The `transfertwin` package directory.
+    """
+    digraph = nx.DiGraph([(a, b) for a, bs in module_graph(src).items() for b in bs])
+    return sorted(sorted(c) for c in nx.strongly_connected_components(digraph) if len(c) > 1)

@@ -5,11 +5,12 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import pytest
 
-from transfertwin._layers import LAYERS, imports_of, package_of, violations
+from transfertwin._layers import LAYERS, import_cycles, imports_of, package_of, violations
 
 ROOT = Path(__file__).resolve().parents[2]
 SRC = ROOT / "src" / "transfertwin"
@@ -72,3 +73,81 @@ def test_readme_dependency_graph_is_generated_from_the_source() -> None:
         [sys.executable, str(ROOT / "scripts" / "import_graph.py"), "--check"], check=False
     )
     assert check.returncode == 0, "run: python scripts/import_graph.py --write"
+
+
+# --- No circles: no module imports, directly or through others, a module
+# that imports it back; imports inside functions count, `if TYPE_CHECKING:` ones do not.
+
+#: The lead untangles `transfertwin.cps` right now: while True, circles whose every module is
+#: under `transfertwin.cps` are reported but do not fail the test. The lead removes this
+#: constant (and its use below) once cps/ is untangled; nothing outside cps is exempt.
+_CPS_BEING_UNTANGLED = True
+
+
+def _in_cps(module: str) -> bool:
+    return module == "transfertwin.cps" or module.startswith("transfertwin.cps.")
+
+
+def test_no_module_imports_itself_back() -> None:
+    cycles = import_cycles(SRC)
+    report = "\n".join(" -> ".join(c) for c in cycles)
+    exempt = [c for c in cycles if _CPS_BEING_UNTANGLED and all(map(_in_cps, c))]
+    if exempt:
+        warnings.warn(f"circles inside cps/ (exempt while it is untangled):\n{report}",
+                      stacklevel=1)  # fmt: skip
+    assert [c for c in cycles if c not in exempt] == [], f"import circles:\n{report}"
+
+
+def test_a_direct_circle_is_found(tmp_path: Path) -> None:
+    src = _tree(tmp_path, {
+        "a/__init__.py": "",
+        "a/_x.py": "from transfertwin.a._y import f\n",
+        "a/_y.py": "import transfertwin.a._x\n",
+    })  # fmt: skip
+    assert import_cycles(src) == [["transfertwin.a._x", "transfertwin.a._y"]]
+
+
+def test_a_circle_through_a_third_module_is_found(tmp_path: Path) -> None:
+    src = _tree(tmp_path, {
+        "a/__init__.py": "from transfertwin.a._x import f\n",
+        "a/_x.py": "from transfertwin.b import g\n",
+        "b/__init__.py": "from transfertwin.b._z import g\n",
+        "b/_z.py": "from transfertwin.a import _x\n",
+        "c.py": "from transfertwin.a import f\n",  # imports the circle, is not in it
+    })  # fmt: skip
+    assert import_cycles(src) == [
+        ["transfertwin.a._x", "transfertwin.b", "transfertwin.b._z"]
+    ]
+
+
+def test_a_circle_through_a_function_level_import_is_found(tmp_path: Path) -> None:
+    src = _tree(tmp_path, {
+        "a/__init__.py": "",
+        "a/_x.py": "from transfertwin.a._y import f\n",
+        "a/_y.py": "def f():\n    from transfertwin.a._x import g\n    return g\n",
+    })  # fmt: skip
+    assert import_cycles(src) == [["transfertwin.a._x", "transfertwin.a._y"]]
+
+
+def test_a_type_checking_import_back_is_no_circle(tmp_path: Path) -> None:
+    src = _tree(tmp_path, {
+        "a/__init__.py": "",
+        "a/_x.py": "from transfertwin.a._y import f\n",
+        "a/_y.py": "from typing import TYPE_CHECKING\n"
+                   "if TYPE_CHECKING:\n    from transfertwin.a._x import Thing\n",
+    })  # fmt: skip
+    assert import_cycles(src) == []
+
+
+def test_a_lazy_surface_is_followed_to_the_module_it_takes_a_name_from(tmp_path: Path) -> None:
+    lazy = ("from typing import TYPE_CHECKING\n"
+            "from transfertwin._lazy import lazy_exports\n"
+            "if TYPE_CHECKING:\n    from transfertwin.b._z import g\n"
+            "__getattr__, __dir__ = lazy_exports(__name__, __file__)\n")  # fmt: skip
+    src = _tree(tmp_path, {
+        "a/__init__.py": "",
+        "a/_x.py": "from transfertwin.b import g\n",  # runs b._z on first access
+        "b/__init__.py": lazy,
+        "b/_z.py": "from transfertwin.a._x import f\n",
+    })  # fmt: skip
+    assert import_cycles(src) == [["transfertwin.a._x", "transfertwin.b._z"]]

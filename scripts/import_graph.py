@@ -1,10 +1,10 @@
-"""Draw the package dependency graph from the imports, into README.md (or check it).
+"""Draw the package dependency graph from the imports, into docs/architecture.md (or check it).
 
     python scripts/import_graph.py            # print the graph
-    python scripts/import_graph.py --write    # replace the README's generated section
-    python scripts/import_graph.py --check    # exit 1 if the README's section is stale
+    python scripts/import_graph.py --write    # replace the page's generated section
+    python scripts/import_graph.py --check    # exit 1 if the page's section is stale
 
-The graph is read from the source, so the README cannot drift from what the code imports.
+The graph is read from the source, so the page cannot drift from what the code imports.
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+PAGE = ROOT / "docs" / "architecture.md"
 sys.path.insert(0, str(ROOT / "src"))
 
 from transfertwin._layers import LAYERS, package_graph  # noqa: E402
@@ -23,7 +24,7 @@ END = "<!-- import-graph:end -->"
 
 
 def render() -> str:
-    """The README section: one line per package, layer by layer, with what it imports."""
+    """The page's section: one line per package, layer by layer, with what it imports."""
     graph = package_graph(ROOT / "src" / "transfertwin")
     lines = [BEGIN, "", "```text"]
     for name in LAYERS:
@@ -42,12 +43,11 @@ def main() -> int:
     if not (args.write or args.check):
         print(section)
         return 0
-    readme = ROOT / "README.md"
-    text = readme.read_text()
+    text = PAGE.read_text(encoding="utf-8")
     start, end = text.index(BEGIN), text.index(END) + len(END)
     if args.check:
         return 0 if text[start:end] == section else 1
-    readme.write_text(text[:start] + section + text[end:])
+    PAGE.write_text(text[:start] + section + text[end:], encoding="utf-8")
     return 0
 
 

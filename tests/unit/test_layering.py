@@ -1,5 +1,5 @@
 """The layering of the package (docs/architecture.md): imports point down, only to public
-surfaces, and the README's dependency graph is the one the source has."""
+surfaces, and the import graph in docs/architecture.md is the one the source has."""
 
 from __future__ import annotations
 
@@ -68,7 +68,7 @@ def test_sibling_sub_packages_follow_their_order(tmp_path: Path) -> None:
     ]
 
 
-def test_readme_dependency_graph_is_generated_from_the_source() -> None:
+def test_architecture_import_graph_is_generated_from_the_source() -> None:
     check = subprocess.run(
         [sys.executable, str(ROOT / "scripts" / "import_graph.py"), "--check"], check=False
     )

@@ -1,10 +1,11 @@
-"""README's command block works as written: every line parses, every input exists.
+"""The command examples work as written: every line parses, every input exists.
 
-Each `$tt ...` line must be accepted by the CLI's parser (no `[optional]` brackets pasted
-into the shell, no unknown option), and every file or folder it reads must be made by an
-earlier line (or ship with the repository): a user who runs the block top to bottom in a
-fresh clone never meets "no such file". Running the commands themselves (at small size)
-is a manual check; this test keeps the text honest cheaply.
+The block of every command (docs/how-to/commands.md) and the README's tour: each `$tt ...`
+line must be accepted by the CLI's parser (no `[optional]` brackets pasted into the shell, no
+unknown option), and every file or folder it reads must be made by an earlier line (or ship
+with the repository): a user who runs a block top to bottom in a fresh clone never meets "no
+such file". Running the commands themselves (at small size) is a manual check; this test
+keeps the text honest cheaply.
 """
 
 from __future__ import annotations
@@ -26,18 +27,30 @@ MAKERS = {("--workdir", "cps", "up"), ("--db", "study", "run")}
 PATH_LIKE = re.compile(r"^[\w./-]+(\.(stl|obj|ply|json|csv|sqlite|parquet|toml|aasx|png)|/)$")
 
 
+COMMANDS_PAGE = ROOT / "docs" / "how-to" / "commands.md"
+
+
 def command_block() -> list[str]:
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    """The lines of the page's command block (continuation lines joined)."""
+    text = COMMANDS_PAGE.read_text(encoding="utf-8")
     section = text.split("## Commands", 1)[1]
     block = section.split("```bash", 1)[1].split("```", 1)[0]
     return block.replace("\\\n", " ").splitlines()
 
 
-def commands() -> list[list[str]]:
+def readme_tour() -> list[str]:
+    """The lines of every `bash` block in the README's tour of commands."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    section = text.split("## A tour", 1)[1].split("\n## ", 1)[0]
+    blocks = [b.split("```", 1)[0] for b in section.split("```bash")[1:]]
+    return "".join(blocks).replace("\\\n", " ").splitlines()
+
+
+def commands(lines: list[str] | None = None) -> list[list[str]]:
     """The block's `$tt` commands as argument lists, `for` loops unrolled."""
     out: list[list[str]] = []
     loop: list[str] | None = None
-    for line in command_block():
+    for line in command_block() if lines is None else lines:
         tokens = shlex.split(line, comments=True)
         if not tokens or tokens[0].startswith("tt="):
             continue
@@ -69,12 +82,23 @@ def test_every_command_parses(args: list[str]) -> None:
     try:
         build_parser().parse_args(args)
     except (InputError, SystemExit) as exc:
-        pytest.fail(f"README: `transfertwin {' '.join(args)}` does not parse: {exc}")
+        pytest.fail(f"commands.md: `transfertwin {' '.join(args)}` does not parse: {exc}")
 
 
-def test_every_input_is_made_by_an_earlier_command() -> None:
+def test_the_readme_tours_five_commands_and_they_parse() -> None:
+    tour = commands(readme_tour())
+    assert [a[0] for a in tour] == ["transfer", "study", "analyze", "calibrate", "web"], tour
+    for args in tour:
+        try:
+            build_parser().parse_args(args)
+        except (InputError, SystemExit) as exc:
+            pytest.fail(f"README: `transfertwin {' '.join(args)}` does not parse: {exc}")
+
+
+@pytest.mark.parametrize("where", ["commands.md", "README"])
+def test_every_input_is_made_by_an_earlier_command(where: str) -> None:
     made: set[str] = set()
-    for args in commands():
+    for args in commands() if where == "commands.md" else commands(readme_tour()):
         reads = []
         for i, token in enumerate(args):
             before = args[i - 1] if i else ""
@@ -85,7 +109,7 @@ def test_every_input_is_made_by_an_earlier_command() -> None:
         for path in reads:
             inside = any(path.startswith(m) for m in made if m.endswith("/"))
             assert path in made or inside or (ROOT / path).exists(), (
-                f"README: `transfertwin {' '.join(args)}` reads {path}, "
+                f"{where}: `transfertwin {' '.join(args)}` reads {path}, "
                 "which no earlier command makes"
             )
 
@@ -99,4 +123,4 @@ def test_a_study_db_is_not_reused_for_another_plan() -> None:
             continue
         db = args[args.index("--db") + 1]
         plan = [a for i, a in enumerate(args) if a not in ignore and args[i - 1] not in ignore]
-        assert plans.setdefault(db, plan) == plan, f"README: {db} is reused for another plan"
+        assert plans.setdefault(db, plan) == plan, f"commands.md: {db} is reused for another plan"

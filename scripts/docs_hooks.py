@@ -2,8 +2,6 @@
 
 A page asks for a generated block with a marker comment on a line of its own:
 
-- `<!-- generated:cli -->`: every `transfertwin` command and subcommand with its `--help`
-  text, walked from `transfertwin.cli.build_parser()` (the parser the CLI runs);
 - `<!-- generated:result-columns -->`: the result table's columns and types
   (`transfertwin.store.RESULT_COLUMNS`, `COLUMN_TYPES`, `KEY_COLUMNS`, `STATUSES`);
 - `<!-- generated:profile-settings -->`: every setting of a physics profile by the dotted
@@ -12,15 +10,15 @@ A page asks for a generated block with a marker comment on a line of its own:
   the ControlInterface operations (`transfertwin.cps.aas.OPERATIONAL_DATA`,
   `CONTROL_INTERFACE`).
 
-So the reference cannot drift from the code: a renamed option or setting changes the page on
-the next build, and `mkdocs build --strict` fails if a marker's generator raises.
+So the reference cannot drift from the code: a renamed setting changes the page on the next
+build, and `mkdocs build --strict` fails if a marker's generator raises. The command reference
+is written into its page by `scripts/cli_reference.py` and checked by a unit test instead, so
+that it reads the same on GitHub as on the site.
 """
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
-import os
 import sys
 import typing
 from pathlib import Path
@@ -28,38 +26,6 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT / "src") not in sys.path:
     sys.path.insert(0, str(ROOT / "src"))
-
-
-def _subcommands(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
-    """A parser's subcommands by name, in the order they were added (aliases skipped)."""
-    out: dict[str, argparse.ArgumentParser] = {}
-    for action in parser._actions:  # argparse keeps no public accessor for these
-        if isinstance(action, argparse._SubParsersAction):
-            for name, sub in action.choices.items():
-                if sub not in out.values():
-                    out[name] = sub
-    return out
-
-
-def _walk(parser: argparse.ArgumentParser, path: tuple[str, ...]):
-    """(path, parser) for every command below `parser`, depth first."""
-    for name, sub in _subcommands(parser).items():
-        yield (*path, name), sub
-        yield from _walk(sub, (*path, name))
-
-
-def cli_markdown() -> str:
-    """Each command's `--help` under a heading `transfertwin CMD [SUB]`."""
-    from transfertwin.cli import build_parser
-
-    os.environ["COLUMNS"] = "96"  # argparse wraps help at $COLUMNS - 2
-    root = build_parser()
-    parts = ["## transfertwin", "", "```text", root.format_help().rstrip(), "```", ""]
-    for path, parser in _walk(root, ()):
-        level = "#" * min(2 + len(path) - 1, 4)
-        parts += [f"#{level} transfertwin {' '.join(path)}", ""]
-        parts += ["```text", parser.format_help().rstrip(), "```", ""]
-    return "\n".join(parts)
 
 
 def result_columns_markdown() -> str:
@@ -152,7 +118,6 @@ def information_model_markdown() -> str:
 
 
 GENERATORS = {
-    "<!-- generated:cli -->": cli_markdown,
     "<!-- generated:result-columns -->": result_columns_markdown,
     "<!-- generated:profile-settings -->": profile_settings_markdown,
     "<!-- generated:information-model -->": information_model_markdown,

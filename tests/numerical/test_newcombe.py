@@ -25,7 +25,7 @@ import pytest
 from scipy.stats import norm
 
 from transfertwin._errors import InputError
-from transfertwin.study.validation._validation import NEWCOMBE_HYBRID_SCORE, newcombe_difference
+from transfertwin.study.validation import NEWCOMBE_HYBRID_SCORE, newcombe_difference
 
 NEWCOMBE_1998_TABLE_II_METHOD_10 = [
     # (k1, n1, k2, n2, low, high), examples (a)-(h)

@@ -21,6 +21,7 @@ from matplotlib.figure import Figure
 from transfertwin._errors import InputError
 from transfertwin.report._figure import FAILURE_COLOR, new_figure
 from transfertwin.study.fullstate import clopper_pearson
+from transfertwin.study.validation import VirtualPhysicalShares
 
 __all__ = [
     "SMALL_HELD_OUT",
@@ -53,8 +54,9 @@ class F05Point:
 
 
 @dataclass(frozen=True)
-class ValidatedState:
-    """An object's best or worst state run by twin and plant (Sec. 6.7).
+class ValidatedState(VirtualPhysicalShares):
+    """An object's best or worst state run by twin and plant (Sec. 6.7); its shares p̂_V
+    and p̂_P as a `StateComparison` has them (`VirtualPhysicalShares`).
 
     Attributes:
         object_id, kind: The object and ``'best'`` or ``'worst'``.
@@ -76,16 +78,6 @@ class ValidatedState:
     ci_p: tuple[float, float]
     diff: tuple[float, float]
     significant: bool
-
-    @property
-    def p_v(self) -> float:
-        """p̂_V = k_v / n_v."""
-        return self.k_v / self.n_v
-
-    @property
-    def p_p(self) -> float:
-        """p̂_P = k_p / n_p."""
-        return self.k_p / self.n_p
 
 
 @dataclass(frozen=True)

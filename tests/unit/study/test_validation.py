@@ -23,7 +23,7 @@ from transfertwin.report._validation_plots import (
     validate_and_report,
     validation_plot_data,
 )
-from transfertwin.study.validation._validation import (
+from transfertwin.study.validation import (
     VALIDATION_COLUMNS,
     DifferenceInterval,
     StateComparison,

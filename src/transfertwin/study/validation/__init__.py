@@ -6,6 +6,13 @@ from transfertwin.study.validation._agreement import (
     compare_scenes,
     run_side,
 )
+from transfertwin.study.validation._comparison import (
+    NEWCOMBE_HYBRID_SCORE,
+    DifferenceInterval,
+    StateComparison,
+    VirtualPhysicalShares,
+    newcombe_difference,
+)
 from transfertwin.study.validation._power import (
     DETECTABLE_DIFFERENCE,
     PowerSummary,
@@ -14,13 +21,9 @@ from transfertwin.study.validation._power import (
     power_summary,
 )
 from transfertwin.study.validation._validation import (
-    NEWCOMBE_HYBRID_SCORE,
     VALIDATION_COLUMNS,
-    DifferenceInterval,
-    StateComparison,
     ValidationResult,
     compare,
-    newcombe_difference,
     summary_json_text,
     validate,
     validation_csv_text,
@@ -37,6 +40,7 @@ __all__ = [
     "SideOutcome",
     "StateComparison",
     "ValidationResult",
+    "VirtualPhysicalShares",
     "compare",
     "compare_scenes",
     "n_to_exclude_zero",

@@ -16,14 +16,11 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 from statsmodels.stats.proportion import confint_proportions_2indep
 
 from transfertwin._errors import InputError
-
-if TYPE_CHECKING:
-    from transfertwin.study.validation._validation import StateComparison
+from transfertwin.study.validation._comparison import StateComparison
 
 __all__ = [
     "DETECTABLE_DIFFERENCE",

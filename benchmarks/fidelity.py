@@ -14,8 +14,9 @@ folder's 5 × 5 figures of before (penalty fixed), which are not the headline.
 
     python benchmarks/fidelity.py [--objects DIR[,DIR...]] [--cv-seeds 20] [--study STORE]
 
-The default `--objects` are the four candidate folders shipped under `docs/fidelity/`
-(nothing is simulated; about 4 minutes on one core). A folder that lacks a core's
+The default `--objects` are the four candidate folders shipped under `benchmarks/results/`
+(`2026-11-23-fidelity-proxies/calibrated-r25` and three of `2026-11-23-fidelity-runs/`;
+nothing is simulated; about 4 minutes on one core). A folder that lacks a core's
 candidates is fitted first (`calibrate object`, about 2 minutes per core on 2 workers).
 With `--study STORE` (e.g. `out/quick.sqlite` of `./dev.sh run`) it also checks the grid
 targets: at least 3 of 4 cores with both outcomes and an overall share between 0.4 and 0.9.
@@ -44,9 +45,11 @@ from transfertwin.study.calibration import (
 )
 
 DEPTHS_M = [d / 1000 for d in (6, 10, 14, 18, 20, 22, 24, 26, 28)]
-SHIPPED = ",".join(f"docs/fidelity/{f}" for f in (
-    "calibrated-r25", "runs/prism-r12.5-R4", "runs/prism-r12.5-R6",
-    "runs/prism-r12.5-R6-mccd-auto"))  # fmt: skip
+SHIPPED = ",".join(f"benchmarks/results/{f}" for f in (
+    "2026-11-23-fidelity-proxies/calibrated-r25",
+    "2026-11-23-fidelity-runs/prism-r12.5-R4",
+    "2026-11-23-fidelity-runs/prism-r12.5-R6",
+    "2026-11-23-fidelity-runs/prism-r12.5-R6-mccd-auto"))  # fmt: skip
 
 
 def _gap_fit(rows) -> None:

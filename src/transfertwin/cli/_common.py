@@ -14,7 +14,6 @@ __all__ = [
     "add_executor_args",
     "add_state_args",
     "executor_from_args",
-    "parse_dock_error",
     "parse_positions",
     "positive_int",
     "with_executor",
@@ -39,20 +38,6 @@ class Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> None:  # type: ignore[override]
         raise InputError(message)
-
-
-def parse_dock_error(text: str):  # -> DockingError
-    """``X_MM,Y_MM,THETA_DEG`` → a docking error ξ (Eq. 6.11)."""
-    from transfertwin.sim import DockingError
-
-    parts = text.split(",")
-    try:
-        values = [float(p) for p in parts]
-    except ValueError:
-        values = []
-    if len(values) != 3:
-        raise InputError(f"--dock-error expects X_MM,Y_MM,THETA_DEG, got {text!r}")
-    return DockingError.from_mm_deg(*values)
 
 
 def add_state_args(p: argparse.ArgumentParser) -> None:

@@ -10,7 +10,7 @@ from rich.console import Console
 from rich.table import Table
 
 from transfertwin._errors import InputError
-from transfertwin.cli._common import add_state_args, parse_dock_error
+from transfertwin.cli._common import add_state_args
 from transfertwin.cli._paths import out_file
 
 __all__ = ["register"]
@@ -39,12 +39,12 @@ def cmd_perceive(args: argparse.Namespace) -> int:
         plot_detection,
         workspace_scan,
     )
-    from transfertwin.sim import SceneConfig
+    from transfertwin.sim import DockingError, SceneConfig
     from transfertwin.study.experiment import system_for
 
     face, conveyor = parse_face(args.face), parse_conveyor(args.conveyor)
     theta = check_theta_deg(args.theta)
-    dock = parse_dock_error(args.dock_error)
+    dock = DockingError.from_text(args.dock_error)
     if args.seed < 0:
         raise InputError(f"--seed must be a non-negative integer, got {args.seed}")
     intrinsics = CameraIntrinsics(*_size(args.size))

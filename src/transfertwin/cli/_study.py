@@ -14,7 +14,6 @@ from transfertwin._errors import InputError
 from transfertwin.cli._common import (
     add_executor_args,
     executor_from_args,
-    parse_dock_error,
     positive_int,
     worker_count,
 )
@@ -25,6 +24,7 @@ __all__ = ["register"]
 
 
 def _plan_from_args(args: argparse.Namespace):  # -> StudyPlan
+    from transfertwin.sim import DockingError
     from transfertwin.study.docking import FixedDockingError, docking_model
     from transfertwin.study.experiment import PRESETS, StudyPlan, load_profile, parse_objects
 
@@ -35,7 +35,7 @@ def _plan_from_args(args: argparse.Namespace):  # -> StudyPlan
         profile_name, scene = load_profile(args.profile)
     kwargs = {"scene": scene} if scene is not None else {}
     if args.dock_error:
-        docking = FixedDockingError(parse_dock_error(args.dock_error))
+        docking = FixedDockingError(DockingError.from_text(args.dock_error))
     else:
         docking = docking_model(args.docking, args.docking_csv)
     return StudyPlan(

@@ -13,7 +13,7 @@ from rich.console import Console
 from rich.table import Table
 
 from transfertwin._errors import InputError
-from transfertwin.cli._common import add_state_args, parse_dock_error
+from transfertwin.cli._common import add_state_args
 from transfertwin.cli._paths import out_dir, out_file
 from transfertwin.cli._progress import progress_bar
 
@@ -49,7 +49,7 @@ def hull_notice(ref: str, units: str = "m") -> str:
 
 def cmd_transfer(args: argparse.Namespace) -> int:
     """One virtual experiment E^V: there and, if that worked, back."""
-    from transfertwin.sim import SceneConfig, render_strip
+    from transfertwin.sim import DockingError, SceneConfig, render_strip
     from transfertwin.study.experiment import (
         ExperimentSpec,
         load_profile,
@@ -68,7 +68,7 @@ def cmd_transfer(args: argparse.Namespace) -> int:
         face=args.face,
         conveyor=args.conveyor,
         theta_deg=args.theta,
-        docking_error=parse_dock_error(args.dock_error),
+        docking_error=DockingError.from_text(args.dock_error),
         scene=scene,
         seed=args.seed,
         units=args.units,

@@ -31,7 +31,6 @@ from transfertwin.replay._source import (
     calibration_source,
     calibration_spec,
     compare_with_row,
-    parse_dock_error,
     study_spec,
     transfer_spec,
 )
@@ -59,7 +58,6 @@ __all__ = [
     "compile_system",
     "gif_frame_times",
     "glb_bytes",
-    "parse_dock_error",
     "plant_row",
     "plant_source",
     "record_experiment",

@@ -41,7 +41,6 @@ __all__ = [
     "calibration_source",
     "calibration_spec",
     "compare_with_row",
-    "parse_dock_error",
     "study_spec",
     "transfer_spec",
 ]
@@ -145,18 +144,6 @@ def compare_with_row(result: ExperimentResult, row: Mapping[str, object]) -> dic
     return {"same": not diffs, "differences": diffs}
 
 
-def parse_dock_error(text: str) -> DockingError:
-    """``X_MM,Y_MM,THETA_DEG`` → a docking error ξ (Eq. 6.11), as `transfer` reads it."""
-    parts = text.split(",")
-    try:
-        values = [float(p) for p in parts]
-    except ValueError:
-        values = []
-    if len(values) != 3:
-        raise InputError(f"--dock-error expects X_MM,Y_MM,THETA_DEG, got {text[:60]!r}")
-    return DockingError.from_mm_deg(*values)
-
-
 def transfer_spec(
     object_ref: str,
     face: str,
@@ -178,7 +165,7 @@ def transfer_spec(
         scene = scene.with_overrides(gap_m=gap_mm / 1000.0)
     return ExperimentSpec(
         object_ref=object_ref, face=face, conveyor=conveyor, theta_deg=theta_deg,
-        docking_error=parse_dock_error(dock_error), scene=scene, seed=seed, units=units,
+        docking_error=DockingError.from_text(dock_error), scene=scene, seed=seed, units=units,
     )  # fmt: skip
 
 

@@ -429,6 +429,22 @@ class DockingError:
         """Build from the units used in result tables (mm, mm, degrees)."""
         return cls(x_mm / 1000.0, y_mm / 1000.0, math.radians(theta_deg))
 
+    @classmethod
+    def from_text(cls, text: str) -> DockingError:
+        """Parse ``X_MM,Y_MM,THETA_DEG`` (the ``--dock-error`` option of `transfer`, `study
+        run`, `perceive` and `replay`), e.g. ``"-2.5,1,0.5"``.
+
+        Raises:
+            InputError: If the text is not three numbers, or they are out of range.
+        """
+        try:
+            values = [float(p) for p in text.split(",")]
+        except ValueError:
+            values = []
+        if len(values) != 3:
+            raise InputError(f"--dock-error expects X_MM,Y_MM,THETA_DEG, got {text[:60]!r}")
+        return cls.from_mm_deg(*values)
+
     def as_mm_deg(self) -> tuple[float, float, float]:
         """(x_mm, y_mm, theta_deg) for result tables."""
         return self.x_m * 1000.0, self.y_m * 1000.0, math.degrees(self.theta_rad)

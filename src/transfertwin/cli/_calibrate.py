@@ -4,8 +4,6 @@ experiments."""
 from __future__ import annotations
 
 import argparse
-import csv
-import io
 import json
 import math
 import sys
@@ -15,6 +13,19 @@ from rich.console import Console
 
 from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
+from transfertwin.cli._calibrate_out import (
+    best_line,
+    builtin_real,
+    csv_text,
+    json_safe,
+    mapping_line,
+    metric_line,
+    prediction_rows,
+    print_sensitivity,
+    trial_line,
+    undefined_reason,
+    write_trials,
+)
 from transfertwin.cli._common import (
     add_executor_args,
     parse_positions,
@@ -56,73 +67,6 @@ def _common(args: argparse.Namespace):
     return rows, scene, name, calib
 
 
-def _mapping_note(mapping: dict[str, str]) -> str:
-    return ", ".join(f"{k}->{v}" for k, v in sorted(mapping.items()))
-
-
-_ROW_KEY = ("object_id", "face", "conveyor", "theta_deg", "success", "dock_err_x_mm",
-            "dock_err_y_mm", "dock_err_theta_deg")  # fmt: skip
-
-
-def _row_key(row: dict[str, object]) -> tuple[str, ...]:
-    return tuple(str(row.get(k)) for k in _ROW_KEY)
-
-
-def _builtin_real(rows: list[dict[str, object]]) -> bool:
-    """Whether the rows are (a part of) the study's real experiments shipped with the
-    package: only then are the objects the real cores whose scans are not public."""
-    from transfertwin.data import calibration_csv_path
-    from transfertwin.store import read_results
-
-    shipped = {_row_key(r) for r in read_results(calibration_csv_path())}
-    return bool(rows) and all(_row_key(r) in shipped for r in rows)
-
-
-def _mapping_line(mapping: dict[str, str], builtin_real: bool) -> str:
-    """Which mesh replays which object; the scans remark only for the built-in real cores."""
-    if builtin_real:
-        return (f"real objects mapped to meshes: {_mapping_note(mapping)} "
-                "(the real cores' scans are not public)")  # fmt: skip
-    return f"objects replayed with the meshes: {_mapping_note(mapping)}"
-
-
-#: Why a metric of a confusion matrix is undefined (Eq. A.1-A.4), by the empty denominator.
-_NO_PREDICTED = "no predicted successes"
-_NO_REAL = "no real successes"
-
-
-def _undefined(confusion, key: str) -> str:
-    """Why ``key`` is undefined for one run's confusion matrix ('' when it is defined):
-    precision needs predicted successes, recall real ones, F0.5 both."""
-    reasons = []
-    if key in ("precision", "f05") and confusion.tp + confusion.fp == 0:
-        reasons.append((_NO_PREDICTED, "precision"))
-    if key in ("recall", "f05") and confusion.tp + confusion.fn == 0:
-        reasons.append((_NO_REAL, "recall"))
-    if key == "accuracy" and confusion.total == 0:
-        reasons.append(("no rows", "accuracy"))
-    if not reasons:
-        return ""
-    why = " and ".join(r for r, _ in reasons)
-    what = " and ".join(m for _, m in reasons)
-    return f"{why}: {what} undefined"
-
-
-def _metric_line(key: str, summary: dict[str, object], confusions) -> str:
-    """One metric's mean ± std over runs, or n/a with the reason when no run defines it."""
-    reasons = [_undefined(c, key) for c in confusions]
-    n_undefined = sum(bool(r) for r in reasons)
-    if n_undefined == len(confusions):
-        return f"{key:9s} n/a ({reasons[0]})"
-    std = summary[key]["std"]
-    spread = f" ± {std:.3f}" if math.isfinite(std) else " (one run: no spread)"
-    line = f"{key:9s} {summary[key]['mean']:.3f}{spread}"
-    if n_undefined:
-        first = next(r for r in reasons if r)
-        line += f" ({n_undefined} of {len(confusions)} runs n/a, counted as 0: {first})"
-    return line
-
-
 def cmd_run(args: argparse.Namespace) -> int:
     """Replay the real experiments R times; write metrics.json and predictions.csv."""
     from transfertwin.study.calibration import calibrate
@@ -132,14 +76,14 @@ def cmd_run(args: argparse.Namespace) -> int:
     result = calibrate(rows, scene=scene, **calib)
     metrics = result.summary()["metrics"]
     confusions = [r.confusion for r in result.runs]
-    builtin_real = args.real == _DEFAULT_REAL or _builtin_real(rows)
+    shipped = args.real == _DEFAULT_REAL or builtin_real(rows)
     per_run = [
         {"run": r.run, **r.confusion.to_dict(), "not_ok": r.not_ok,
          **{k: r.confusion.metric(k) for k in metrics}}
         for r in result.runs
     ]  # fmt: skip
-    undefined = {k: _undefined(confusions[0], k) for k in ("f05", "precision", "recall")
-                 if all(_undefined(c, k) for c in confusions)}  # fmt: skip
+    undefined = {k: undefined_reason(confusions[0], k) for k in ("f05", "precision", "recall")
+                 if all(undefined_reason(c, k) for c in confusions)}  # fmt: skip
     payload = {
         "profile": name, "real": args.real, "n_real": len(rows), "runs": per_run,
         "mean": {k: v["mean"] for k, v in metrics.items()},
@@ -147,27 +91,16 @@ def cmd_run(args: argparse.Namespace) -> int:
         "undefined": undefined,
         "object_map": result.object_map,
         "note": "real objects are replayed with the mapped meshes; the real scans are not public"
-        if builtin_real else "objects are replayed with the mapped meshes; a metric listed "
+        if shipped else "objects are replayed with the mapped meshes; a metric listed "
         "under 'undefined' has an empty denominator in every run (its mean is 0 by convention)",
     }  # fmt: skip
-    write_atomic(out / "metrics.json", json.dumps(_json_safe(payload), indent=2) + "\n")
-    write_atomic(out / "predictions.csv", _csv_text(_prediction_rows(rows, result)))
-    print(_mapping_line(result.object_map, builtin_real))
+    write_atomic(out / "metrics.json", json.dumps(json_safe(payload), indent=2) + "\n")
+    write_atomic(out / "predictions.csv", csv_text(prediction_rows(rows, result)))
+    print(mapping_line(result.object_map, shipped))
     for key in ("f05", "precision", "recall", "accuracy"):
-        print(_metric_line(key, metrics, confusions))
+        print(metric_line(key, metrics, confusions))
     print(out / "metrics.json")
     return 0
-
-
-def _prediction_rows(rows, result) -> list[dict[str, object]]:
-    """predictions.csv: per real row its state, real outcome and each run's virtual one
-    (``pred_run<r>``: 1 success, 0 failure or a result that was not 'ok')."""
-    keys = ("object_id", "face", "conveyor", "theta_deg", "success")
-    return [
-        {"row": i, **{k: row[k] for k in keys},
-         **{f"pred_run{r.run}": r.predicted[i] for r in result.runs}}
-        for i, row in enumerate(rows)
-    ]  # fmt: skip
 
 
 def _parse_values(text: str) -> list[object]:
@@ -183,66 +116,6 @@ def _parse_values(text: str) -> list[object]:
     if not values:
         raise InputError("--values is empty")
     return values
-
-
-def _write_trials(out: Path, records, keys, metric: str, title: str) -> None:
-    """trials.csv (one row per `(label, TunedTrial)`: parameters, objective, metrics) and
-    scores.png (the objective metric per run)."""
-    from transfertwin.report import (
-        figure_png,
-        plot_score_distribution,
-        score_distribution_data,
-    )
-
-    buf = io.StringIO()
-    metrics = ("f05", "f05_std", "precision", "recall", "accuracy", "brier", "not_ok")
-    writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(["label", *keys, "objective", *metrics, "penalty", "runs"])
-    for label, t in records:
-        writer.writerow([label, *(t.params.get(k, "") for k in keys), _fmt(t.objective),
-                         *(_fmt(t.metrics[m]) for m in metrics), _fmt(t.penalty),
-                         len(t.scores)])  # fmt: skip
-    write_atomic(out / "trials.csv", buf.getvalue())
-    labels = [f"{label} " + ",".join(f"{k}={v}" for k, v in t.params.items())
-              for label, t in records]  # fmt: skip
-    data = score_distribution_data(labels, [list(t.scores) for _, t in records], metric)
-    fig = plot_score_distribution(data)
-    fig.suptitle(title)
-    write_atomic(out / "scores.png", figure_png(fig))
-
-
-def _fmt(value: float) -> str:
-    return "" if not math.isfinite(value) else f"{value:.6f}"
-
-
-#: How the CLI names a metric in its lines (the --metric names are file/JSON names).
-_METRIC_NAMES = {"f05": "F0.5", "brier": "Brier"}
-
-
-def _metric_name(metric: str) -> str:
-    return _METRIC_NAMES.get(metric, metric)
-
-
-def _params_text(params: dict[str, object]) -> str:
-    """``physics.solver=Newton mu=0.5``; ``(base settings)`` for none."""
-    parts = [f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in params.items()]
-    return " ".join(parts) or "(base settings)"
-
-
-def _trial_line(label: str, params: dict[str, object], metric: str, score: float) -> str:
-    """``S0 physics.solver=Newton: F0.5 0.860``: a trial, its settings and its named score."""
-    return f"{label} {_params_text(params)}: {_metric_name(metric)} {score:.3f}"
-
-
-def _best_line(label: str, params: dict[str, object], metric: str, score: float,
-               baseline: float) -> str:  # fmt: skip
-    """The best trial beside the untuned baseline (the starting profile, unmodified cores)."""
-    sign = 1.0 if metric != "brier" else -1.0
-    better = "better" if sign * (score - baseline) > 0 else "not better"
-    return (
-        f"best: {_trial_line(label, params, metric, score)}; untuned baseline "
-        f"{_metric_name(metric)} {baseline:.3f} ({better})"
-    )
 
 
 def _check_metric(metric: str) -> None:
@@ -270,11 +143,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     rows, scene, _, calib = _common(args)
     out = out_dir(args.out)
     trials = sweep(rows, args.param, _parse_values(args.values), base=scene, metric=args.metric,
-                   on_trial=lambda t: print(_trial_line(t.label, t.params, t.metric, t.score)),
+                   on_trial=lambda t: print(trial_line(t.label, t.params, t.metric, t.score)),
                    **calib)  # fmt: skip
-    _write_trials(out, _records(trials), _keys(trials), args.metric, f"sweep of {args.param}")
+    write_trials(out, _records(trials), _keys(trials), args.metric, f"sweep of {args.param}")
     best = best_trial(trials)
-    print(f"best: {_trial_line(best.label, best.params, best.metric, best.score)}; "
+    print(f"best: {trial_line(best.label, best.params, best.metric, best.score)}; "
           f"{out / 'trials.csv'}")  # fmt: skip
     return 0
 
@@ -348,12 +221,12 @@ def cmd_tune(args: argparse.Namespace) -> int:
         open_storage(storage)
     work = out / "trials"
     metric = args.metric
-    show = lambda t: print(f"{_trial_line(f'T{t.number}', t.params, metric, t.metrics[metric])}"  # noqa: E731
+    show = lambda t: print(f"{trial_line(f'T{t.number}', t.params, metric, t.metrics[metric])}"  # noqa: E731
                            f", objective {t.objective:.4f}")  # fmt: skip
     if args.method == "lhs":
         lhs = tune_lhs(rows, space, base=scene, n_per_round=args.trials, rounds=2,
                        metric=args.metric, penalty=args.penalty, work_dir=work,
-                       on_trial=lambda t: print(_trial_line(t.label, t.params, metric, t.score)),
+                       on_trial=lambda t: print(trial_line(t.label, t.params, metric, t.score)),
                        **calib)  # fmt: skip
         records = [(t.label, tuned_trial(i, t)) for i, t in enumerate(lhs)]
         best = records[lhs.index(best_trial(lhs))][1]
@@ -374,7 +247,7 @@ def cmd_tune(args: argparse.Namespace) -> int:
         )
     if work.is_dir() and not any(work.iterdir()):
         work.rmdir()
-    _write_trials(out, records, space.names(), args.metric,
+    write_trials(out, records, space.names(), args.metric,
                   f"calibrate tune ({args.method}, {args.metric})")  # fmt: skip
     mapping = dict(calib["object_map"])
     for oid, spec in trial_proxies(best.params, calib["object_map"]).items():
@@ -395,8 +268,8 @@ def cmd_tune(args: argparse.Namespace) -> int:
         "note": "tuned proxies are calibrated stand-ins, not scans; use the object map with "
                 "the profile (--profile, --object-map)",
     }  # fmt: skip
-    write_atomic(out / "best.json", json.dumps(_json_safe(payload), indent=2) + "\n")
-    print(f"{_best_line(label, best.params, metric, best.metrics[metric], baseline)}; "
+    write_atomic(out / "best.json", json.dumps(json_safe(payload), indent=2) + "\n")
+    print(f"{best_line(label, best.params, metric, best.metrics[metric], baseline)}; "
           f"profile {profile}; object map {object_map}")  # fmt: skip
     return 0
 
@@ -434,14 +307,14 @@ def cmd_simstudy(args: argparse.Namespace) -> int:
     out = out_dir(args.out)
     trials = simulation_parameter_study(
         rows, base=scene, sets=sets, metric=args.metric,
-        on_trial=lambda t: print(_trial_line(t.label, t.params, t.metric, t.score)), **calib,
+        on_trial=lambda t: print(trial_line(t.label, t.params, t.metric, t.score)), **calib,
     )  # fmt: skip
-    _write_trials(out, _records(trials), _keys(trials), args.metric, "simulation-parameter study")
+    write_trials(out, _records(trials), _keys(trials), args.metric, "simulation-parameter study")
     best = best_trial(trials)
     chosen = {"label": best.label, "params": best.params, args.metric: best.score}
     write_atomic(out / "chosen.json", json.dumps(chosen, indent=2) + "\n")
     save_profile(out / "profile.toml", f"simstudy-{best.label}", scene_with(scene, best.params))
-    print(f"chosen: {_trial_line(best.label, best.params, best.metric, best.score)}; "
+    print(f"chosen: {trial_line(best.label, best.params, best.metric, best.score)}; "
           f"{out / 'profile.toml'}")  # fmt: skip
     return 0
 
@@ -537,8 +410,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
                 "training folds",
     }  # fmt: skip
     write_atomic(out / "fidelity.png", figure_png(plot_fidelity(plot)))
-    write_atomic(out / "fidelity.json", json.dumps(_json_safe(report), indent=2) + "\n")
-    write_atomic(out / "evaluation.json", json.dumps(_json_safe(payload), indent=2) + "\n")
+    write_atomic(out / "fidelity.json", json.dumps(json_safe(report), indent=2) + "\n")
+    write_atomic(out / "evaluation.json", json.dumps(json_safe(payload), indent=2) + "\n")
     print("\n".join(report_lines(report)))
     print(f"single folder {first.label} ({args.folds}-fold x {args.repeats}, penalty "
           f"{args.penalty:g} fixed; not the headline):")  # fmt: skip
@@ -615,35 +488,8 @@ def cmd_object(args: argparse.Namespace) -> int:
     return 0
 
 
-def _csv_text(rows: list[dict[str, object]]) -> str:
-    buf = io.StringIO()
-    keys = list(rows[0]) if rows else []
-    writer = csv.DictWriter(buf, fieldnames=keys, lineterminator="\n")
-    writer.writeheader()
-    for row in rows:
-        writer.writerow({k: "" if v is None or (isinstance(v, float) and math.isnan(v))
-                         else (f"{v:.6g}" if isinstance(v, float) else v)
-                         for k, v in row.items()})  # fmt: skip
-    return buf.getvalue()
-
-
-def _fmt(value: object, spec: str = ".2f") -> str:
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "-"
-    return format(value, spec)
-
-
-def _signature_line(label: str, sig: dict[str, dict[str, object]]) -> str:
-    parts = [" ".join(f"{k} {_fmt(v)}" for k, v in groups.items()) for groups in sig.values()]
-    # object/face pairs are in the JSON; the line keeps face, conveyor and yaw
-    parts = parts[:3]
-    return f"{label}: " + " | ".join(parts)
-
-
 def cmd_sensitivity(args: argparse.Namespace) -> int:
     """One-at-a-time (or Morris) sensitivity of the replay to candidate gap mechanisms."""
-    from rich.table import Table
-
     if getattr(args, "executor", "local") != "local":
         raise InputError("calibrate sensitivity runs on local worker processes (no --executor)")
 
@@ -684,55 +530,12 @@ def cmd_sensitivity(args: argparse.Namespace) -> int:
         fig = plot_morris(morris_plot_data(result), title)
     else:
         fig = plot_sensitivity(sensitivity_plot_data(result), title)
-    write_atomic(out / "sensitivity.csv", _csv_text(result.csv_rows()))
+    write_atomic(out / "sensitivity.csv", csv_text(result.csv_rows()))
     write_atomic(out / "sensitivity.png", figure_png(fig))
-    write_atomic(out / "sensitivity.json", json.dumps(_json_safe(payload), indent=2) + "\n")
-    table = Table(title=title)
-    if args.method == "morris":
-        for col in ("factor", "range", "mu* share", "± conf", "sigma", "mu* stuck", "mu* F0.5"):
-            table.add_column(col, justify="left" if col == "factor" else "right")
-        idx = result.indices
-        for r in result.ranking("share"):
-            f = next(x for x in result.factors if x.name == r["factor"])
-            extra = [idx.get(k, {}).get(f.name, {}).get("mu_star") for k in ("stuck_rate", "f05")]
-            table.add_row(f.name, f"{f.low:g}..{f.high:g}", _fmt(r["mu_star"], ".3f"),
-                          _fmt(r["mu_star_conf"], ".3f"), _fmt(r["sigma"], ".3f"),
-                          *(_fmt(v, ".3f") for v in extra))  # fmt: skip
-    else:
-        for col in ("factor", "levels", "success share by level", "Δ share", "stuck/fail max",
-                    "F0.5 best", "Δ F0.5", "AUC best"):  # fmt: skip
-            table.add_column(col, justify="left" if col == "factor" else "right")
-        for e in result.effects():
-            lv = result.of(str(e["factor"]))
-            table.add_row(
-                str(e["factor"]), " ".join(f"{x.value:g}" for x in lv),
-                " ".join(f"{x.share:.2f}" for x in lv), _fmt(e["share_range"]),
-                _fmt(e["stuck_share_max"]), _fmt(e["f05_best"], ".3f"),
-                _fmt(e["f05_range"], ".3f"), _fmt(e["auc_best"]),
-            )  # fmt: skip
-    console.print(table)
-    real = result.real
-    print(f"real success share {real['share']:.2f} [{real['ci_low']:.2f}, {real['ci_high']:.2f}]"
-          f" (n {real['n']})")  # fmt: skip
-    print(_signature_line("real signature", real["signature"]))
-    if args.method != "morris":
-        b = result.base
-        print(f"base profile: share {b.share:.2f} [{b.ci_low:.2f}, {b.ci_high:.2f}], "
-              f"stuck/fail {_fmt(b.stuck_share)}, F0.5 {b.f05:.3f}, AUC {_fmt(b.auc)}")  # fmt: skip
-        print(_signature_line("base signature", b.signature))
+    write_atomic(out / "sensitivity.json", json.dumps(json_safe(payload), indent=2) + "\n")
+    print_sensitivity(result, args.method, title, console)
     print(out / "sensitivity.json")
     return 0
-
-
-def _json_safe(value: object) -> object:
-    """NaN and infinities become null (strict JSON)."""
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
-    if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
-    return value
 
 
 def _shared(p: argparse.ArgumentParser) -> None:

@@ -11,7 +11,7 @@ import csv
 import json
 from pathlib import Path
 
-from transfertwin.cli._calibrate import _builtin_real, _mapping_line, _metric_line
+from transfertwin.cli._calibrate_out import builtin_real, mapping_line, metric_line
 from transfertwin.data import calibration_csv_path
 from transfertwin.store import read_results
 from transfertwin.study.calibration import ConfusionMatrix, summarize_runs
@@ -22,7 +22,7 @@ PLANT_HEADER = ("experiment_id,transfer_unit,object_id,theta_deg,face,conveyor,s
 
 def lines(*runs: ConfusionMatrix) -> dict[str, str]:
     summary = summarize_runs(runs)["metrics"]
-    return {k: _metric_line(k, summary, runs) for k in ("f05", "precision", "recall")}
+    return {k: metric_line(k, summary, runs) for k in ("f05", "precision", "recall")}
 
 
 def test_only_real_failures_and_only_predicted_failures_give_n_a_with_the_reason() -> None:
@@ -56,12 +56,12 @@ def test_defined_metrics_print_as_before() -> None:
 
 def test_the_scans_remark_is_only_for_the_builtin_real_cores(tmp_path: Path) -> None:
     shipped = read_results(calibration_csv_path())
-    assert _builtin_real(shipped) and _builtin_real(shipped[:5])
-    assert "scans are not public" in _mapping_line({"o1": "o1"}, True)
+    assert builtin_real(shipped) and builtin_real(shipped[:5])
+    assert "scans are not public" in mapping_line({"o1": "o1"}, True)
     plant = tmp_path / "plant_experiments.csv"
     plant.write_text(PLANT_HEADER + "\n0,TU_A,o3,-32,front,both,0,-10.38,9.48,1.98,25.78\n")
-    assert not _builtin_real(read_results(plant))
-    line = _mapping_line({"o3": "o3"}, False)
+    assert not builtin_real(read_results(plant))
+    line = mapping_line({"o3": "o3"}, False)
     assert line == "objects replayed with the meshes: o3->o3" and "scan" not in line
 
 

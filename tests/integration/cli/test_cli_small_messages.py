@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 import trimesh
 
-from transfertwin.cli._calibrate import _best_line, _trial_line
+from transfertwin.cli._calibrate_out import best_line, trial_line
 from transfertwin.cli._study import run_summary_line
 from transfertwin.cli._transfer import demo_row, hull_notice
 from transfertwin.objects import hull_cache_path, load_object
@@ -30,19 +30,19 @@ def test_demo_rows_show_a_dash_where_an_outcome_was_not_determined() -> None:
 
 
 def test_a_sweep_trial_names_its_setting_and_metric() -> None:
-    assert _trial_line("S0", {"physics.solver": "Newton"}, "f05", 0.86) == (
+    assert trial_line("S0", {"physics.solver": "Newton"}, "f05", 0.86) == (
         "S0 physics.solver=Newton: F0.5 0.860"
     )
-    assert _trial_line("T3", {"mu": 0.540779, "gap_mm": 23.746}, "brier", 0.1234) == (
+    assert trial_line("T3", {"mu": 0.540779, "gap_mm": 23.746}, "brier", 0.1234) == (
         "T3 mu=0.5408 gap_mm=23.75: Brier 0.123"
     )
-    assert _trial_line("B", {}, "recall", 0.5) == "B (base settings): recall 0.500"
+    assert trial_line("B", {}, "recall", 0.5) == "B (base settings): recall 0.500"
 
 
 def test_the_best_trial_stands_beside_the_untuned_baseline() -> None:
-    line = _best_line("T7", {"mu": 0.5}, "f05", 0.91, 0.86)
+    line = best_line("T7", {"mu": 0.5}, "f05", 0.91, 0.86)
     assert line == "best: T7 mu=0.5: F0.5 0.910; untuned baseline F0.5 0.860 (better)"
-    assert _best_line("T1", {"mu": 0.5}, "brier", 0.2, 0.1).endswith("Brier 0.100 (not better)")
+    assert best_line("T1", {"mu": 0.5}, "brier", 0.2, 0.1).endswith("Brier 0.100 (not better)")
 
 
 def test_the_study_summary_rate_is_wall_clock_with_start_up() -> None:

@@ -1,4 +1,4 @@
-"""An emulated physical plant with hidden ground truth (issue 12).
+"""An emulated physical plant with hidden ground truth.
 
 `EmulatedPlant(seed)` stands in for the real transfer system: it runs experiments E^P in a
 simulation whose parameters the twin never sees and returns rows like the real calibration

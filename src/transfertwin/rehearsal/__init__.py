@@ -23,13 +23,13 @@ from transfertwin.rehearsal._rehearse import (
     RehearsalConfig,
     calibration_design,
     curve_document,
-    f05_intervals,
     holdout_split,
     parse_ablations,
     parse_object_list,
     rehearse,
     twin_scene,
 )
+from transfertwin.rehearsal._scoring import f05_intervals
 from transfertwin.rehearsal._thresholded import majority_scores, training_threshold
 
 __all__ = [

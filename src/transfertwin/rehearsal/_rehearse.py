@@ -16,7 +16,7 @@
 
 The twin's only inputs from the plant are the rows `EmulatedPlant.run` returns
 (`PLANT_COLUMNS`, like the real calibration table). F0.5 is the mean over the R replay
-runs of each run's F0.5 (the study's Table 6.4 definition, Appendix A.2).
+runs of each run's F0.5 (the study's Table 6.4 definition, Appendix A.2; `_scoring`).
 """
 
 from __future__ import annotations
@@ -45,6 +45,12 @@ from transfertwin.plant import (
     PlantRequest,
 )
 from transfertwin.rehearsal._operations import run_operations
+from transfertwin.rehearsal._scoring import (
+    base_rate_f05,
+    f05_intervals,
+    held_out_scores,
+    run_predictions,
+)
 from transfertwin.rehearsal._thresholded import majority_scores, training_threshold
 from transfertwin.sim import DockingError, SceneConfig
 from transfertwin.store import DOCKING_ERROR_COLUMNS
@@ -74,7 +80,6 @@ __all__ = [
     "RehearsalConfig",
     "calibration_design",
     "curve_document",
-    "f05_intervals",
     "holdout_split",
     "parse_ablations",
     "parse_object_list",
@@ -105,8 +110,6 @@ TUNED_SPACE = "mu=0.3:0.7,gap_mm=8.0:18.0"
 #: 30-80 ms and 0.5-1.0), not fitted.
 TWIN_FEATURE_SOLREF = (0.05, 0.75)
 
-#: Resamples of the held-out rows behind the F0.5 intervals (percentile bootstrap, seed 0).
-BOOTSTRAP_REPLICATES = 2000
 
 #: Marginal families of the twin's docking model (fast; see `transfertwin.plant`).
 _FAMILIES = ("normal", "truncnorm", "kde")
@@ -314,81 +317,6 @@ def holdout_split(
     return train, test
 
 
-def _scores(result: CalibrationResult) -> dict[str, float]:
-    p, y = result.probabilities(), np.asarray(result.actual)
-    out = {m: result.metric(m) for m in ("f05", "precision", "recall", "accuracy")}
-    out["brier"] = float(np.mean((p - y) ** 2))
-    return out
-
-
-def _base_rate_f05(y: Sequence[int]) -> float:
-    """F0.5 of the predictor that always says 'success' (precision = base rate, recall 1)."""
-    p = sum(y) / len(y)
-    return 0.0 if p == 0 else 1.25 * p / (0.25 * p + 1)
-
-
-def _f05_rows(pred: np.ndarray, act: np.ndarray) -> np.ndarray:
-    """F0.5 per resample: `pred` and `act` (B, n) bool (0 where nothing is predicted)."""
-    tp = (pred & act).sum(1)
-    fp = (pred & ~act).sum(1)
-    fn = (~pred & act).sum(1)
-    den = 1.25 * tp + 0.25 * fn + fp
-    return np.divide(1.25 * tp, den, out=np.zeros(len(den)), where=den > 0)
-
-
-def f05_intervals(
-    predictions: Mapping[str, np.ndarray],
-    actual: Sequence[int],
-    *,
-    replicates: int = BOOTSTRAP_REPLICATES,
-    seed: int = 0,
-    alpha: float = 0.05,
-    differences: Sequence[tuple[str, str]] = (),
-) -> dict[str, list[float]]:
-    """Paired percentile-bootstrap intervals of F0.5 on the held-out rows.
-
-    Each resample draws the held-out rows with replacement once and scores every predictor
-    on the same rows (the mean over runs of each run's F0.5, as ``f05_*``), and the
-    always-success predictor ('base_rate'). With 'before' and 'after' it adds their paired
-    difference 'after_minus_before'; each pair (a, b) of `differences` adds 'a_minus_b'
-    (e.g. an oracle's F0.5 minus the twin's: the gap, paired row by row).
-
-    Args:
-        predictions: Name → virtual outcomes per run and held-out row, (R, n) of 0/1.
-        actual: The plant's outcomes (n,).
-        replicates: Resamples B.
-        seed: Seed of the resampling.
-        alpha: 1 - confidence level.
-
-    Returns:
-        Name → [low, high].
-    """
-    act = np.asarray(actual, dtype=bool)
-    if act.ndim != 1 or act.size == 0:
-        raise InputError("f05_intervals: need at least one held-out row")
-    unknown = sorted({n for pair in differences for n in pair} - set(predictions))
-    if unknown:
-        raise InputError(f"f05_intervals: differences name no predictor: {', '.join(unknown)}")
-    idx = np.random.default_rng([seed, 0x424F4F54]).integers(0, act.size, (replicates, act.size))
-    a = act[idx]
-    stats: dict[str, np.ndarray] = {"base_rate": _f05_rows(np.ones_like(a), a)}
-    for name, pred in predictions.items():
-        pred = np.asarray(pred, dtype=bool)
-        if pred.ndim != 2 or pred.shape[1] != act.size:
-            raise InputError(f"f05_intervals: {name} needs (runs, {act.size}) predictions")
-        stats[name] = np.mean([_f05_rows(run[idx], a) for run in pred], axis=0)
-    if "before" in stats and "after" in stats:
-        stats["after_minus_before"] = stats["after"] - stats["before"]
-    for a_name, b_name in differences:
-        stats[f"{a_name}_minus_{b_name}"] = stats[a_name] - stats[b_name]
-    q = (alpha / 2, 1 - alpha / 2)
-    return {k: [float(v) for v in np.quantile(x, q)] for k, x in stats.items()}
-
-
-def _predictions(result: CalibrationResult) -> np.ndarray:
-    return np.array([r.predicted for r in result.runs], dtype=int)
-
-
 def _csv_text(rows: Sequence[Mapping[str, object]], columns: Sequence[str]) -> str:
     buf = io.StringIO()
     writer = csv.DictWriter(buf, columns, lineterminator="\n", extrasaction="ignore")
@@ -525,7 +453,7 @@ def _twin(run: _Run, measures: frozenset[str], out: Path) -> dict[str, object]:
 
     run.stage("calibrated twin: replay of the held-out experiments")
     after_result = run.replay(run.test, scene, object_map)
-    after = _scores(after_result)
+    after = held_out_scores(after_result)
 
     run.stage("full-state prediction")
     docking = _docking_model(run.plant_rows)
@@ -595,7 +523,7 @@ def _twin(run: _Run, measures: frozenset[str], out: Path) -> dict[str, object]:
         "virtual_rerun": sum(str(r.get("message", "")).startswith("re-run") for r in twin_rows),
         "variant_virtual_experiments": run.virtual - virtual0,
         "_analysis": analysis,
-        "_after_predictions": _predictions(after_result),
+        "_after_predictions": run_predictions(after_result),
         "_object_map": object_map,
         "_scene": scene,
     }
@@ -609,8 +537,8 @@ def _thresholds(run: _Run, main: Mapping[str, object]) -> tuple[tuple[float, flo
         return (0.5, 0.5), "0.5 (R = 1: P is 0 or 1, every threshold gives the same decisions)"
     y = [int(r["success"]) for r in run.train]
     run.stage("decision thresholds: replay of the training experiments before and after")
-    p_before = _predictions(run.replay(run.train, run.cfg.scene)).mean(axis=0)
-    p_after = _predictions(run.replay(run.train, main["_scene"], main["_object_map"]))
+    p_before = run_predictions(run.replay(run.train, run.cfg.scene)).mean(axis=0)
+    p_after = run_predictions(run.replay(run.train, main["_scene"], main["_object_map"]))
     tb, ta = training_threshold(p_before, y), training_threshold(p_after.mean(axis=0), y)
     return (tb, ta), f"chosen on the {len(y)} training rows (best F0.5 there)"
 
@@ -655,8 +583,8 @@ def rehearse(
 
     stage("twin before calibration: replay of the held-out experiments")
     before_result = run.replay(test, cfg.scene)
-    before = _scores(before_result)
-    before_pred = _predictions(before_result)
+    before = held_out_scores(before_result)
+    before_pred = run_predictions(before_result)
 
     measures = frozenset(COUNTER_MEASURES)
     main = _twin(run, measures, out)
@@ -708,7 +636,7 @@ def rehearse(
         + (operations["plant_experiments"] if operations else 0),
         "virtual_experiments": run.virtual,
         "scores_before": before,
-        "f05_base_rate": _base_rate_f05(y_test),
+        "f05_base_rate": base_rate_f05(y_test),
         "held_out": len(test),
         "training": len(train),
         "ablations": ablations,

@@ -6,6 +6,15 @@ its mass readings (`EmulatedPlant.weigh`, the mass counter-measure). `run_operat
 measures the twin's predictions in operation (Sec. 7.2).
 """
 
+from transfertwin.rehearsal._config import (
+    COUNTER_MEASURES,
+    TWIN_FEATURE_SOLREF,
+    RehearsalConfig,
+    parse_ablations,
+    parse_object_list,
+    twin_scene,
+)
+from transfertwin.rehearsal._design import calibration_design, holdout_split
 from transfertwin.rehearsal._operations import (
     HANDLING_S,
     POLICIES,
@@ -15,20 +24,7 @@ from transfertwin.rehearsal._operations import (
     operation_summary,
     run_operations,
 )
-from transfertwin.rehearsal._rehearse import (
-    COUNTER_MEASURES,
-    CURVE_KEYS,
-    REHEARSAL_KEYS,
-    TWIN_FEATURE_SOLREF,
-    RehearsalConfig,
-    calibration_design,
-    curve_document,
-    holdout_split,
-    parse_ablations,
-    parse_object_list,
-    rehearse,
-    twin_scene,
-)
+from transfertwin.rehearsal._rehearse import CURVE_KEYS, REHEARSAL_KEYS, curve_document, rehearse
 from transfertwin.rehearsal._scoring import f05_intervals
 from transfertwin.rehearsal._thresholded import majority_scores, training_threshold
 

@@ -8,14 +8,14 @@ import pytest
 from transfertwin._errors import InputError
 from transfertwin.cli import main
 from transfertwin.rehearsal import RehearsalConfig
-from transfertwin.rehearsal._rehearse import _config_record
+from transfertwin.rehearsal._config import config_record
 
 
 def test_plant_kind_is_checked_and_recorded_only_when_it_is_the_mismatch() -> None:
     base = {"plant_seed": 1, "objects": ("o3",), "calibration_experiments": 20}
-    assert "plant_kind" not in _config_record(RehearsalConfig(**base))
+    assert "plant_kind" not in config_record(RehearsalConfig(**base))
     cfg = RehearsalConfig(**base, plant_kind="mismatch")
-    assert _config_record(cfg)["plant_kind"] == "mismatch"
+    assert config_record(cfg)["plant_kind"] == "mismatch"
     with pytest.raises(InputError, match="--plant-kind"):
         RehearsalConfig(**base, plant_kind="drake")
 
@@ -23,8 +23,8 @@ def test_plant_kind_is_checked_and_recorded_only_when_it_is_the_mismatch() -> No
 def test_mismatch_parts_switched_off_are_checked_and_recorded() -> None:
     base = {"plant_seed": 1, "objects": ("o3",), "calibration_experiments": 20}
     cfg = RehearsalConfig(**base, plant_kind="mismatch", mismatch_off=["sag"])
-    assert cfg.mismatch_off == ("sag",) and _config_record(cfg)["mismatch_off"] == ("sag",)
-    assert "mismatch_off" not in _config_record(RehearsalConfig(**base, plant_kind="mismatch"))
+    assert cfg.mismatch_off == ("sag",) and config_record(cfg)["mismatch_off"] == ("sag",)
+    assert "mismatch_off" not in config_record(RehearsalConfig(**base, plant_kind="mismatch"))
     with pytest.raises(InputError, match="--mismatch-off"):
         RehearsalConfig(**base, plant_kind="mismatch", mismatch_off=("gravity",))
     with pytest.raises(InputError, match="--mismatch-off"):  # the in-class plant has no parts

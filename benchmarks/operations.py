@@ -88,14 +88,14 @@ def order_sequence(floor, n: int, seed: int) -> list[tuple[str, str]]:
 
 class Tms:
     def __init__(self, wd: Path) -> None:
-        from transfertwin.cli._cps_floor import _info
+        from transfertwin.cli._cps_client import load_info
 
-        self.info, self.creds = _info(wd)
+        self.info, self.creds = load_info(wd)
 
     def __call__(self, op: str, *args):
-        from transfertwin.cli._cps_floor import _call
+        from transfertwin.cli._cps_client import call_asset
 
-        return asyncio.run(_call(self.info, self.creds, "TMS", op, *args, timeout_s=20))
+        return asyncio.run(call_asset(self.info, self.creds, "TMS", op, *args, timeout_s=20))
 
 
 def drive(wd: Path, orders: list[tuple[str, str]], inflight: int, timeout_s: float) -> dict:

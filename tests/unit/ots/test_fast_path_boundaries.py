@@ -63,6 +63,13 @@ def _around(centre: float, edge: float | None = None) -> list[float]:
     return [_past(centre, -1.0, edge), centre, _past(centre, 1.0, edge)]
 
 
+def _sx_on_a_bound(th: BeltThresholds) -> list[tuple[float, float]]:
+    """(s_x, bound): half extents that put an edge of a base's box (x = -0.25, 0.3125 or
+    -0.375 in `_critical_states`) exactly on a bound."""
+    return [(0.375, th.tm_x_min), (0.25, th.tm_x_max), (0.1875, th.tu_x_max),
+            (0.3125, th.tu_x_min), (0.25, th.tm_x_min)]  # fmt: skip
+
+
 def _critical_states(th: BeltThresholds) -> np.ndarray:
     """States at and one ulp around every bound of both directions' sets, plus NaN/±inf in
     each read column, from bases on the TM, on the TU and in the gap (N, 11)."""
@@ -79,15 +86,11 @@ def _critical_states(th: BeltThresholds) -> np.ndarray:
           (th.x_success, None), (x_ret, None)]  # fmt: skip
     values = {
         Col.X: [v for x, edge in xs for v in _around(x, edge)],
-        Col.Y: [v for y, e in ((th.y_min + SY, th.y_min), (th.y_max - SY, th.y_max))
-                for v in _around(y, e)],  # fmt: skip
+        Col.Y: [*_around(th.y_min + SY, th.y_min), *_around(th.y_max - SY, th.y_max)],
         Col.Z: _around(th.z_fall + SZ, th.z_fall) if th.z_fall is not None else [0.0],
         Col.T: [v for t in (th.t0_tol, -th.t0_tol, th.t_max) for v in _around(t)],
         Col.A: [ASSET_TM, ASSET_TU, 0.5, 2.0],
-        # Half extents that put a base's box edge on a bound (base x -0.25 / 0.3125 / -0.375).
-        Col.SX: [v for sx, e in ((0.375, th.tm_x_min), (0.25, th.tm_x_max), (0.1875, th.tu_x_max),
-                                 (0.3125, th.tu_x_min), (0.25, th.tm_x_min))
-                 for v in _around(sx, e)],  # fmt: skip
+        Col.SX: [v for sx, e in _sx_on_a_bound(th) for v in _around(sx, e)],
         Col.SY: _around(0.25, th.y_max),
         Col.SZ: _around(0.09375, th.z_fall) if th.z_fall is not None else [0.0],
     }

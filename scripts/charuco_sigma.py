@@ -1,5 +1,5 @@
 """Measure the spread of the unit camera's ChArUco docking-error measurement, the basis of
-the sigmas PropS is told (`cps.roles._module.CAMERA_SIGMA_XY_M`, docs/architecture.md, "PropS in
+the sigmas PropS is told (`cps.roles.CAMERA_SIGMA_XY_M`, docs/architecture.md, "PropS in
 the loop").
 
     python scripts/charuco_sigma.py [--n 30] [--seed 0] [--noise 3.0]
@@ -40,7 +40,7 @@ def main() -> None:
           f"theta {d[:, 2].mean() * 1e3:+.4f} mrad")  # fmt: skip
     sd = d.std(axis=0, ddof=1)
     print(f"  sd    x {sd[0] * 1e3:.4f} mm  y {sd[1] * 1e3:.4f} mm  theta {sd[2] * 1e3:.4f} mrad")
-    print("PropS is told 0.1 mm and 0.5 mrad (cps.roles._module.CAMERA_SIGMA_*)")
+    print("PropS is told 0.1 mm and 0.5 mrad (cps.roles.CAMERA_SIGMA_*)")
 
 
 if __name__ == "__main__":

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import subprocess
 import sys
-import warnings
 from pathlib import Path
 
 import pytest
@@ -78,24 +77,10 @@ def test_architecture_import_graph_is_generated_from_the_source() -> None:
 # --- No circles: no module imports, directly or through others, a module
 # that imports it back; imports inside functions count, `if TYPE_CHECKING:` ones do not.
 
-#: The lead untangles `transfertwin.cps` right now: while True, circles whose every module is
-#: under `transfertwin.cps` are reported but do not fail the test. The lead removes this
-#: constant (and its use below) once cps/ is untangled; nothing outside cps is exempt.
-_CPS_BEING_UNTANGLED = True
-
-
-def _in_cps(module: str) -> bool:
-    return module == "transfertwin.cps" or module.startswith("transfertwin.cps.")
-
-
 def test_no_module_imports_itself_back() -> None:
     cycles = import_cycles(SRC)
     report = "\n".join(" -> ".join(c) for c in cycles)
-    exempt = [c for c in cycles if _CPS_BEING_UNTANGLED and all(map(_in_cps, c))]
-    if exempt:
-        warnings.warn(f"circles inside cps/ (exempt while it is untangled):\n{report}",
-                      stacklevel=1)  # fmt: skip
-    assert [c for c in cycles if c not in exempt] == [], f"import circles:\n{report}"
+    assert cycles == [], f"import circles:\n{report}"
 
 
 def test_a_direct_circle_is_found(tmp_path: Path) -> None:

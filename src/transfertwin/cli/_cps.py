@@ -1,20 +1,22 @@
-"""`transfertwin cps up|status|order|trust|experiment|export`: the demo cyber-physical system
-on loopback, optionally with an emulated plant as its physical assets (`cps up --plant-seed`)."""
+"""`transfertwin cps up|status|order|trust|experiment|export`: a floor of assets on loopback
+(the demo floor or a floor file), optionally on an emulated plant (`cps up --plant-seed`)."""
 
 from __future__ import annotations
 
 import argparse
-import asyncio
-import contextlib
 import json
-import logging
 import math
-import signal
 from pathlib import Path
 
 from transfertwin._errors import InputError
-from transfertwin.cli._cps_client import endpoint_of, load_info, run_client, text_table, workdir_of
-from transfertwin.cli._cps_floor import cmd_up_floor, floor_order, floor_status, print_floor_status
+from transfertwin.cli._cps_client import endpoint_of, load_info, run_client, workdir_of
+from transfertwin.cli._cps_floor import (
+    cmd_up_floor,
+    cmd_up_local,
+    floor_order,
+    floor_status,
+    print_floor_status,
+)
 from transfertwin.cli._cps_floor import register as register_floor
 from transfertwin.cli._cps_study import register as register_study
 
@@ -22,168 +24,24 @@ __all__ = ["register"]
 
 
 def cmd_up(args: argparse.Namespace) -> int:
-    """Start the demo CPS and serve until SIGINT/SIGTERM: one process per asset on the
-    built-in floor or `--floor` (`_cps_floor.cmd_up_floor`); all assets in this process with
-    `--single-process` (implied by `--plant-seed` without `--floor`)."""
-    single = args.single_process or (args.plant_seed is not None and args.floor is None)
-    if args.floor is not None and args.single_process:
-        raise InputError("--floor runs one process per asset; --single-process runs all "
-                         "assets in one process: choose one")  # fmt: skip
-    if not single:
-        if args.floor is None:
-            args.floor = "demo"
-        return cmd_up_floor(args)
-    if args.policy is not None or args.study is not None:
-        raise InputError("--policy and --study are for a floor (one process per asset); the "
-                         "single-process CPS takes the first idle module")  # fmt: skip
-    from transfertwin.cps import Cps, CpsConfig, check_plant_seed
-    from transfertwin.study.experiment import load_profile
-
-    if args.plant_seed is not None:
-        check_plant_seed(args.plant_seed)
-        if args.insecure:
-            raise InputError("--plant-seed with --insecure: physical assets are served only "
-                             "with security (drop --insecure)")  # fmt: skip
-    wd = workdir_of(args.workdir, must_exist=False)
-    scene = load_profile(args.config)[1] if args.config else None
-    kwargs = {"scene": scene} if scene is not None else {}
-    cfg = CpsConfig(wd, host=args.host, insecure=args.insecure, time_scale=args.time_scale,
-                    seed=args.seed, docking=args.docking, plant_seed=args.plant_seed,
-                    **kwargs)  # fmt: skip
-    wd.mkdir(parents=True, exist_ok=True)
-    handler = logging.FileHandler(wd / "cps.log")
-    handler.setFormatter(logging.Formatter("%(asctime)s %(message)s"))
-    logging.getLogger("transfertwin.cps").addHandler(handler)
-    logging.getLogger("transfertwin.cps").setLevel(logging.INFO)
-
-    async def serve() -> None:
-        stop = asyncio.Event()
-        loop = asyncio.get_running_loop()
-
-        def on_signal(signum: int, frame: object) -> None:
-            _exit_after(SHUTDOWN_LIMIT_S, wd)
-            loop.call_soon_threadsafe(stop.set)
-
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            signal.signal(sig, on_signal)
-        async with Cps(cfg) as cps:
-            print(f"CPS up: {len(cps.assets)} assets; {wd / 'cps.json'}", flush=True)
-            await stop.wait()
-        print("CPS down", flush=True)
-
-    asyncio.run(serve())
-    return 0
-
-
-#: Seconds a stopping single-process CPS may take before it ends without waiting further.
-SHUTDOWN_LIMIT_S = 30.0
-
-
-def _exit_after(seconds: float, wd: Path) -> None:
-    """Start (once) a watchdog that ends the process if stopping takes longer than
-    `seconds`: a stop that hangs (a session or a thread that never returns) must not keep
-    stale endpoints around. cps.json goes first, as on a clean stop."""
-    import os
-    import threading
-
-    if getattr(_exit_after, "armed", False):
-        return
-    _exit_after.armed = True
-
-    def force() -> None:
-        (wd / "cps.json").unlink(missing_ok=True)
-        print(f"CPS down (forced: stopping took over {seconds:g} s)", flush=True)
-        os._exit(0)
-
-    timer = threading.Timer(seconds, force)
-    timer.daemon = True
-    timer.start()
+    """Start a floor (the built-in one or `--floor`) and serve until SIGINT/SIGTERM: one
+    process per asset (`_cps_floor.cmd_up_floor`), or every asset's node in this process
+    with `--single-process` (`_cps_floor.cmd_up_local`); the same nodes either way."""
+    if args.floor is None:
+        args.floor = "demo"
+    return cmd_up_local(args) if args.single_process else cmd_up_floor(args)
 
 
 def cmd_status(args: argparse.Namespace) -> int:
     """List the assets as the knowledge graph knows them, with where each object is and
     where each transport module stands on the shop floor (and the unit it is docked at)."""
-    from transfertwin.cps.opcua import connect
-
     wd = workdir_of(args.workdir, must_exist=True)
-    info, creds = load_info(wd)
-    if info.get("mode") == "processes":
-        doc = floor_status(wd)
-        if args.json:
-            print(json.dumps(doc, indent=2))
-        else:
-            print_floor_status(doc)
-        return 0
-
-    async def ask() -> list[dict]:
-        async with connect(
-            endpoint_of(info, "KG"),
-            "KG",
-            credentials=creds,
-            cert_dir=Path(info["cert_dir"]),
-            insecure=info["insecure"],
-        ) as kg:
-            rows = json.loads(await kg.call("Query", _ASSETS_QUERY))
-        tms = {a["id"] for a in info["assets"] if a["class"] == "transport_module"}
-        for r in rows:  # a transport module's location: its floor pose, from its own server
-            if r.get("id") in tms and r.get("status") != "offline":
-                r["location"] = await _floor_pose(info, creds, r["id"])
-        return rows
-
-    rows = run_client(wd, ask)
+    doc = floor_status(wd)
     if args.json:
-        print(json.dumps({"assets": rows}, indent=2))
-        return 0
-    for r in rows:  # the graph's order of the classes is arbitrary
-        r["class"] = "/".join(sorted(str(r.get("class", "")).split("/")))
-    print("assets in the knowledge graph")
-    print(text_table(rows, ("id", "class", "type", "status", "state", "location", "endpoint")))
+        print(json.dumps(doc, indent=2))
+    else:
+        print_floor_status(doc)
     return 0
-
-
-async def _floor_pose(info: dict, creds, tm: str) -> str:
-    """'[unit ](x, y) m θ°' of a transport module, read from its OperationalData."""
-    from transfertwin.cps.opcua import connect
-
-    cert_dir, insecure = Path(info["cert_dir"]), info["insecure"]
-    async with connect(endpoint_of(info, tm), tm, credentials=creds, role="viewer",
-                       cert_dir=cert_dir, insecure=insecure) as s:  # fmt: skip
-        x, y, theta, docked = [await s.read("OperationalData", p)
-                               for p in ("PoseX", "PoseY", "PoseTheta", "DockedAt")]  # fmt: skip
-    at = f"{docked} " if docked else ""
-    return f"{at}({x:.2f}, {y:.2f}) m {math.degrees(theta):.1f}°"
-
-
-_ASSETS_QUERY = """
-PREFIX tt: <https://transfertwin.dev/ontology#>
-SELECT ?id (GROUP_CONCAT(DISTINCT ?cls; separator="/") AS ?class) (SAMPLE(?t) AS ?type)
-       (SAMPLE(?st) AS ?status) (SAMPLE(?os) AS ?state) (SAMPLE(?loc) AS ?location)
-       (SAMPLE(?ep) AS ?endpoint) WHERE {
-  ?a tt:assetId ?id .
-  OPTIONAL { ?a a ?c . FILTER(STRSTARTS(STR(?c), STR(tt:))) BIND(STRAFTER(STR(?c), "#") AS ?cls) }
-  OPTIONAL { ?a tt:assetType ?at . BIND(STRAFTER(STR(?at), "#") AS ?t) }
-  OPTIONAL { ?a tt:status ?st }
-  OPTIONAL { ?a tt:operationalState ?os }
-  OPTIONAL { ?a tt:locatedAt ?h . ?h tt:assetId ?loc }
-  OPTIONAL { ?a tt:endpoint ?ep }
-} GROUP BY ?id ORDER BY ?id
-"""
-
-
-def _check_order(info: dict, source: str, target: str, obj: str) -> None:
-    """What the client can check from cps.json; the TMS checks the rest (where it is)."""
-    by_class: dict[str, list[str]] = {}
-    for a in info["assets"]:
-        by_class.setdefault(a["class"], []).append(a["id"])
-    units, objects = by_class.get("transfer_unit", []), by_class.get("object", [])
-    for flag, unit in (("--from", source), ("--to", target)):
-        if unit not in units:
-            raise InputError(f"{flag} {unit}: no such transfer unit; units: {', '.join(units)}")
-    if source == target:
-        raise InputError(f"--from and --to are both {source}: nothing to transport")
-    if obj not in objects:
-        raise InputError(f"--object {obj}: not an object of this CPS; objects: "
-                         f"{', '.join(objects)}")  # fmt: skip
 
 
 def cmd_order(args: argparse.Namespace) -> int:
@@ -193,69 +51,11 @@ def cmd_order(args: argparse.Namespace) -> int:
     exits 2 with the reason at once. A transport that fails physically is an outcome, not
     an error: it is printed and the exit code is 0.
     """
-    from transfertwin.cps.opcua import OperationRefused, connect
-
     if not 0 < args.timeout < float("inf"):
         raise InputError(f"--timeout must be a positive number of seconds, got {args.timeout}")
     wd = workdir_of(args.workdir, must_exist=True)
     info, creds = load_info(wd)
-    if info.get("mode") == "processes":
-        return floor_order(wd, info, creds, args)
-    if args.source is None:
-        raise InputError("--from is required by the single-process CPS (a floor started with "
-                         "--floor finds the object itself)")  # fmt: skip
-    _check_order(info, args.source, args.target, args.object)
-
-    async def order() -> dict:
-        async with connect(endpoint_of(info, "TMS"), "TMS", credentials=creds,
-                           cert_dir=Path(info["cert_dir"]), insecure=info["insecure"],
-                           timeout_s=60) as tms:  # fmt: skip
-            changed = asyncio.Event()
-
-            class Watch:
-                def datachange_notification(self, node, val, data) -> None:
-                    changed.set()
-
-                def status_change_notification(self, status) -> None:
-                    changed.set()
-
-            await tms.subscribe(Watch(), ("OperationalData", "CompletedOperations"))
-            try:
-                op = await tms.call("SubmitTransportOperation", args.source, args.target,
-                                    args.object)  # fmt: skip
-            except OperationRefused as exc:
-                raise InputError(f"the TMS refused the order: {exc.reason}") from None
-            print(f"submitted {op}: {args.object} {args.source} -> {args.target}", flush=True)
-            loop = asyncio.get_running_loop()
-            deadline = loop.time() + args.timeout
-            while True:
-                status = json.loads(await tms.call("OperationStatus", op))
-                if status["state"] == "finished":
-                    return status
-                changed.clear()
-                left = deadline - loop.time()
-                if left <= 0:
-                    raise InputError(
-                        f"{op} did not finish within --timeout {args.timeout:g} s "
-                        f"(it is {status['state']}); it goes on in the CPS"
-                    )
-                # a poll every 5 s also covers a missed notification
-                with contextlib.suppress(TimeoutError):
-                    await asyncio.wait_for(changed.wait(), timeout=min(left, 5.0))
-
-    status = run_client(wd, order)
-    op = status["operation"]
-    log = (wd / "cps.log").read_text().splitlines() if (wd / "cps.log").exists() else []
-    start = min((i for i, line in enumerate(log) if f"TMS: {op} " in line), default=len(log))
-    for line in log[start:]:
-        print(line)
-        if f"TMS: {op} finished" in line:
-            break
-    result = status["result"]["status"]
-    print(f"{op} finished: {result}; {args.object} is at {status['location']}")
-    if result.startswith("error"):
-        raise RuntimeError(f"{op}: {result}")
-    return 0
+    return floor_order(wd, info, creds, args)
 
 
 def cmd_trust(args: argparse.Namespace) -> int:
@@ -421,8 +221,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     csub = cps.add_subparsers(dest="cps_command", required=True, parser_class=type(cps))
     p = csub.add_parser("up", help="start TU_A..TU_D, TM_1, objects, KG and logical assets")
     p.add_argument("--workdir", required=True)
-    p.add_argument("--config", help="physics profile TOML of the virtual models")
-    p.add_argument("--host", default="127.0.0.1", help="interface to bind (default loopback)")
+    p.add_argument("--config", help=argparse.SUPPRESS)  # refused: a floor's physics are built in
+    p.add_argument("--host", default="127.0.0.1", help=argparse.SUPPRESS)  # refused likewise
     p.add_argument("--insecure", action="store_true", help="serve NoSecurity (explicit opt-in)")
     p.add_argument("--time-scale", type=float, default=1.0,
                    help="simulated seconds per wall second (0: as fast as possible)")  # fmt: skip
@@ -433,30 +233,29 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "scans with its depth camera (default sampled)")  # fmt: skip
     p.add_argument("--plant-seed", type=int, metavar="N",
                    help="an emulated plant drawn from seed N (its parameters stay hidden): "
-                        "with --floor, every unit and module runs on it (hal = plant); "
-                        "without, the single-process CPS also starts the physical units "
-                        "TU_A_P..TU_D_P")  # fmt: skip
+                        "every unit and module runs on it (hal = plant), and the plant's own "
+                        "units (TU_<name>_P, kind physical) join beside them")  # fmt: skip
     p.add_argument("--floor", metavar="FLOOR",
                    help="a floor file (examples/floor-demo.toml), default 'demo', the built-in "
-                        "floor; one process per asset, each on its own loopback address")
+                        "floor; each asset on its own loopback address")
     p.add_argument("--single-process", action="store_true",
-                   help="all assets in this process (the console tests' and --plant-seed's "
-                        "CPS); stops with it")  # fmt: skip
+                   help="every asset's node in this process, one event loop (the same nodes "
+                        "as one process per asset); the floor stops with it")  # fmt: skip
     p.add_argument("--detach", action="store_true",
                    help="exit once the floor is up and leave it running (stop it with "
                         "'cps down')")  # fmt: skip
     p.add_argument("--lease", type=float, default=None,
-                   help="with --floor: seconds without a heartbeat before an asset counts as "
+                   help="seconds without a heartbeat before an asset counts as "
                         "offline (default 5 up to 66 assets, then 3 s per 40 assets: 15 at "
                         "200; docs/scaling.md)")  # fmt: skip
     p.add_argument("--policy", choices=("nearest-idle", "predictive"),
-                   help="with --floor: how the TMS assigns orders and chooses pre-transfer "
+                   help="how the TMS assigns orders and chooses pre-transfer "
                         "states (default: the floor file's, else nearest-idle)")  # fmt: skip
     p.add_argument("--study", metavar="STORE",
-                   help="with --floor: a study store whose per-state success shares the "
+                   help="a study store whose per-state success shares the "
                         "predictive policy uses (default: the floor file's)")  # fmt: skip
     p.add_argument("--start-timeout", type=float, default=120.0,
-                   help="with --floor: seconds to wait for every asset to join (default 120)")
+                   help="seconds to wait for every asset to join (default 120)")
     p.set_defaults(func=cmd_up)
     p = csub.add_parser("status", help="list the assets and where the objects are")
     p.add_argument("--workdir", required=True)

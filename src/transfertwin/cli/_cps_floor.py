@@ -30,25 +30,15 @@ def _floor_spec(name: str):
     return default_floor_spec() if name == "demo" else load_floor(name)
 
 
-def cmd_up_floor(args: argparse.Namespace) -> int:
-    """Start one process per asset of the floor; wait until the knowledge graph knows them
-    all; then stay until SIGINT/SIGTERM (stopping the floor) or until no asset process of
-    the floor runs any more (`cps down` from another shell, or each one stopped), or, with
-    --detach, exit and leave the floor running."""
-    from transfertwin.cps import (
-        asset_pids,
-        check_workdir,
-        launch,
-        prepare_floor,
-        stop_floor,
-        write_floor_info,
-    )
-
+def _floor_to_run(args: argparse.Namespace):
+    """The floor `cps up` runs: `--floor` (or the built-in one) with `--policy`/`--study`,
+    every unit and module on the emulated plant with `--plant-seed` (InputError on a flag
+    that does not fit)."""
     for flag, value, default in (("--config", args.config, None), ("--host", args.host,
                                                                      "127.0.0.1")):
         if value != default:  # each asset has its own address; the physics are the defaults
-            raise InputError(f"{flag} is for the single-process CPS (add --single-process); "
-                             "a floor's assets bind their own addresses from the floor")
+            raise InputError(f"{flag} is not taken by a floor: its assets bind their own "
+                             "addresses from the floor and use the built-in physics")
     if not args.time_scale >= 0:
         raise InputError(f"--time-scale must be >= 0, got {args.time_scale}")
     if args.docking not in ("sampled", "navigated"):
@@ -64,6 +54,24 @@ def cmd_up_floor(args: argparse.Namespace) -> int:
             raise InputError("--plant-seed with --insecure: a plant floor is served only "
                              "with security (drop --insecure)")  # fmt: skip
         floor = floor.with_hal("plant")
+    return floor
+
+
+def cmd_up_floor(args: argparse.Namespace) -> int:
+    """Start one process per asset of the floor; wait until the knowledge graph knows them
+    all; then stay until SIGINT/SIGTERM (stopping the floor) or until no asset process of
+    the floor runs any more (`cps down` from another shell, or each one stopped), or, with
+    --detach, exit and leave the floor running."""
+    from transfertwin.cps import (
+        asset_pids,
+        check_workdir,
+        launch,
+        prepare_floor,
+        stop_floor,
+        write_floor_info,
+    )
+
+    floor = _floor_to_run(args)
     wd = out_dir(args.workdir)
     check_workdir(wd)
     configs = prepare_floor(floor, wd, insecure=args.insecure, seed=args.seed,
@@ -105,6 +113,78 @@ def cmd_up_floor(args: argparse.Namespace) -> int:
     print("floor down" + (": no asset process of it runs any more" if ended else ""),
           flush=True)  # fmt: skip
     return 0
+
+
+def cmd_up_local(args: argparse.Namespace) -> int:
+    """Every asset of the floor on a node in this process, one event loop (`LocalFloor`):
+    serve until SIGINT/SIGTERM (`cps down` from another shell sends it); the work folder
+    and cps.json as a floor of processes has them, the log in ``W/cps.log``."""
+    from transfertwin.cps import LocalFloor
+
+    if args.detach:
+        raise InputError("--detach leaves asset processes running; --single-process runs "
+                         "the floor in this process: choose one")  # fmt: skip
+    floor = _floor_to_run(args)
+    wd = out_dir(args.workdir)
+    wd.mkdir(parents=True, exist_ok=True)
+    handler = logging.FileHandler(wd / "cps.log")
+    handler.setFormatter(logging.Formatter("%(asctime)s %(message)s"))
+    cps_log = logging.getLogger("transfertwin.cps")
+    cps_log.addHandler(handler)
+    cps_log.setLevel(logging.INFO)
+    cps_log.propagate = False  # the assets' log is the floor's file, as each process's is
+    logging.getLogger("asyncua.client.client").setLevel(logging.CRITICAL)
+    local = LocalFloor(floor, wd, insecure=args.insecure, seed=args.seed,
+                       time_scale=args.time_scale, docking=args.docking, lease_s=args.lease,
+                       plant_seed=args.plant_seed,
+                       online_timeout_s=args.start_timeout)  # fmt: skip
+
+    async def serve() -> None:
+        stop = asyncio.Event()
+        loop = asyncio.get_running_loop()
+
+        def on_signal(signum: int, frame: object) -> None:
+            _exit_after(SHUTDOWN_LIMIT_S, wd)
+            loop.call_soon_threadsafe(stop.set)
+
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, on_signal)
+        async with local:
+            print(f"CPS up: {len(local.nodes)} assets; {wd / 'cps.json'}", flush=True)
+            await stop.wait()
+        print("CPS down", flush=True)
+
+    # Not asyncio.run: at its end it joins the default executor's threads, and a simulation
+    # step still running there would hold the process past `cps down`'s limit.
+    loop = asyncio.new_event_loop()
+    loop.run_until_complete(serve())
+    logging.shutdown()
+    sys.stdout.flush()
+    os._exit(0)
+
+
+#: Seconds a stopping single-process floor may take before it ends without waiting further.
+SHUTDOWN_LIMIT_S = 30.0
+
+
+def _exit_after(seconds: float, wd: Path) -> None:
+    """Start (once) a watchdog that ends the process if stopping takes longer than
+    `seconds`: a stop that hangs (a session or a thread that never returns) must not keep
+    stale endpoints around."""
+    if getattr(_exit_after, "armed", False):
+        return
+    _exit_after.armed = True
+
+    def force() -> None:
+        for pid_file in (wd / "assets").glob("*/state/pid"):
+            pid_file.unlink(missing_ok=True)
+        (wd / "cps.json").unlink(missing_ok=True)
+        print(f"CPS down (forced: stopping took over {seconds:g} s)", flush=True)
+        os._exit(0)
+
+    timer = threading.Timer(seconds, force)
+    timer.daemon = True
+    timer.start()
 
 
 def _with_operation(floor, policy: str | None, study: str | None):
@@ -288,8 +368,9 @@ def floor_status(wd: Path, *, with_objects: bool = True) -> dict:
         try:
             doc = json.loads(await call_asset(info, creds, "KG", "Status", timeout_s=5))
         except (OSError, TimeoutError, ConnectionError) as exc:
-            raise InputError(f"{wd}: the knowledge graph is not answering "
-                             f"({type(exc).__name__})") from None  # fmt: skip
+            raise InputError(f"{wd}: the floor is not running or not answering (its knowledge "
+                             f"graph: {type(exc).__name__}); start it with 'transfertwin cps "
+                             "up'") from None  # fmt: skip
         heard = {a["id"] for a in doc["assets"]}
         for a in info["assets"]:  # prepared but never heard of: on standby, or not joined yet
             if a["id"] not in heard:
@@ -409,6 +490,8 @@ def floor_order(wd: Path, info: dict, creds, args: argparse.Namespace) -> int:
         units = sorted(a for a, c in by_id.items() if c == "transfer_unit")
         raise InputError(f"--to {args.target}: no such transfer unit; units: {', '.join(units)}"
                          + (f"; destination groups: {', '.join(groups)}" if groups else ""))
+    if args.source is not None and args.source == args.target:
+        raise InputError(f"--from and --to are both {args.source}: nothing to transport")
 
     async def submit() -> tuple[str, str]:
         source = args.source

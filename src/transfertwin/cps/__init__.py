@@ -24,15 +24,7 @@ if TYPE_CHECKING:
         stop_floor,
         write_floor_info,
     )
-    from transfertwin.cps._plant_assets import (
-        PHYSICAL_RECORD_EXTRA,
-        PLANT_LOG,
-        RUN_TRANSFER,
-        check_plant_seed,
-        physical_record,
-        plant_descriptors,
-    )
-    from transfertwin.cps._runtime import DOCKING_MODES, Cps, CpsConfig
+    from transfertwin.cps._local import LocalFloor
     from transfertwin.cps.aas import (
         TYPE_PROPERTIES,
         AssetDescriptor,
@@ -52,11 +44,13 @@ if TYPE_CHECKING:
     )
     from transfertwin.cps.apps import PoseGraph, PoseObservation
     from transfertwin.cps.floor import (
+        DOCKING_MODES,
         AssetConfig,
         FloorSpec,
         HalConfig,
         ModuleSpec,
         StationSpec,
+        check_plant_seed,
         default_floor_spec,
         floor_toml,
         load_asset_config,
@@ -75,6 +69,13 @@ if TYPE_CHECKING:
         connect,
         new_credentials,
     )
+    from transfertwin.cps.roles import (
+        PHYSICAL_RECORD_EXTRA,
+        PLANT_LOG,
+        RUN_TRANSFER,
+        physical_record,
+        plant_descriptors,
+    )
 
 __all__ = [
     "DOCKING_MODES",
@@ -90,14 +91,13 @@ __all__ = [
     "AssetRepresentation",
     "AssetServer",
     "Capability",
-    "Cps",
-    "CpsConfig",
     "Credentials",
     "FloorSpec",
     "GatewayHAL",
     "HalConfig",
     "KnowledgeGraph",
     "Layer",
+    "LocalFloor",
     "ModuleSpec",
     "OpcUaUnitHAL",
     "PhysicalType",

@@ -43,6 +43,7 @@ from transfertwin.cps.opcua import (
     trust_certificates,
     write_credentials,
 )
+from transfertwin.cps.roles import PLANT_LOG
 
 __all__ = ["asset_pids", "floor_configs", "launch", "prepare_floor", "stop_floor"]
 
@@ -82,6 +83,7 @@ def prepare_floor(
     seed_file = None
     if floor.uses_plant():
         seed_file = write_plant_seed(workdir / PLANT_SEED_FILE, plant_seed).resolve()
+        _rotate(workdir / PLANT_LOG)  # this start's E^P rows in a table of their own
     floor_file = workdir / "floor.toml"
     write_atomic(floor_file, floor_toml(floor))
     creds_file = workdir / "credentials.json"
@@ -124,6 +126,16 @@ async def _certificates(workdir: Path, configs: Iterable[AssetConfig]) -> None:
         clients.append((await ensure_certificate(cfg.cert_dir, "client-operator"))[0])
     folders = [workdir / "certs" / "trusted", *sorted({cfg.trust_dir for cfg in configs})]
     trust_certificates(folders, clients)  # each written once, hard-linked into the others
+
+
+def _rotate(path: Path) -> None:
+    """Move an earlier start's table out of the way (``NAME.1.csv``, ``NAME.2.csv``, ...)."""
+    if not path.exists():
+        return
+    n = 1
+    while (old := path.with_name(f"{path.stem}.{n}{path.suffix}")).exists():
+        n += 1
+    path.rename(old)
 
 
 def floor_configs(workdir: Path) -> dict[str, AssetConfig]:
@@ -253,12 +265,11 @@ def write_floor_info(workdir: Path, configs: dict[str, AssetConfig], floor: Floo
     standby = floor.standby()
     first = next(iter(configs.values()))
     info = {
-        "mode": "processes",
         "floor": str(first.floor_file),
         "assets": [{"id": aid, "kind": by_id[aid].kind.value, "class": by_id[aid].asset_class,
                     "type": by_id[aid].physical_type.value if by_id[aid].physical_type else None,
                     "endpoint": cfg.endpoint,
-                    "security_policy": "None" if cfg.insecure else "Basic256Sha256",
+                    "security_policy": "None" if cfg.insecure else "Basic256Sha256_SignAndEncrypt",
                     "config": str((workdir / "assets" / f"{aid}.toml").resolve()),
                     "standby": aid in standby}
                    for aid, cfg in sorted(configs.items())],

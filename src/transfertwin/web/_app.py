@@ -264,7 +264,7 @@ def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = No
         check_read(request)
         gw = gateway()
         return JSONResponse({"assets": gw.assets(), "kg_error": gw.floor_error or gw.kg_error,
-                             "tms_error": gw.tms_error, "mode": gw.info.mode,
+                             "tms_error": gw.tms_error,
                              "objects": gw.ids_of("object"),
                              "units": gw.ids_of("transfer_unit"),
                              "groups": gw.destination_groups()})  # fmt: skip

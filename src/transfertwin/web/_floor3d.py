@@ -1,7 +1,7 @@
-"""The static layout of a running floor for the console's 3-D floor view (issue 31, item 2).
+"""The static layout of a running floor for the console's 3-D floor view.
 
-`floor_layout(workdir)` reads the floor file a process floor's ``cps.json`` names (a
-single-process CPS runs the demonstration floor, `default_floor_spec`): its size, the
+`floor_layout(workdir)` reads the floor file the floor's ``cps.json`` names (the
+demonstration floor, `default_floor_spec`, without one): its size, the
 stations with their transfer units, the transport modules' start poses and where each object
 starts. What moves — the modules' poses, who holds each object, the orders — comes from the
 console's live feed (``/api/live``), which the page follows.

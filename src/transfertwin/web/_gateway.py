@@ -7,12 +7,12 @@ and talks to the assets through the CPS client API (`transfertwin.cps.opcua.conn
 knowledge-graph queries and the orders (the only calls). Credentials stay in this process;
 nothing returned to the browser carries them.
 
-It follows the floor as it changes (issue 27, item 8): ``cps.json`` is read again every
-second, and a CPS started again in the same folder (new ports) is picked up; on a process
-floor the knowledge graph's ``Status`` names the assets that joined at runtime and those
-whose lease expired; a session that breaks is opened again (an asset process that restarts
-keeps its endpoint); values of an asset that stopped answering are kept but marked stale,
-with the time of the last read and the reason.
+It follows the floor as it changes: ``cps.json`` is read again every second, and a floor
+started again in the same folder (new ports) is picked up; the knowledge graph's ``Status``
+names the assets that joined at runtime and those whose lease expired; a session that
+breaks is opened again (an asset process that restarts keeps its endpoint); values of an
+asset that stopped answering are kept but marked stale, with the time of the last read and
+the reason.
 """
 
 from __future__ import annotations
@@ -27,6 +27,7 @@ from typing import Any
 
 from asyncua import ua
 
+from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
 from transfertwin.cps.opcua import (
     NAMESPACE,
@@ -40,12 +41,11 @@ from transfertwin.cps.opcua import load_credentials as _load_credentials
 from transfertwin.web._floor import (
     FloorInfo,
     asset_condition,
-    current_run_operations,
     merge_assets,
     order_rows,
     read_floor_info,
 )
-from transfertwin.web._orders import LOCATION_QUERY, Order, OrderDesk
+from transfertwin.web._orders import Order, OrderDesk
 
 __all__ = ["ASSETS_QUERY", "CAPABILITIES_QUERY", "CpsGateway", "Order"]
 
@@ -117,23 +117,17 @@ class CpsGateway(OrderDesk):
         self.errors: dict[str, str] = {}  # why the last session attempt failed
         self.seen: dict[str, float] = {}  # time of the last good read (s since the epoch)
         self.kg_rows: list[dict[str, Any]] = []
-        self.kg_status: dict[str, dict[str, Any]] | None = None  # process floors' Status
+        self.kg_status: dict[str, dict[str, Any]] | None = None  # the graph's Status
         self.kg_error: str | None = None
         self.floor_error: str | None = None
         self.ledger: list[dict[str, Any]] | None = None  # the TMS's operations
         self.tms_error: str | None = None
-        self.orders: dict[str, Order] = {}
-        self._log_cache: tuple[tuple[int, int], dict[str, dict[str, Any]]] | None = None
+        self.orders: dict[str, Order] = _kept_orders(workdir / ORDERS_FILE)
         self._tasks: list[asyncio.Task] = []
         self._floor_tasks: list[asyncio.Task] = []
         self._order_tasks: set[asyncio.Task] = set()
         self.updated = 0.0
         self._use(info)
-
-    @property
-    def processes(self) -> bool:
-        """One process per asset (``cps up --floor``): the graph has Status, the TMS Ledger."""
-        return self.info.mode == "processes"
 
     def _use(self, info: FloorInfo) -> None:
         """Take a (new) cps.json: its credentials, certificates and assets."""
@@ -155,9 +149,8 @@ class CpsGateway(OrderDesk):
                 await ensure_certificate(self.info.cert_dir, f"client-{role}")
 
     def _start_floor_tasks(self) -> None:
-        self._floor_tasks = [asyncio.create_task(self._watch_graph())]
-        if self.processes:
-            self._floor_tasks.append(asyncio.create_task(self._watch_ledger()))
+        self._floor_tasks = [asyncio.create_task(self._watch_graph()),
+                             asyncio.create_task(self._watch_ledger())]
 
     async def stop(self) -> None:
         """Close every session."""
@@ -281,15 +274,14 @@ class CpsGateway(OrderDesk):
             caps.setdefault(r["id"], []).append(r["cap"])
         for r in rows:
             r["capabilities"] = caps.get(r["id"], [])
-        if self.processes:
-            status = json.loads(await kg.call("Status"))["assets"]
-            self.kg_status = {r["id"]: r for r in status}
-            if set(self.kg_status) - set(self._assets):
-                self._sync_watchers()  # an asset joined at runtime
+        status = json.loads(await kg.call("Status"))["assets"]
+        self.kg_status = {r["id"]: r for r in status}
+        if set(self.kg_status) - set(self._assets):
+            self._sync_watchers()  # an asset joined at runtime
         self.kg_rows, self.kg_error = rows, None
 
     async def _watch_ledger(self) -> None:
-        """Process floors: the TMS's ledger (operations with their histories) each second."""
+        """The TMS's ledger (operations with their histories) each second."""
         while True:
             try:
                 async with self._session("TMS", "operator") as tms:
@@ -331,7 +323,7 @@ class CpsGateway(OrderDesk):
             return "unknown"
         if self.kg_status is not None and aid in self.kg_status:
             return "online" if self.kg_status[aid].get("online") else "offline"
-        return row.get("status") or ("not joined" if self.processes else "offline")
+        return row.get("status") or "not joined"
 
     def assets(self) -> list[dict[str, Any]]:
         """Every asset of the floor: its knowledge-graph description, whether it answers and
@@ -413,37 +405,10 @@ class CpsGateway(OrderDesk):
         return [aid for aid, a in self._assets.items() if a.get("class") == cls]
 
     # -- orders: the floor's operations by their unique id ----------------------------------
-    def _run_stamp(self) -> tuple[int, int, int] | None:
-        return self.info.stamp
-
-    def _run_operations(self) -> dict[str, dict[str, Any]]:
-        """A single-process CPS's operations of this run, from cps.log (cached by size)."""
-        path = self.workdir / "cps.log"
-        try:
-            st = path.stat()
-        except OSError:
-            return {}
-        key = (st.st_size, st.st_mtime_ns)
-        if self._log_cache is None or self._log_cache[0] != key:
-            lines = path.read_text(errors="replace").splitlines()
-            self._log_cache = (key, current_run_operations(lines, self.info.started))
-        return self._log_cache[1]
-
     def order_rows(self) -> list[dict[str, Any]]:
-        """The Orders tab: every operation of the floor (placed here or from the command
-        line), keyed by its operation id; orders of an earlier run of the CPS first."""
-        now = self.info.stamp
-        earlier = [
-            o.public() | {"placed_by": "console", "earlier_run": True}
-            for o in self.orders.values()
-            if o.run != now
-        ]
-        placed = [o.public() for o in self.orders.values() if o.run == now]
-        if self.processes:
-            rows = order_rows(self.ledger or [], placed, from_ledger=True)
-        else:
-            rows = order_rows(list(self._run_operations().values()), placed, from_ledger=False)
-        return earlier + rows
+        """The Orders tab: every operation of the floor's TMS (placed here or from the
+        command line), keyed by its operation id, with who placed it."""
+        return order_rows(self.ledger or [], [o.public() for o in self.orders.values()])
 
     def order(self, oid: str) -> dict[str, Any]:
         """One row of `order_rows`, by console id or operation id."""
@@ -456,44 +421,35 @@ class CpsGateway(OrderDesk):
         async with self._session("TMS", "operator", timeout_s=30) as tms:
             return await tms.call(operation, *args)
 
-    def _follow_later(self, order: Order) -> None:
-        if self.processes:  # the ledger carries the operation's history and outcome
-            return
-        task = asyncio.create_task(self._follow(order))
-        self._order_tasks.add(task)
-        task.add_done_callback(self._order_tasks.discard)
+    def _keep_orders(self) -> None:
+        doc = [o.record() for o in self.orders.values()]
+        write_atomic(self.workdir / ORDERS_FILE, json.dumps(doc, indent=1) + "\n")
 
     def _module_sources(self) -> list[str]:
-        # a process floor's TMS takes an order onward from a module holding the object
-        return self.ids_of("transport_module") if self.processes else []
-
-    def by_destination(self) -> bool:
-        return self.processes
+        # the TMS takes an order onward from a module holding the object
+        return self.ids_of("transport_module")
 
     def destination_groups(self) -> list[str]:
-        return [g for g, _ in self.info.groups] if self.processes else []
+        return [g for g, _ in self.info.groups]
 
     def kpis(self) -> dict[str, Any] | None:
-        """The TMS's KPIs as it publishes them (`KpisJson`; a process floor's), or None."""
-        text = self.values.get("TMS", {}).get("KpisJson") if self.processes else None
+        """The TMS's KPIs as it publishes them (`KpisJson`), or None."""
+        text = self.values.get("TMS", {}).get("KpisJson")
         try:
             return json.loads(text) if text else None
         except ValueError:
             return None
 
-    async def _where(self, obj: str) -> str:
-        units = self.ids_of("transfer_unit") + self._module_sources()
-        if self.processes:
-            ledger = json.loads(await self._tms_call("Ledger"))
-            if obj in ledger["unknown"]:
-                u = ledger["unknown"][obj]
-                raise InputError(f"where {obj} is is unknown since {u['operation']} (last seen "
-                                 f"at {u['last_seen']}); say where it is with "
-                                 "'transfertwin cps locate'")  # fmt: skip
-            holders = [ledger["locations"].get(obj)]
-        else:
-            holders = [r["holder"] for r in await self._query(LOCATION_QUERY % obj)]
-        holders = [h for h in holders if h in units]
-        if not holders:
-            raise InputError(f"where {obj} is is not known: give the source unit")
-        return holders[0]
+
+#: The console's own orders, kept in the floor's work folder (`Order.record`).
+ORDERS_FILE = "console-orders.json"
+
+
+def _kept_orders(path: Path) -> dict[str, Order]:
+    """The console's orders kept in `path` (none when it is missing or unreadable)."""
+    try:
+        doc = json.loads(path.read_text())
+        orders = [Order.from_record(rec) for rec in doc]
+    except (OSError, ValueError, KeyError, TypeError):
+        return {}
+    return {o.id: o for o in orders}

@@ -183,7 +183,7 @@ class _SharedCps:
             assert self.factory is not None
             assert self.certs is not None
             wd = self.certs(self.factory.mktemp("plant-cps") / "wd")
-            self.cps = RunningCps(wd, "--plant-seed", str(PLANT_SEED))
+            self.cps = RunningCps(wd, "--single-process", "--plant-seed", str(PLANT_SEED))
             self.stopped = False
         return self.cps
 

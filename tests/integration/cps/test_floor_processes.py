@@ -113,7 +113,8 @@ def floor(tmp_path_factory):
     early = early_floor(tmp_path_factory, *EARLY_FLOOR)
     up = early.result()
     assert up.returncode == 0, up.stderr
-    assert "6 asset processes" in up.stdout and "1 on standby" in up.stdout
+    # TU_A, TU_B, TM_1, o1, KG, TMS, and the plant's own TU_A_P and TU_B_P
+    assert "8 asset processes" in up.stdout and "1 on standby" in up.stdout
     try:
         yield early.wd
     finally:
@@ -127,10 +128,10 @@ def floor(tmp_path_factory):
 def test_every_asset_is_its_own_process_on_its_own_address(floor):
     doc = status(floor)
     online = {a["id"]: a for a in doc["assets"] if a["online"]}
-    assert set(online) == {"KG", "TMS", "TU_A", "TU_B", "TM_1", "o1"}
-    assert len({a["pid"] for a in online.values()}) == 6
+    assert set(online) == {"KG", "TMS", "TU_A", "TU_B", "TM_1", "o1", "TU_A_P", "TU_B_P"}
+    assert len({a["pid"] for a in online.values()}) == 8
     hosts = {a["address"].split("//")[1].split(":")[0] for a in online.values()}
-    assert len(hosts) == 6 and all(h.startswith("127.") for h in hosts)
+    assert len(hosts) == 8 and all(h.startswith("127.") for h in hosts)
     assert all(a["address"].startswith("opc.tcp://") for a in online.values())
     assert doc["objects"]["o1"] == {"location": "TU_A", "unknown": False, "moving": None}
     # each asset's own configuration is there to restart it by hand, with its own certificate
@@ -139,7 +140,8 @@ def test_every_asset_is_its_own_process_on_its_own_address(floor):
         assert f'id = "{aid}"' in cfg and "insecure = false" in cfg
         assert (floor / "assets" / aid / "certs" / "client-operator.der").is_file()
     info = json.loads((floor / "cps.json").read_text())
-    assert info["mode"] == "processes"
+    assert {a["id"]: a["config"] for a in info["assets"] if a["id"] in online} == {
+        aid: str((floor / "assets" / f"{aid}.toml").resolve()) for aid in online}
 
 
 def test_a_unit_killed_with_minus_9_lapses_one_stopped_leaves_and_both_rejoin(floor, capfd):

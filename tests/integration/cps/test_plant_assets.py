@@ -43,11 +43,13 @@ def test_plant_units_join_beside_the_virtual_models(plant_cps, capfd):
         assert kinds[unit] == ("physical", "transfer_unit", "D/E")
         assert kinds[unit.removesuffix("_P")][0] == "virtual_model"
     assert plant_cps.stderr_path.read_text() == ""
-    st = run_main(capfd, "cps", "status", "--workdir", str(plant_cps.wd))
+    st = run_main(capfd, "cps", "status", "--workdir", str(plant_cps.wd), "--json")
     assert st.returncode == 0, st.stderr
-    rows = {line.split()[0]: line.split() for line in st.stdout.splitlines()[2:]}
-    assert rows["TU_C_P"][1] == "PhysicalAsset/TransferUnit"
-    # The TMS moves the CPS's (virtual) objects; a physical unit is no place in its ledger.
+    rows = {a["id"]: a for a in json.loads(st.stdout)["assets"]}
+    assert (rows["TU_C_P"]["kind"], rows["TU_C_P"]["class"]) == ("physical", "transfer_unit")
+    assert rows["TU_C_P"]["online"] and rows["TU_C"]["kind"] == "virtual_model"
+    # The TMS moves the floor's objects between its units; the plant's own unit is no place
+    # in its ledger.
     res = run_main(capfd, *plant_cps.order_args("TU_A_P", "TU_C", "o1"))
     assert res.returncode == 2 and "TU_A_P" in res.stderr, res.stderr
 
@@ -298,11 +300,11 @@ def test_nothing_the_twin_can_reach_holds_a_hidden_parameter(plant_cps, capfd):
 
 
 def test_the_cps_touches_the_plant_only_through_its_public_methods(monkeypatch):
-    """Statically: only `cps._plant_assets` names the plant, and there only `stations` and
-    `operate` of it; only `cps.hal._local` names the plant's physics (a plant floor's module), and
-    there only `PlantPhysics(seed).system`; at run time: a recording plant sees nothing
-    else."""
-    from transfertwin.cps import _plant_assets
+    """Statically: only `cps.roles._plant_unit` names the plant, and there only `stations`
+    and `operate` of it; only `cps.hal._local` names the plant's physics (a plant floor's
+    module), and there only `PlantPhysics(seed).system`; at run time: a recording plant
+    sees nothing else."""
+    from transfertwin.cps.roles import _plant_unit
     from transfertwin.plant import EmulatedPlant, PlantRequest
 
     for path in [*(SRC / "cps").rglob("*.py"), *(SRC / "web").rglob("*.py"),
@@ -316,12 +318,12 @@ def test_the_cps_touches_the_plant_only_through_its_public_methods(monkeypatch):
             tree = ast.parse(text)
             assert {n.attr for n in ast.walk(tree) if isinstance(n, ast.Attribute)
                     and isinstance(n.value, ast.Name) and n.value.id == "physics"} == {"system"}
-        elif path.name != "_plant_assets.py":
+        elif path.name != "_plant_unit.py":
             imported = {n.module for n in ast.walk(ast.parse(text))
                         if isinstance(n, ast.ImportFrom) and n.module}  # fmt: skip
             assert not any(m.startswith("transfertwin.plant") for m in imported), path
             assert "EmulatedPlant" not in text, path
-    tree = ast.parse((SRC / "cps" / "_plant_assets.py").read_text())
+    tree = ast.parse((SRC / "cps" / "roles" / "_plant_unit.py").read_text())
     used = {
         node.attr
         for node in ast.walk(tree)
@@ -342,7 +344,7 @@ def test_the_cps_touches_the_plant_only_through_its_public_methods(monkeypatch):
             return getattr(self._real, name)
 
     monkeypatch.setattr("transfertwin.plant.EmulatedPlant", Recording)
-    plant = _plant_assets.PhysicalPlant(SEED)
+    plant = _plant_unit.PhysicalPlant(SEED)
     assert "TU_A" in plant.stations
     row = plant.cycle(PlantRequest("o1", "front", "left", 0, "TU_A"))
     assert row["transfer_unit"] == "TU_A" and "transfer_time_s" in row

@@ -1,17 +1,18 @@
-"""The transport operation flow of Fig. 5.9a in the running CPS (real asyncua servers on
-loopback): the transport module navigates the shop floor, docks by laser with the error that
-emerges there, forms the OTS from its depth camera's scan and transfers; its states and
-pose are published over OPC UA. And the OTS refused on what a real scan sees."""
+"""The transport operation flow of Fig. 5.9a on the demo floor in one process (real asyncua
+servers on loopback): the transport module navigates the shop floor, docks by laser with the
+error that emerges there, forms the OTS from its depth camera's scan and transfers; its
+states and pose are published over OPC UA. And the OTS refused on what a real scan sees."""
 
 from __future__ import annotations
 
 import asyncio
+import json
 import math
 
 import numpy as np
 import pytest
 
-from transfertwin.cps import Cps, CpsConfig
+from transfertwin.cps import LocalFloor, default_floor_spec
 from transfertwin.cps.apps import HOME_POSE, STEPS, Environment, form_ots
 from transfertwin.navigation import default_floor, relative
 from transfertwin.ots import BeltThresholds, TransferDirection
@@ -26,8 +27,9 @@ def _dedup(states: list[str]) -> list[str]:
 @pytest.mark.slow  # ~20-40 s (CI: the CPS slow group)
 def test_a_navigated_order_runs_navigate_dock_scan_transfer_in_order(tmp_path, cps_certs):
     async def scenario():
-        cfg = CpsConfig(cps_certs(tmp_path), gossip_period_s=10.0, docking="navigated")  # quiet
-        async with Cps(cfg) as cps:
+        wd = cps_certs(tmp_path)
+        async with LocalFloor(default_floor_spec(), wd, time_scale=0.0,
+                              docking="navigated") as cps:  # fmt: skip
             seen: list[str] = []
             done = asyncio.Event()
 
@@ -41,6 +43,7 @@ def test_a_navigated_order_runs_navigate_dock_scan_transfer_in_order(tmp_path, c
                         done.set()
 
             pose_props = ("PoseX", "PoseY", "PoseTheta")
+            kg = cps.nodes["KG"].role.kg
             async with cps.client("TM_1", role="viewer") as tm, cps.client("TMS") as tms:
                 home = [await tm.read("OperationalData", p) for p in pose_props]
                 assert home == list(HOME_POSE)
@@ -54,7 +57,12 @@ def test_a_navigated_order_runs_navigate_dock_scan_transfer_in_order(tmp_path, c
                     await asyncio.sleep(0.1)
                 pose = np.array([await tm.read("OperationalData", p) for p in pose_props])
                 docked_at = await tm.read("OperationalData", "DockedAt")
-            record = cps.completed[0]
+                record = json.loads(await tms.call("OperationStatus", op))
+                ledger = json.loads(await tms.call("Ledger"))
+                for _ in range(100):  # the graph hears the module's state by its heartbeats
+                    if kg.idle_transport_modules() == ["TM_1"]:
+                        break
+                    await asyncio.sleep(0.1)
             result = record["result"]
             assert record["operation"] == op and result["docking"] == "navigated"
 
@@ -64,7 +72,7 @@ def test_a_navigated_order_runs_navigate_dock_scan_transfer_in_order(tmp_path, c
             if result["y_pickup"] == 1:  # the delivery leg follows the pick-up
                 assert states[4:8] == list(STEPS)
             assert _dedup(seen) == ["idle", *_dedup(states)], seen
-            assert cps.kg.idle_transport_modules() == ["TM_1"] and docked_at == ""
+            assert kg.idle_transport_modules() == ["TM_1"] and docked_at == ""
 
             # The emergent docking error of each leg is recorded, and it is the error of the
             # pose the module stands at (published over OPC UA) from the station's goal.
@@ -80,9 +88,10 @@ def test_a_navigated_order_runs_navigate_dock_scan_transfer_in_order(tmp_path, c
             assert not np.allclose(pose, HOME_POSE)
             # ... and it is the error the MuJoCo environment docked with.
             err = DockingError.from_mm_deg(last["x_mm"], last["y_mm"], last["theta_deg"])
-            scene = cfg.scene
+            module = cps.nodes["TM_1"].role
+            scene = module.env.scene
             want = tu_pose_in_tip_frame(err, scene.gap_m, scene.layout.tip_to_centre_m)
-            assert np.allclose(cps.env.system.tu_pose, want, atol=1e-5)
+            assert np.allclose(module.env.system.tu_pose, want, atol=1e-5)
 
             # The OTS was formed from the depth camera's scan: the object on the giving unit.
             pickup = result["legs"][0]["scanning"]
@@ -90,7 +99,7 @@ def test_a_navigated_order_runs_navigate_dock_scan_transfer_in_order(tmp_path, c
             assert pickup["boxes"][0]["x"] > 0.0  # on TU_B, ahead of the module's tip
             where = {"delivered": "TU_D", "failed at pick-up": "TU_B",
                      "failed at delivery": "TM_1"}[result["status"]]  # fmt: skip
-            assert cps.ledger.location("o2") == where == record["location"]
+            assert ledger["locations"]["o2"] == where == record["location"]
 
     asyncio.run(asyncio.wait_for(scenario(), timeout=600))
 

@@ -7,17 +7,15 @@ from __future__ import annotations
 import json
 import os
 import time
-from datetime import datetime
 from pathlib import Path
 
 from transfertwin.web._floor import (
     asset_condition,
-    current_run_operations,
     merge_assets,
     order_rows,
     read_floor_info,
 )
-from transfertwin.web._gateway import CpsGateway
+from transfertwin.web._gateway import CpsGateway, Order
 
 ASSETS = [
     {"id": "KG", "kind": "logical", "class": "knowledge_graph",
@@ -29,9 +27,9 @@ ASSETS = [
 ]  # fmt: skip
 
 
-def write_info(wd: Path, assets=ASSETS, mode: str = "processes") -> None:
+def write_info(wd: Path, assets=ASSETS) -> None:
     wd.mkdir(parents=True, exist_ok=True)
-    info = {"mode": mode, "assets": assets, "credentials_file": None,
+    info = {"assets": assets, "credentials_file": None,
             "cert_dir": str(wd / "certs"), "insecure": True}  # fmt: skip
     (wd / "cps.json").write_text(json.dumps(info))
 
@@ -47,7 +45,7 @@ def test_item8_1_a_rewritten_cps_json_has_a_new_stamp_and_endpoints(tmp_path):
     assert [a["endpoint"] for a in second.assets] == [a["endpoint"] for a in moved]
     (tmp_path / "cps.json").unlink()
     assert read_floor_info(tmp_path) is None  # a stopped CPS removes it
-    (tmp_path / "cps.json").write_text('{"mode": "proc')  # being written
+    (tmp_path / "cps.json").write_text('{"assets": [')  # being written
     assert read_floor_info(tmp_path) is None
 
 
@@ -88,38 +86,6 @@ def test_item8_1_offline_assets_say_why():
     assert asset_condition(False, None, None) == (False, "connecting")
 
 
-def test_item8_2_orders_of_an_earlier_run_in_the_same_log_are_not_this_runs():
-    earlier = [
-        "2026-01-01 10:00:00,000 CPS up: 14 assets",
-        "2026-01-01 10:00:00,100 TMS: op1 TU_A -> TU_C (o5) accepted",
-        "2026-01-01 10:00:01,100 TMS: op1 allocated to TM_1",
-        "2026-01-01 10:00:02,100 TM_1: docked at TU_A, docking error (1, 2, 0.1)",
-        "2026-01-01 10:00:09,100 TMS: op1 finished: delivered",
-        "2026-01-01 10:00:10,000 CPS down",
-    ]
-    this = [
-        "2026-01-01 11:00:00,000 KG: TU_A joined",
-        "2026-01-01 11:00:01,000 CPS up: 14 assets",
-        "2026-01-01 11:00:05,500 TMS: op1 TU_A -> TU_B (o1) accepted",
-        "2026-01-01 11:00:05,600 TU_B discovered TM_1 at opc.tcp://127.0.0.1:1/x",
-        "2026-01-01 11:00:06,000 TMS: op1 allocated to TM_1",
-        "2026-01-01 11:00:07,000 TM_1: docked at TU_A, docking error (3, 1, 0.2)",
-        "a traceback line without a stamp",
-    ]
-    ops = current_run_operations(earlier + this, datetime(2026, 1, 1, 11, 0, 1))
-    assert list(ops) == ["op1"]
-    assert ops["op1"]["object"] == "o1" and ops["op1"]["target"] == "TU_B"
-    assert ops["op1"]["state"] == "running" and ops["op1"]["outcome"] is None
-    assert ops["op1"]["history"] == ["TMS: op1 TU_A -> TU_B (o1) accepted",
-                                     "TMS: op1 allocated to TM_1",
-                                     "TM_1: docked at TU_A, docking error (3, 1, 0.2)"]  # fmt: skip
-    # without a start line: the lines stamped since cps.json was written
-    no_marks = [ln for ln in earlier + this if "CPS up" not in ln]
-    assert current_run_operations(no_marks, datetime(2026, 1, 1, 11))["op1"]["object"] == "o1"
-    done = current_run_operations(earlier, datetime(2026, 1, 1, 10))["op1"]
-    assert done["state"] == "finished" and done["outcome"] == "delivered"
-
-
 LEDGER = [
     {"operation": "op7", "object": "o1", "source": "TU_A", "target": "TU_B",
      "state": "finished", "phase": "done", "module": "TM_1", "submitted": 1.0,
@@ -139,7 +105,7 @@ def test_item8_3_orders_from_the_command_line_are_listed_with_the_consoles():
     placed = [{"id": "w1", "operation": "op9", "object": "o1", "source": "TU_B",
                "target": "TU_A", "state": "running", "outcome": None,
                "steps": [{"t": 19.5, "text": "submitted"}]}]  # fmt: skip
-    rows = order_rows(LEDGER, placed, from_ledger=True)
+    rows = order_rows(LEDGER, placed)
     assert [r["operation"] for r in rows] == ["op7", "op8", "op9"]
     assert [r["placed_by"] for r in rows] == ["cps", "cps", "console"]
     assert rows[0]["outcome"] == "delivered" and rows[0]["id"] == "op7"
@@ -149,14 +115,14 @@ def test_item8_3_orders_from_the_command_line_are_listed_with_the_consoles():
 
 
 def test_item8_2_each_operation_keeps_its_own_history():
-    rows = order_rows(LEDGER, [], from_ledger=True)
+    rows = order_rows(LEDGER, [])
     history = {r["operation"]: [s["text"] for s in r["steps"]] for r in rows}
     assert history == {"op7": ["queued", "assigned to TM_1", "delivered"],
                        "op8": ["queued"], "op9": ["queued", "assigned to TM_1"]}  # fmt: skip
 
 
-def gateway(tmp_path: Path, mode: str = "processes") -> CpsGateway:
-    write_info(tmp_path, mode=mode)
+def gateway(tmp_path: Path) -> CpsGateway:
+    write_info(tmp_path)
     return CpsGateway(tmp_path)
 
 
@@ -188,10 +154,30 @@ def test_item8_4_values_of_an_asset_that_stopped_answering_are_stale(tmp_path):
 
 
 def test_item8_1_a_stopped_cps_is_said_once_for_every_asset(tmp_path):
-    gw = gateway(tmp_path, mode="single")
+    gw = gateway(tmp_path)
     gw.online = dict.fromkeys(gw.online or ("KG", "TU_A", "o1"), True)
     gw.floor_error = "the CPS is not running (no cps.json)"
     live = gw.live()
     assert not any(live["online"].values())
     assert set(live["reason"].values()) == {"the CPS is not running (no cps.json)"}
     assert live["kg_error"] == gw.floor_error
+
+
+def test_an_order_placed_here_is_shown_once_as_the_consoles_after_a_restart(tmp_path):
+    """The console keeps its orders in the work folder: after the floor (or the console)
+    restarted, an order placed here is one row, the console's, with the TMS's record (its
+    state, steps and the source the TMS resolved), not a stuck copy beside a second row."""
+    gw = gateway(tmp_path)
+    order = Order("w1", "o1", "where it is", "TU_A", "2026-01-01T10:00:00+00:00", "127.0.0.1",
+                  operation="op9", state="running")  # fmt: skip
+    gw.orders[order.id] = order
+    gw._keep_orders()
+    again = gateway(tmp_path)  # a new console (or the same one after the floor restarted)
+    assert list(again.orders) == ["w1"] and again._next_order() == 2
+    again.ledger = LEDGER
+    rows = again.order_rows()
+    assert [r["operation"] for r in rows] == ["op7", "op8", "op9"]
+    assert [r["placed_by"] for r in rows] == ["cps", "cps", "console"]
+    mine = rows[2]
+    assert mine["id"] == "w1" and mine["state"] == "running" and mine["source"] == "TU_B"
+    assert [s["text"] for s in mine["steps"]] == ["queued", "assigned to TM_1"]

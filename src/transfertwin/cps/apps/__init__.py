@@ -1,5 +1,8 @@
-"""The assets' applications: TMS, Experiment Manager (and its studies), PropS, virtual
-environment, and the transport module's operation flow (Fig. 5.9a) on the shop floor.
+"""What the assets' roles are built from, as libraries: the object ledger, the pose graph
+PropS fuses (`PoseGraph`), the transport operation flow (Fig. 5.9a) and the hand-over
+policy, the module's drive on the shop floor (`FloorRobot`), the camera's check of what it
+sees, the simulated environment, the docking-error model, and studies run by the
+Experiment Manager (`StudyJob`).
 
 The names load on first use (PEP 562): an asset process imports only what its role needs
 (a unit or an object needs neither the simulation nor the navigation stack).
@@ -10,7 +13,7 @@ from typing import TYPE_CHECKING
 from transfertwin._lazy import lazy_exports
 
 if TYPE_CHECKING:
-    from transfertwin.cps.apps._applications import AssetApplications, VirtualTransport
+    from transfertwin.cps.apps._camera import ScanVerdict, height_key, scan_check
     from transfertwin.cps.apps._docking import docking_model
     from transfertwin.cps.apps._environment import Environment, ScaledClock
     from transfertwin.cps.apps._floor import HOME_POSE, FloorRobot, LegResult
@@ -56,7 +59,6 @@ __all__ = [
     "PICKUP_RETRIES",
     "STEPS",
     "STUDY_INDEX",
-    "AssetApplications",
     "Environment",
     "FloorRobot",
     "HandOverRetries",
@@ -69,17 +71,19 @@ __all__ = [
     "PoseGraphSolution",
     "PoseObservation",
     "ScaledClock",
+    "ScanVerdict",
     "StepResult",
     "StudyJob",
     "StudyRequest",
     "TransportSkills",
-    "VirtualTransport",
     "docking_model",
     "form_ots",
     "fuse_poses",
+    "height_key",
     "legs_of",
     "record_store",
     "run_transport_operation",
+    "scan_check",
     "state_text",
     "study_opcua_values",
     "study_stores",

@@ -70,9 +70,9 @@ def take_back(tm, tu, observe, clock, scene, to_unit: bool) -> bool:
 
 class HandOverRetries:
     """The hand-over policy as a mixin of a module's skills (`TransportSkills`): put it
-    before the class whose ``transfer`` is one try. It uses the skills' ``cps`` (the
-    module's role: ``_take_back(unit, to_unit)``, ``_undock``, ``_attempt``,
-    ``_lost_in_gap``, ``_face``, ``op``, ``state``), ``obj``, ``load_state``, ``face``,
+    before the class whose ``transfer`` is one try. It uses the skills' ``host`` (the
+    module, `transfertwin.cps.node.ModuleHost`: ``take_back``, ``undock``, ``attempt``,
+    ``lost_in_gap``, ``face``, ``op``, ``state``), ``obj``, ``load_state``, ``face``,
     ``dock`` and ``form_ots``."""
 
     attempt = 0
@@ -85,17 +85,17 @@ class HandOverRetries:
         state without one), `PICKUP_RETRIES` times."""
         from transfertwin.cps.apps import StepResult
 
-        role = self.cps
+        host = self.host
         result = await super().transfer(leg)
         pickup = leg.name == "pick-up"
         onto, retries = ("unit", PICKUP_RETRIES) if pickup else ("module", DELIVERY_RETRIES)
         tries = []
         while not result.ok and result.info.get("valid"):
-            back = await role._take_back(leg.unit, to_unit=pickup)
+            back = await host.take_back(leg.unit, to_unit=pickup)
             tries.append({"attempt": self.attempt + 1, "taken_back": back,
                           "reason": result.reason, "state": self.load_state})  # fmt: skip
             if not back:
-                role._lost_in_gap = True
+                host.lost_in_gap = True
                 return StepResult(False, f"{result.reason}; the object did not come back "
                                          f"onto the {onto}: it lies in the gap",
                                   {**result.info, "retries": tries})  # fmt: skip
@@ -104,14 +104,14 @@ class HandOverRetries:
                                          f"after {self.attempt + 1} attempt(s)",
                                   {**result.info, "retries": tries})  # fmt: skip
             self.attempt += 1
-            role._attempt = self.attempt
+            host.attempt = self.attempt
             if pickup and self.fallback:  # the station puts it down in the next-best state
                 self._load(self.fallback)
             log.info("%s: took %s back onto the %s at %s; %sdocking again (attempt %d)",
-                     role.aid, self.obj, onto, leg.unit,
+                     host.aid, self.obj, onto, leg.unit,
                      f"loaded {state_text(self.load_state)}, " if pickup else "",
                      self.attempt + 1)  # fmt: skip
-            await role._undock(role.aid)
+            await host.undock()
             for step in (self.dock, self.form_ots):
                 pre = await step(leg)
                 if not pre.ok:
@@ -123,12 +123,12 @@ class HandOverRetries:
 
     def _load(self, state) -> None:
         """From now on the object lies in `state` (the face the module carries it on)."""
-        role = self.cps
+        host = self.host
         self.load_state = dict(state)
-        self.face = role._face = str(state["face"])
-        role.state.data.setdefault("faces", {})[self.obj] = self.face
-        if role.op is not None:
-            role.op["load"] = self.load_state
+        self.face = host.face = str(state["face"])
+        host.state.data.setdefault("faces", {})[self.obj] = self.face
+        if host.op is not None:
+            host.op["load"] = self.load_state
 
 
 def state_text(state) -> str:

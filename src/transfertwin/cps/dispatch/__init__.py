@@ -31,6 +31,7 @@ if TYPE_CHECKING:
         state_key,
         tries,
     )
+    from transfertwin.cps.dispatch._orders import OrderBook, order_view
     from transfertwin.cps.dispatch._predict import (
         DEFAULT_STATE,
         ON_THE_FLY_THETA_STEP,
@@ -50,6 +51,7 @@ __all__ = [
     "TRANSFER_S",
     "UNIT_STEPS",
     "Bid",
+    "OrderBook",
     "StatePrediction",
     "choose",
     "drive_s",
@@ -57,6 +59,7 @@ __all__ = [
     "fallback",
     "floor_seconds",
     "kpis",
+    "order_view",
     "posterior",
     "rank_states",
     "record",

@@ -30,6 +30,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from transfertwin._errors import InputError
+
 if TYPE_CHECKING:
     from transfertwin.cps.apps import FloorRobot
 
@@ -49,7 +51,6 @@ def drive_s(robot: FloorRobot, start: Sequence[float], station: str) -> float:
     length at the cruise speed (a straight line with a detour factor if it finds none)."""
     import numpy as np
 
-    from transfertwin._errors import InputError
     from transfertwin.navigation import plan_path
 
     cfg, floor = robot.cfg, robot.floor

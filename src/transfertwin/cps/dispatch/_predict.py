@@ -20,6 +20,8 @@ from collections.abc import Iterable, Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from transfertwin.cps.apps import docking_model
+
 __all__ = [
     "DEFAULT_STATE",
     "ON_THE_FLY_THETA_STEP",
@@ -90,7 +92,6 @@ def virtual_predictions(obj: str, runs: int, seed: int, scene=None,
     grid, `runs` runs each, docking errors from the fitted generator; in this process, or
     on `workers` worker processes); best first. Deterministic in `seed` (the same rows
     whatever `workers`)."""
-    from transfertwin.cps.apps import docking_model
     from transfertwin.store import MemoryResultStore
     from transfertwin.study.experiment import StudyPlan, run_study
 

@@ -9,6 +9,7 @@ from transfertwin._lazy import lazy_exports
 
 if TYPE_CHECKING:
     from transfertwin.cps.floor._asset_config import (
+        DOCKING_MODES,
         HAL_KINDS,
         PROVENANCE,
         AssetConfig,
@@ -25,17 +26,17 @@ if TYPE_CHECKING:
         OperationSpec,
         StationSpec,
         default_floor_spec,
-        floor_toml,
-        load_floor,
-        parse_floor,
     )
+    from transfertwin.cps.floor._floor_io import floor_toml, load_floor, parse_floor
     from transfertwin.cps.floor._plant_secret import (
         PLANT_SEED_FILE,
+        check_plant_seed,
         read_plant_seed,
         write_plant_seed,
     )
 
 __all__ = [
+    "DOCKING_MODES",
     "HAL_KINDS",
     "LOGICAL_ASSETS",
     "PLANT_SEED_FILE",
@@ -48,6 +49,7 @@ __all__ = [
     "ModuleSpec",
     "OperationSpec",
     "StationSpec",
+    "check_plant_seed",
     "default_floor_spec",
     "floor_toml",
     "load_asset_config",

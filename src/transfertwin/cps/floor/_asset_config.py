@@ -48,17 +48,23 @@ Relative paths are resolved against the file's folder.
 from __future__ import annotations
 
 import ipaddress
-import json
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
+from transfertwin.cps.floor._toml import read_toml, table, toml_value
 
-__all__ = ["HAL_KINDS", "PROVENANCE", "AssetConfig", "HalConfig", "load_asset_config",
-           "write_asset_config"]  # fmt: skip
+__all__ = ["DOCKING_MODES", "HAL_KINDS", "PROVENANCE", "AssetConfig", "HalConfig",
+           "load_asset_config", "write_asset_config"]  # fmt: skip
+
+#: How a transport module gets to a station and sees the belts (docs/architecture.md,
+#: "Transport operation flow"): 'sampled' puts it at the station with a docking error drawn
+#: from the generator fitted to the real errors and forms the OTS from the simulation's
+#: true object box; 'navigated' plans and drives on the shop floor, docks by laser (the
+#: error emerges) and forms the OTS from its depth camera's workspace scan.
+DOCKING_MODES = ("sampled", "navigated")
 
 #: What an asset's hardware abstraction layer may be.
 HAL_KINDS = ("virtual", "plant", "remote")
@@ -168,7 +174,7 @@ class AssetConfig:
             raise InputError(f"{where}: a secure asset needs [security] credentials")
         if not (math.isfinite(self.lease_s) and self.lease_s >= 0.5):
             raise InputError(f"{where}: lease_s must be at least 0.5 s, got {self.lease_s}")
-        if self.docking not in ("sampled", "navigated"):
+        if self.docking not in DOCKING_MODES:
             raise InputError(f"{where}: docking must be sampled or navigated")
         self.hal.check(where)
 
@@ -178,26 +184,15 @@ class AssetConfig:
         return f"opc.tcp://{self.host}:{self.port}/transfertwin/{self.asset_id}"
 
 
-def _table(doc: dict, key: str) -> dict:
-    value = doc.get(key, {})
-    if not isinstance(value, dict):
-        raise InputError(f"[{key}] must be a table")
-    return value
-
-
 def load_asset_config(path: Path | str) -> AssetConfig:
     """Read ``ASSET.toml``; one `InputError` line for anything missing or malformed."""
     path = Path(path)
-    try:
-        doc = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such asset configuration file") from None
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise InputError(f"{path}: not a readable TOML file ({exc})") from None
+    doc = read_toml(path, missing="no such asset configuration file",
+                    unreadable="not a readable TOML file")  # fmt: skip
     base = path.parent
-    asset, net = _table(doc, "asset"), _table(doc, "network")
-    sec, run = _table(doc, "security"), _table(doc, "runtime")
-    hal = _table(doc, "hal")
+    asset, net = table(doc, "asset"), table(doc, "network")
+    sec, run = table(doc, "security"), table(doc, "runtime")
+    hal = table(doc, "hal")
 
     def rel(value: object, key: str) -> Path:
         if not isinstance(value, str) or not value:
@@ -251,16 +246,6 @@ def _hal(table: dict, rel, path: Path) -> HalConfig:
     )  # fmt: skip
 
 
-def _toml(value: object) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, int | float):
-        return repr(value)
-    if isinstance(value, list | tuple):
-        return "[" + ", ".join(_toml(v) for v in value) + "]"
-    return json.dumps(str(value))  # a TOML basic string is a JSON string
-
-
 def write_asset_config(path: Path, cfg: AssetConfig) -> Path:
     """Write `cfg` as ``ASSET.toml`` (atomically; absolute paths)."""
     tables = {
@@ -284,8 +269,8 @@ def write_asset_config(path: Path, cfg: AssetConfig) -> Path:
         if hal.trust_dir is not None:
             tables["hal"]["trust_dir"] = str(hal.trust_dir)
     lines = [f"# transfertwin asset process: transfertwin cps asset --config {path.name}"]
-    for name, table in tables.items():
-        lines += ["", f"[{name}]", *(f"{k} = {_toml(v)}" for k, v in table.items())]
+    for name, rows in tables.items():
+        lines += ["", f"[{name}]", *(f"{k} = {toml_value(v)}" for k, v in rows.items())]
     path.parent.mkdir(parents=True, exist_ok=True)
     write_atomic(path, "\n".join(lines) + "\n")
     return path

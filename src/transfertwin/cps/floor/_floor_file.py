@@ -54,11 +54,8 @@ Parsing happens here, at the edge; the rest of the runtime sees the frozen `Floo
 
 from __future__ import annotations
 
-import json
 import math
-import tomllib
 from dataclasses import dataclass, replace
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 from transfertwin._errors import InputError
@@ -68,6 +65,7 @@ from transfertwin.cps.aas import (
     AssetKind,
     Capability,
     PhysicalType,
+    physical_twin,
 )
 
 if TYPE_CHECKING:
@@ -80,9 +78,6 @@ __all__ = [
     "OperationSpec",
     "StationSpec",
     "default_floor_spec",
-    "floor_toml",
-    "load_floor",
-    "parse_floor",
 ]
 
 #: The logical assets a floor may run, by id: (class, capability).
@@ -188,7 +183,9 @@ class FloorSpec:
         raise InputError(f"floor {self.name}: no transport module {asset_id!r}")
 
     def descriptors(self) -> tuple[AssetDescriptor, ...]:
-        """Every asset of the floor: units, modules, objects, logical assets (in that order)."""
+        """Every asset of the floor: units, modules, objects, logical assets, and the
+        physical twins of the units on the emulated plant (``TU_<name>_P``, kind physical:
+        the plant's own units, beside their virtual models), in that order."""
         units = tuple(
             _virtual(s.unit, "transfer_unit", PhysicalType.D_E, _TU_CAPS, s.name)
             for s in self.stations
@@ -203,13 +200,17 @@ class FloorSpec:
                             capabilities=(LOGICAL_ASSETS[aid][1],))
             for aid in self.logical
         )
-        return (*units, *modules, *objects, *logical)
+        plant = tuple(physical_twin(u) for u, s in zip(units, self.stations, strict=True)
+                      if s.hal == "plant")  # fmt: skip
+        return (*units, *modules, *objects, *logical, *plant)
 
     def hal_of(self, asset_id: str) -> tuple[str, str | None]:
         """(HAL kind, gateway endpoint or None) of a unit or module; virtual otherwise."""
         for s in self.stations:
             if s.unit == asset_id:
                 return s.hal, s.gateway
+            if s.hal == "plant" and asset_id == f"{s.unit}_P":
+                return "plant", None
         for m in self.modules:
             if m.asset_id == asset_id:
                 return m.hal, m.gateway
@@ -331,7 +332,7 @@ def _check(floor: FloorSpec) -> None:
 def default_floor_spec() -> FloorSpec:
     """The demonstration floor (Sec. 5.3): stations A–D of `navigation.default_floor` with
     TU_A…TU_D, TM_1 at the home pose, o1…o5 as `DEMO_PLACEMENT`, the four logical assets."""
-    from transfertwin.cps.apps import HOME_POSE
+    from transfertwin.cps.apps import HOME_POSE  # the navigation stack: not for every asset
     from transfertwin.navigation import default_floor
 
     base = default_floor()
@@ -342,153 +343,3 @@ def default_floor_spec() -> FloorSpec:
     x, y, th = HOME_POSE
     module = ModuleSpec("TM_1", x, y, math.degrees(th))
     return FloorSpec("demo", base.size_m, stations, (module,), tuple(DEMO_PLACEMENT.items()))
-
-
-def _float(table: dict, key: str, where: str) -> float:
-    value = table.get(key)
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise InputError(f"{where}: {key} must be a finite number, got {value!r}")
-    return float(value)
-
-
-def _str(table: dict, key: str, where: str) -> str:
-    value = table.get(key)
-    if not isinstance(value, str) or not value:
-        raise InputError(f"{where}: {key} must be a non-empty string, got {value!r}")
-    return value
-
-
-def parse_floor(doc: dict, name: str) -> FloorSpec:
-    """A `FloorSpec` from a parsed floor document (see the module docstring)."""
-    known = {"name", "size_m", "station", "module", "object", "logical", "operation", "hal"}
-    if unknown := sorted(set(doc) - known):
-        raise InputError(f"floor {name}: unknown key {unknown[0]!r}; known: "
-                         f"{', '.join(sorted(known))}")  # fmt: skip
-    name = str(doc.get("name", name))
-    size = doc.get("size_m", [12.0, 8.0])
-    if not isinstance(size, list) or len(size) != 2:
-        raise InputError(f"floor {name}: size_m must be [width, height] in metres")
-    size_m = (_float({"w": size[0]}, "w", f"floor {name}: size_m"),
-              _float({"h": size[1]}, "h", f"floor {name}: size_m"))  # fmt: skip
-    hal = doc.get("hal", "virtual")
-    if hal not in ("virtual", "plant"):
-        raise InputError(f"floor {name}: hal must be virtual or plant, got {hal!r} (a remote "
-                         "HAL is set per station, with its gateway)")  # fmt: skip
-    stations = []
-    for i, t in enumerate(doc.get("station", [])):
-        where = f"floor {name}: station {i + 1}"
-        gateway = t.get("gateway")
-        stations.append(StationSpec(_str(t, "name", where), _float(t, "x_m", where),
-                                    _float(t, "y_m", where), _float(t, "yaw_deg", where),
-                                    _str(t, "mount", where), str(t.get("hal", hal)),
-                                    None if gateway is None else str(gateway)))  # fmt: skip
-    modules = []
-    for i, t in enumerate(doc.get("module", [])):
-        where = f"floor {name}: module {i + 1}"
-        gateway = t.get("gateway")
-        modules.append(ModuleSpec(_str(t, "id", where), _float(t, "x_m", where),
-                                  _float(t, "y_m", where), float(t.get("theta_deg", 0.0)),
-                                  bool(t.get("standby", False)), str(t.get("hal", hal)),
-                                  None if gateway is None else str(gateway)))  # fmt: skip
-    objects = []
-    for i, t in enumerate(doc.get("object", [])):
-        where = f"floor {name}: object {i + 1}"
-        objects.append((_str(t, "id", where), _str(t, "at", where)))
-    logical = doc.get("logical", list(LOGICAL_ASSETS))
-    if not isinstance(logical, list) or not all(isinstance(a, str) for a in logical):
-        raise InputError(f"floor {name}: logical must be a list of asset ids")
-    return FloorSpec(name, size_m, tuple(stations), tuple(modules), tuple(objects),
-                     tuple(logical), _operation(doc.get("operation", {}), name))  # fmt: skip
-
-
-def _operation(table: object, name: str) -> OperationSpec:
-    where = f"floor {name}: [operation]"
-    if not isinstance(table, dict):
-        raise InputError(f"{where} must be a table")
-    known = {"policy", "study", "runs", "groups", "capacity", "sensor", "learn"}
-    if unknown := sorted(set(table) - known):
-        raise InputError(f"{where}: unknown key {unknown[0]!r}; known: {', '.join(sorted(known))}")
-    study = table.get("study")
-    if study is not None and (not isinstance(study, str) or not study):
-        raise InputError(f"{where}: study must be the path of a study store")
-    runs, capacity = table.get("runs", 4), table.get("capacity", 0)
-    for key, value in (("runs", runs), ("capacity", capacity)):
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise InputError(f"{where}: {key} must be an integer, got {value!r}")
-    groups = table.get("groups", {})
-    if not isinstance(groups, dict) or not all(
-            isinstance(v, list) and all(isinstance(u, str) for u in v) for v in groups.values()):
-        raise InputError(f"{where}: groups must map a name to a list of unit ids")  # fmt: skip
-    learn = table.get("learn", True)
-    if not isinstance(learn, bool):
-        raise InputError(f"{where}: learn must be true or false, got {learn!r}")
-    return OperationSpec(str(table.get("policy", "nearest-idle")), study, runs,
-                         tuple((g, tuple(u)) for g, u in groups.items()), capacity,
-                         str(table.get("sensor", "truth")), learn)  # fmt: skip
-
-
-def load_floor(path: Path | str, *, check_cores: bool = True) -> FloorSpec:
-    """Read a floor file; one `InputError` line for a missing, unreadable or invalid file.
-
-    Args:
-        path: The floor file.
-        check_cores: Also check that every object is a built-in core (imports the mesh
-            library; an asset process whose launcher checked it skips this).
-    """
-    path = Path(path)
-    try:
-        doc = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such floor file") from None
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise InputError(f"{path}: not a readable TOML floor file ({exc})") from None
-    spec = parse_floor(doc, path.stem)
-    study = spec.operation.study
-    if study is not None and not Path(study).is_absolute():  # relative to the floor file
-        op = replace(spec.operation, study=str((path.parent / study).resolve()))
-        spec = replace(spec, operation=op)
-    if not check_cores:
-        return spec
-    from transfertwin.objects import builtin_ids
-
-    cores = set(builtin_ids())
-    for obj, _ in spec.objects:
-        if obj not in cores:
-            raise InputError(f"{path}: object {obj!r} is not a built-in core (o1..o37)")
-    return spec
-
-
-def floor_toml(floor: FloorSpec) -> str:
-    """`floor` as a floor file (what `load_floor` reads back to an equal `FloorSpec`)."""
-    lines = [f"name = {json.dumps(floor.name)}",
-             f"size_m = [{floor.size_m[0]!r}, {floor.size_m[1]!r}]",
-             f"logical = [{', '.join(json.dumps(a) for a in floor.logical)}]"]  # fmt: skip
-    for s in floor.stations:
-        lines += ["", "[[station]]", f"name = {json.dumps(s.name)}", f"x_m = {s.x_m!r}",
-                  f"y_m = {s.y_m!r}", f"yaw_deg = {s.yaw_deg!r}",
-                  f"mount = {json.dumps(s.mount)}"]  # fmt: skip
-        if s.hal != "virtual":
-            lines.append(f"hal = {json.dumps(s.hal)}")
-        if s.gateway is not None:
-            lines.append(f"gateway = {json.dumps(s.gateway)}")
-    for m in floor.modules:
-        lines += ["", "[[module]]", f"id = {json.dumps(m.asset_id)}", f"x_m = {m.x_m!r}",
-                  f"y_m = {m.y_m!r}", f"theta_deg = {m.theta_deg!r}",
-                  f"standby = {'true' if m.standby else 'false'}"]  # fmt: skip
-        if m.hal != "virtual":
-            lines.append(f"hal = {json.dumps(m.hal)}")
-        if m.gateway is not None:
-            lines.append(f"gateway = {json.dumps(m.gateway)}")
-    for obj, at in floor.objects:
-        lines += ["", "[[object]]", f"id = {json.dumps(obj)}", f"at = {json.dumps(at)}"]
-    op = floor.operation
-    lines += ["", "[operation]", f"policy = {json.dumps(op.policy)}", f"runs = {op.runs}",
-              f"capacity = {op.capacity}", f"sensor = {json.dumps(op.sensor)}",
-              f"learn = {'true' if op.learn else 'false'}"]
-    if op.study is not None:
-        lines.append(f"study = {json.dumps(op.study)}")
-    if op.groups:
-        lines += ["", "[operation.groups]"]
-        lines += [f"{json.dumps(g)} = [{', '.join(json.dumps(u) for u in units)}]"
-                  for g, units in op.groups]  # fmt: skip
-    return "\n".join(lines) + "\n"

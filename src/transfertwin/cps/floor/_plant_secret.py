@@ -9,7 +9,7 @@ from pathlib import Path
 
 from transfertwin._errors import InputError
 
-__all__ = ["PLANT_SEED_FILE", "read_plant_seed", "write_plant_seed"]
+__all__ = ["PLANT_SEED_FILE", "check_plant_seed", "read_plant_seed", "write_plant_seed"]
 
 #: What the plant seed file is called in a floor's work folder.
 PLANT_SEED_FILE = "plant.secret"
@@ -35,3 +35,9 @@ def read_plant_seed(path: Path) -> int:
         raise InputError(f"{path}: the plant seed file must hold a non-negative integer")
     return int(text)
 
+
+def check_plant_seed(seed: object) -> int:
+    """A plant seed as the emulated plant takes it; InputError otherwise."""
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise InputError(f"--plant-seed must be a non-negative integer, got {seed!r}")
+    return seed

@@ -25,6 +25,8 @@ from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from transfertwin.cps.opcua import OperationRefused, TrustList, ensure_certificate
+
 if TYPE_CHECKING:
     from asyncua import Client
 
@@ -45,7 +47,6 @@ class GatewayError(ConnectionError):
 
 def gateway_refusal(exc: GatewayError):
     """`exc` as the refusal of an operation call (BadCommunicationError, its line)."""
-    from transfertwin.cps.opcua import OperationRefused
 
     return OperationRefused(str(exc), status="BadCommunicationError")
 
@@ -63,7 +64,6 @@ async def _secure(client: Client, cfg: AssetConfig) -> None:
     from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
     from cryptography.hazmat.primitives.serialization import Encoding
 
-    from transfertwin.cps.opcua import TrustList, ensure_certificate
 
     url = cfg.hal.endpoint
     mode = ua.MessageSecurityMode.SignAndEncrypt

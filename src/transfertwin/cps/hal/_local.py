@@ -47,7 +47,7 @@ def environment_for(cfg: AssetConfig, scene: SceneConfig):
     `GatewayWorld`: the hardware behind the gateway is the world). Its `scene` stays the twin's
     (what the module's controller knows: belt speed, thresholds, timing); only the systems
     it steps are the plant's."""
-    from transfertwin.cps.apps import Environment
+    from transfertwin.cps.apps import Environment  # the simulation: a module's process only
 
     if cfg.hal.kind == "virtual":
         return Environment(scene, cfg.time_scale)

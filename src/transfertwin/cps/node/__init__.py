@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 from transfertwin._lazy import lazy_exports
 
 if TYPE_CHECKING:
+    from transfertwin.cps.node._host import ModuleHost
     from transfertwin.cps.node._lease import (
         DEFAULT_LEASE_S,
         HEARTBEATS_PER_S,
@@ -28,6 +29,7 @@ __all__ = [
     "HEARTBEATS_PER_S",
     "NO_LEASE",
     "AssetNode",
+    "ModuleHost",
     "NodeState",
     "Peers",
     "Renewal",

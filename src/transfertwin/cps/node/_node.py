@@ -25,7 +25,12 @@ from collections.abc import Awaitable, Callable
 from typing import Any
 
 from transfertwin._errors import InputError
-from transfertwin.cps.aas import AssetDescriptor, build_representation, externally_synced
+from transfertwin.cps.aas import (
+    AssetDescriptor,
+    build_representation,
+    externally_synced,
+    operation,
+)
 from transfertwin.cps.floor import PROVENANCE, AssetConfig, FloorSpec, load_floor
 from transfertwin.cps.node._lease import NO_LEASE, Renewal, heartbeat_period
 from transfertwin.cps.node._peers import Peers
@@ -95,6 +100,8 @@ class AssetNode:
         cfg = self.cfg
         rep = build_representation(self.desc, endpoint=cfg.endpoint,
                                    provenance=PROVENANCE[cfg.hal.kind])  # fmt: skip
+        for spec in self.role.operations():
+            rep.submodel("ControlInterface").submodel_element.add(operation(spec))
         writable = {("OperationalData", p) for p in externally_synced(rep)}
         writable |= {("OperationalData", p) for p in self.role.writable()}
         scfg = ServerConfig(host=cfg.host, port=cfg.port, insecure=cfg.insecure,
@@ -155,6 +162,14 @@ class AssetNode:
     def learn(self, aid: str, endpoint: str) -> None:
         """Remember where `aid` answers (from the graph's status)."""
         self._known[aid] = endpoint
+
+    def open_session(self, aid: str, timeout_s: float):
+        """A session of its own with `aid` whose requests may take `timeout_s` (a call that
+        runs long, such as an experiment cycle), as an async context manager."""
+        url = self.endpoint_of(aid)
+        if url is None:
+            raise ConnectionError(f"{aid}: endpoint not known (not discovered yet)")
+        return self._open(url, aid, timeout_s)
 
     def _open(self, url: str, aid: str, timeout_s: float = 10.0):
         cfg = self.cfg

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 from transfertwin.cps.node._state import NodeState
 
 if TYPE_CHECKING:
+    from transfertwin.cps.aas import OperationSpec
     from transfertwin.cps.node._node import AssetNode
 
 __all__ = ["Role"]
@@ -33,6 +34,11 @@ class Role:
 
     def handlers(self) -> dict[str, Any]:
         return {}
+
+    def operations(self) -> tuple[OperationSpec, ...]:
+        """Operations of the asset's ControlInterface beyond its class's (`RunTransfer` of a
+        plant's physical unit)."""
+        return ()
 
     def writable(self) -> set[str]:
         return set()

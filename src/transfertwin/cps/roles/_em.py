@@ -18,7 +18,13 @@ from pathlib import Path
 from typing import Any
 
 from transfertwin._errors import InputError
+from transfertwin.cps.aas import AssetKind
+from transfertwin.cps.apps import StudyJob, StudyRequest, record_store, study_opcua_values
+from transfertwin.cps.dispatch import virtual_predictions
+from transfertwin.cps.hal import load_scene
 from transfertwin.cps.node import Role
+from transfertwin.cps.opcua import OpcUaUnitHAL
+from transfertwin.cps.roles._plant_unit import PLANT_LOG, append_plant_log, physical_record
 
 __all__ = ["ExperimentRole"]
 
@@ -73,8 +79,6 @@ class ExperimentRole(Role):
         return job.result()
 
     async def _predict_now(self, obj: str, runs: int, seed: int) -> str:
-        from transfertwin.cps.dispatch import virtual_predictions
-        from transfertwin.cps.hal import load_scene
 
         await self.set("State", "predicting")
         try:
@@ -141,7 +145,6 @@ class ExperimentRole(Role):
 
     async def _launch(self, plan_json: str, store: Path, request=None) -> None:
         """Check the store (refused if it holds another plan), persist the wish, run."""
-        from transfertwin.cps.apps import StudyJob, record_store
 
         if request is None:
             request = await asyncio.to_thread(_parse, plan_json)
@@ -170,7 +173,6 @@ class ExperimentRole(Role):
             asyncio.run_coroutine_threadsafe(self._publish(status), self._loop)
 
     async def _publish(self, status: dict[str, Any]) -> None:
-        from transfertwin.cps.apps import study_opcua_values
 
         for prop, value in study_opcua_values(status).items():
             with contextlib.suppress(Exception):  # a server going down mid-update
@@ -200,10 +202,13 @@ class ExperimentRole(Role):
     # -- single experiments ---------------------------------------------------------------
     async def _run(self, unit: str, obj: str, face: str, conveyor: str, theta_deg: int,
                    seed: int) -> str:  # fmt: skip
-        from transfertwin.cps.opcua import OpcUaUnitHAL
         from transfertwin.cps.roles._module import MirroredUnitHAL, load_scene
         from transfertwin.study.experiment import ExperimentSpec, run_experiment, system_for
 
+        desc = self.node.descriptors.get(unit)
+        if desc is not None and desc.kind is AssetKind.PHYSICAL and \
+                desc.asset_class == "transfer_unit":  # E^P on the plant's unit
+            return await self._run_physical(unit, obj, face, conveyor, theta_deg, seed)
         if unit not in self.node.floor.units:
             raise ValueError(f"no transfer unit {unit!r}")
         scene = load_scene()
@@ -220,8 +225,26 @@ class ExperimentRole(Role):
         await self.set("ExperimentsDone", int(await self.get("ExperimentsDone")) + 1)
         return json.dumps(result.row())
 
+    async def _run_physical(self, unit: str, obj: str, face: str, conveyor: str,
+                            theta_deg: int, seed: int) -> str:  # fmt: skip
+        """E^P: the physical unit's ``RunTransfer`` over OPC UA; its log row appended to the
+        floor's ``plant_experiments.csv`` and answered in the shape of an E^V record."""
+        if isinstance(seed, bool) or int(seed) < 0:
+            raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+        await self.set("State", "running")
+        try:
+            async with self.node.open_session(unit, 120.0) as session:  # a cycle takes long
+                row = json.loads(await session.call("RunTransfer", obj, face, conveyor,
+                                                    int(theta_deg)))  # fmt: skip
+        finally:
+            await self.set("State", "idle")
+        append_plant_log(self.node.cfg.floor_file.parent / PLANT_LOG, row)
+        log.info("EM: E^P %s on %s: %s %s %s %d: success %s", row["experiment_id"], unit,
+                 obj, face, conveyor, int(theta_deg), row["success"])  # fmt: skip
+        await self.set("ExperimentsDone", int(await self.get("ExperimentsDone")) + 1)
+        return json.dumps(physical_record(row, int(seed)))
+
 
 def _parse(plan_json: str):  # -> StudyRequest
-    from transfertwin.cps.apps import StudyRequest
 
     return StudyRequest.parse(plan_json)

@@ -1,7 +1,7 @@
-"""The transport module in its own process: it takes operations from the TMS, runs them
-through the flow of Fig. 5.9a (`run_transport_operation`, the same skills as the
-single-process CPS, `VirtualTransport`) and reports every step, every moved object and
-the result back to the TMS.
+"""The transport module on its node: it takes operations from the TMS, runs them through
+the flow of Fig. 5.9a (`run_transport_operation` with its skills, `ModuleSkills`, which
+reach it through its public side, `ModuleHost`) and reports every step, every moved object
+and the result back to the TMS.
 
 The module's process owns the simulation of itself and the unit it is docked at (its
 `Environment`): the unit's belts are commanded through the unit's own OPC UA interface
@@ -23,18 +23,28 @@ import logging
 import math
 import time
 import zlib
-from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from transfertwin.cps.hal import MirroredUnitHAL, load_scene
+from transfertwin.cps.apps import (
+    HOME_POSE,
+    FloorRobot,
+    docking_model,
+    legs_of,
+    run_transport_operation,
+    take_back,
+)
+from transfertwin.cps.dispatch import estimate, floor_seconds
+from transfertwin.cps.hal import MirroredUnitHAL, environment_for, load_scene
 from transfertwin.cps.node import Role
+from transfertwin.cps.opcua import OpcUaUnitHAL, OperationRefused
+from transfertwin.cps.roles._docking import observe_docking, props_docking_estimate
 
 if TYPE_CHECKING:
     from transfertwin.cps.node import AssetNode
 
-__all__ = ["CAMERA_SIGMA_THETA_RAD", "CAMERA_SIGMA_XY_M", "UNCERTAIN_STEPS", "ModuleRole"]
+__all__ = ["UNCERTAIN_STEPS", "ModuleRole"]
 
 log = logging.getLogger("transfertwin.cps")
 
@@ -48,8 +58,6 @@ class ModuleRole(Role):
 
     def __init__(self, node: AssetNode) -> None:
         super().__init__(node)
-        from transfertwin.cps.apps import HOME_POSE, FloorRobot
-        from transfertwin.cps.hal import environment_for
 
         spec = node.floor.module(self.aid)
         self.robot = FloorRobot(node.floor.shop_floor(), home=spec.home or HOME_POSE)
@@ -58,14 +66,13 @@ class ModuleRole(Role):
             self.robot.docked_at = self.state.data.get("station")
         self.env = environment_for(node.cfg, load_scene())  # virtual or the plant's physics
         self.op: dict[str, Any] | None = None
-        self._face = "front"  # the face the carried object lies on (its load plan's)
+        self.face = "front"  # the face the carried object lies on (its load plan's)
+        self.attempt = 0  # the hand-over try of the running leg (0: the first)
+        self.lost_in_gap = False  # the hand-over policy gave up with the object in the gap
+        self.docking = node.cfg.docking
+        self.seed = node.cfg.seed
+        self._op_id = ""
         self._outbox_kick = asyncio.Event()
-        # what `VirtualTransport` reads of the runtime it serves
-        self.floor_robots = {self.aid: self.robot}
-        self.config = SimpleNamespace(docking=node.cfg.docking, seed=node.cfg.seed,
-                                      scene=self.env.scene)  # fmt: skip
-        self.assets = {d.asset_id: SimpleNamespace(desc=d) for d in node.descriptors.values()}
-        self.ledger = SimpleNamespace(objects_at=self._objects_at)
 
     def initial(self) -> dict[str, Any]:
         return {"possesses": [], "pose": None, "docked": "", "current": None, "outbox": []}
@@ -79,7 +86,7 @@ class ModuleRole(Role):
         data = self.state.data
         await self.set("PossessedObjects", ",".join(data["possesses"]))
         await self.set("DockedAt", "")
-        await self._publish_pose(self.aid)
+        await self.publish_pose()
         if data["current"] is not None:  # died in the middle of an operation
             cur = data["current"]
             step = cur.get("state", "idle")
@@ -106,8 +113,16 @@ class ModuleRole(Role):
                 "operation": (self.op or {}).get("operation")}  # fmt: skip
 
     # -- belts and possession -------------------------------------------------------------
-    def _objects_at(self, holder: str) -> list[str]:
-        return sorted(self.state.data["possesses"]) if holder == self.aid else []
+    def carried(self) -> list[str]:
+        """The objects on this module's belts (its own record of them)."""
+        return sorted(self.state.data["possesses"])
+
+    def station_of(self, unit: str) -> str:
+        """The station of transfer unit `unit` (ValueError: none)."""
+        desc = self.node.descriptors.get(unit)
+        if desc is None or desc.station is None:
+            raise ValueError(f"{unit} stands at no station of the shop floor")
+        return desc.station
 
     async def _set_belt(self, belt: str, speed: float) -> bool:
         if belt not in ("left", "right"):
@@ -128,7 +143,6 @@ class ModuleRole(Role):
     async def _bid(self, order: str) -> str:
         """This module's bid for an order (`_dispatch`): expected seconds per candidate
         target from where it stands, by its own planner."""
-        from transfertwin.cps.dispatch import estimate
 
         doc = json.loads(order)
         units = self.node.floor.units
@@ -148,7 +162,6 @@ class ModuleRole(Role):
 
     async def _assign(self, op_id: str, source: str, target: str, obj: str,
                       plan: str = "{}") -> bool:  # fmt: skip
-        from transfertwin.cps.opcua import OperationRefused
 
         if self.op is not None:
             if self.op["operation"] == op_id:
@@ -178,7 +191,6 @@ class ModuleRole(Role):
         return True
 
     async def _run(self, op: dict[str, Any]) -> None:
-        from transfertwin.cps.apps import legs_of, run_transport_operation
 
         op_id, obj = op["operation"], op["object"]
         await self.set("CurrentTask", f"{op_id}: {obj} {op['source']} -> {op['target']}")
@@ -200,13 +212,13 @@ class ModuleRole(Role):
         skills.heights = self.state.data.setdefault("heights", {})  # learnt by the camera
         faces = self.state.data.setdefault("faces", {})  # of the objects on board
         if op["source"] == self.aid:  # on board already: it lies as it was loaded
-            self._face = faces.get(obj, "front")
+            self.face = faces.get(obj, "front")
         else:
-            self._face = faces[obj] = (op.get("load") or {}).get("face", "front")
-        skills.face = self._face
+            self.face = faces[obj] = (op.get("load") or {}).get("face", "front")
+        skills.face = self.face
         self._op_id = op_id
-        self._lost_in_gap = False
-        self._attempt = 0
+        self.lost_in_gap = False
+        self.attempt = 0
         try:
             legs = legs_of(op["source"], op["target"])
             if op["source"] == self.aid:  # on board already: the delivery leg only
@@ -221,17 +233,16 @@ class ModuleRole(Role):
             if step in UNCERTAIN_STEPS:
                 self.state.data["possesses"] = [o for o in self.state.data["possesses"]
                                                 if o != obj]  # fmt: skip
-            await self._undock(self.aid)
+            await self.undock()
             with self.env.lock:
                 self.env.undock()
             await self.set("State", "idle")
-        if self._lost_in_gap:  # the hand-over policy gave up with the object in the gap
+        if self.lost_in_gap:  # the hand-over policy gave up with the object in the gap
             result["location_unknown"] = True
             self.state.data["possesses"] = [o for o in self.state.data["possesses"] if o != obj]
         result["docking"] = self.node.cfg.docking
         result["loaded_state"] = skills.load_state  # a retried pick-up may have changed it
         with contextlib.suppress(Exception):  # modelled floor time, for the KPIs
-            from transfertwin.cps.dispatch import floor_seconds
 
             result["floor_s"] = await asyncio.to_thread(
                 floor_seconds, result, self.robot, op.get("start_pose") or self.robot.pose,
@@ -243,7 +254,9 @@ class ModuleRole(Role):
 
     def _transport(self, source: str, target: str, obj: str):
         """The skills a leg runs with (`TransportSkills`): the simulation's here."""
-        return _ModuleTransport(self, self.aid, source, target, obj)
+        from transfertwin.cps.roles._module_skills import ModuleSkills  # the study stack
+
+        return ModuleSkills(self, source, target, obj)
 
     def _report(self, op_id: str, event: dict[str, Any]) -> None:
         """Queue a report to the TMS (persisted; sent in order until acknowledged)."""
@@ -269,8 +282,9 @@ class ModuleRole(Role):
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(self._outbox_kick.wait(), 0.5)
 
-    # -- what `VirtualTransport` calls --------------------------------------------------------
-    async def _publish_pose(self, tm: str) -> None:
+    # -- the module's side of its skills (`ModuleHost`) ------------------------------------
+    async def publish_pose(self) -> None:
+        """Publish and persist the module's floor pose (PoseX, PoseY, PoseTheta)."""
         x, y, theta = (float(v) for v in self.robot.pose)
         for prop, value in (("PoseX", x), ("PoseY", y), ("PoseTheta", theta)):
             await self.set(prop, value)
@@ -278,23 +292,26 @@ class ModuleRole(Role):
         self.state.data["station"] = self.robot.docked_at
         self.state.save()
 
-    async def _docking_estimate(self, tm: str, unit: str, error, seed: int):
-        observed = functools.partial(_observe_docking, self.robot, error, seed)
-        return await _props_docking_estimate(self, tm, unit, error, observed)  # PropS in the loop
+    async def docking_estimate(self, unit: str, error, seed: int):
+        """The docking error the transfer uses, and what PropS said of it."""
+        observed = functools.partial(observe_docking, self.robot, error, seed)
+        return await props_docking_estimate(self, unit, error, observed)  # PropS in the loop
 
-    def _error(self, source: str, target: str, obj: str, leg: int):
-        from transfertwin.cps.apps import docking_model
+    def docking_error(self, source: str, target: str, obj: str, leg: int):
+        """The docking error drawn for this try of leg `leg` (sampled docking)."""
         from transfertwin.study.experiment import experiment_seeds
 
-        key = f"{obj}:{source}:{target}:{self._op_id}:{self._attempt}"
+        key = f"{obj}:{source}:{target}:{self._op_id}:{self.attempt}"
         seed, _ = experiment_seeds(self.node.cfg.seed, key, leg, 0)
         return docking_model().sample(seed)
 
-    def _locked(self, fn, *args):
+    def locked(self, fn, *args):
+        """`fn(*args)` with the simulation's lock held."""
         with self.env.lock:
             return fn(*args)
 
-    async def _dock(self, tm: str, unit: str) -> bool:
+    async def dock(self, unit: str) -> bool:
+        """Publish the docking at `unit`, on both sides."""
         await self.set("DockedAt", unit)
         try:
             await self.node.peers.write(unit, "DockedTransportModule", self.aid)
@@ -302,7 +319,8 @@ class ModuleRole(Role):
             raise ConnectionError(f"{unit} not answering while docking: {exc}") from None
         return True
 
-    async def _undock(self, tm: str) -> bool:
+    async def undock(self) -> bool:
+        """Leave the unit docked at, and clear its docking and barriers."""
         unit = await self.get("DockedAt")
         await self.set("DockedAt", "")
         if unit:
@@ -317,20 +335,20 @@ class ModuleRole(Role):
     async def _dock_op(self, unit: str) -> bool:
         if unit not in self.node.floor.units:
             raise ValueError(f"no transfer unit {unit!r}")
-        return await self._dock(self.aid, unit)
+        return await self.dock(unit)
 
     async def _undock_op(self) -> bool:
-        return await self._undock(self.aid)
+        return await self.undock()
 
     async def _unit_hal(self, unit: str) -> MirroredUnitHAL:
         """The docked unit's HAL: its OPC UA interface, mirrored into this simulation."""
-        from transfertwin.cps.opcua import OpcUaUnitHAL
 
         session = await self.node.peers.session(unit)
         loop = asyncio.get_running_loop()
         return MirroredUnitHAL(OpcUaUnitHAL(session, loop, timeout_s=10), self.env.system.tu, loop)
 
-    async def _transfer(self, tm: str, unit: str, direction):
+    async def transfer(self, unit: str, direction):
+        """One OTS between this module and `unit` (its belts over OPC UA, mirrored here)."""
         from transfertwin.study.experiment import scene_controller
 
         hal = await self._unit_hal(unit)
@@ -342,7 +360,7 @@ class ModuleRole(Role):
             try:
                 ctl = scene_controller(self.env.scene, system.tm, hal, vision or system,
                                        self.env.clock)  # fmt: skip
-                return ctl.transfer(direction, self._face, None)
+                return ctl.transfer(direction, self.face, None)
             finally:
                 if vision is not None:
                     vision.close()
@@ -362,15 +380,14 @@ class ModuleRole(Role):
 
         load = (self.op or {}).get("load") or {}
         xy = POSITIONS[str(load.get("conveyor", "both"))]
-        seed = zlib.crc32(f"{self._op_id}:{self._attempt}".encode())
+        seed = zlib.crc32(f"{self._op_id}:{self.attempt}".encode())
         return open_sensor(self.env.system, expected_xy=xy,
                            theta_rad=math.radians(float(load.get("theta_deg", 0.0))),
                            seed=seed)  # fmt: skip
 
-    async def _take_back(self, unit: str, to_unit: bool = False) -> bool:
+    async def take_back(self, unit: str, to_unit: bool = False) -> bool:
         """Reverse both belt pairs (the unit's through its interface) in the simulation
         until the object is back (`cps.apps._hand_over.take_back`)."""
-        from transfertwin.cps.apps import take_back
 
         hal = await self._unit_hal(unit)
         system = self.env.system
@@ -382,7 +399,8 @@ class ModuleRole(Role):
 
         return await asyncio.to_thread(reverse)
 
-    async def _moved(self, obj: str, holder: str) -> None:
+    async def moved(self, obj: str, holder: str) -> None:
+        """A transfer put `obj` onto `holder`: this module's possessions and the TMS learn it."""
         own = set(self.state.data["possesses"])
         own.add(obj) if holder == self.aid else own.discard(obj)
         self.state.data["possesses"] = sorted(own)
@@ -391,118 +409,7 @@ class ModuleRole(Role):
         self._report(self._op_id, {"event": "moved", "object": obj, "holder": holder})
 
 
-#: Standard deviations PropS is told for a unit camera's ChArUco docking measurement:
-#: about twice the spread measured on this rig with 3 grey levels of pixel noise (0.05 mm,
-#: 0.2 mrad; docs/architecture.md, "PropS in the loop").
-CAMERA_SIGMA_XY_M = 1e-4
-CAMERA_SIGMA_THETA_RAD = 5e-4
-
-
-@functools.cache
-def _charuco_rig():
-    from transfertwin.navigation import CharucoRig
-
-    return CharucoRig(pixel_noise_sd=3.0)
-
-
-def _observe_docking(robot, error, seed: int):
-    """What is sensed at a docking: the module's own localisation fix of its world pose
-    (x, y, θ, σ_xy, σ_θ) and the unit camera's ChArUco measurement of the docking error
-    (x, y, θ; None when the board is not found)."""
-    from transfertwin.navigation import localise
-
-    rng = np.random.default_rng(np.random.SeedSequence([seed, 11]))
-    noise = robot.cfg.noise
-    own = localise(robot.pose, noise, rng)
-    truth = np.array([error.x_m, error.y_m, error.theta_rad])
-    seen = _charuco_rig().measure_error(truth, rng)
-    return ((*(float(v) for v in own), noise.loc_xy_sd_m, noise.loc_theta_sd_rad),
-            None if seen is None else tuple(float(v) for v in seen))  # fmt: skip
-
-
-def _mm_deg(x: float, y: float, theta: float) -> dict[str, float]:
-    return {"x_mm": round(x * 1e3, 4), "y_mm": round(y * 1e3, 4),
-            "theta_deg": round(math.degrees(theta), 4)}  # fmt: skip
-
-
-async def _props_docking_estimate(role, tm: str, unit: str, error, observed,
-                                  measured: str = "true"):  # fmt: skip
-    """PropS in the loop: report the module's pose and the unit camera's observation
-    (`observed()`, run in a worker thread: (x, y, θ, σ_xy, σ_θ), and (x, y, θ) or None) to
-    PropS, and take the docking error from its fused estimate (with its uncertainty). On
-    the emulated plant the physics docks with the true error (it is the reality; the
-    estimate is what the twin knows). Without PropS on the floor, or when it does not
-    answer, `error` (recorded as `measured`: the true one, or the module's localisation's
-    on real hardware), and why."""
-    from transfertwin.sim import DockingError
-
-    props = next((d.asset_id for d in role.node.descriptors.values()
-                  if d.asset_class == "props"), None)  # fmt: skip
-    if props is None:
-        return error, None
-    own, seen = await asyncio.to_thread(observed)
-    info: dict[str, Any] = {measured: _mm_deg(error.x_m, error.y_m, error.theta_rad),
-                            "camera": seen is not None}  # fmt: skip
-    try:
-        await asyncio.wait_for(role.node.peers.call(props, "ReportPose", tm, tm, *own), 10.0)
-        if seen is not None:
-            await asyncio.wait_for(role.node.peers.call(
-                props, "ReportRelativePose", f"{unit}/camera", tm, unit, *seen,
-                CAMERA_SIGMA_XY_M, CAMERA_SIGMA_THETA_RAD), 10.0)  # fmt: skip
-        est = json.loads(await asyncio.wait_for(
-            role.node.peers.call(props, "DockingError", tm, unit), 10.0))  # fmt: skip
-        fused = DockingError(est["x_m"], est["y_m"], est["theta_rad"])
-    except Exception as exc:  # PropS away, or an estimate outside the dockable range
-        log.info("%s: docking error from PropS not available (%s); the %s one", tm, exc,
-                 measured)  # fmt: skip
-        return error, {**info, "used": measured, "why": f"{type(exc).__name__}: {exc}"}
-    info["fused"] = {**_mm_deg(fused.x_m, fused.y_m, fused.theta_rad),
-                     "sd_x_mm": round(est["sd_x_m"] * 1e3, 4),
-                     "sd_y_mm": round(est["sd_y_m"] * 1e3, 4),
-                     "sd_theta_deg": round(math.degrees(est["sd_theta_rad"]), 4)}  # fmt: skip
-    if role.node.cfg.hal.kind == "plant":
-        return error, {**info, "used": "true (the plant's physics)"}
-    return fused, {**info, "used": "fused"}
-
-
 def _warm_up() -> None:
     """Fit the docking-error generator once (about 0.6 s) before the first operation."""
-    from transfertwin.cps.apps import docking_model
 
     docking_model()
-
-
-def _make_transport():
-    from transfertwin.cps.apps import HandOverRetries, VirtualTransport
-
-    class ModuleTransport(HandOverRetries, VirtualTransport):
-        """The skills of `VirtualTransport` with the hand-over policy (`HandOverRetries`:
-        a failed transfer taken back and tried again); a module that
-        restarted with an object on board puts it back on its belts in the simulation
-        before docking to deliver it."""
-
-        def _seed(self, leg):
-            return super()._seed(leg) + 7919 * self.attempt
-
-        async def dock(self, leg):
-            env = self.cps.env
-            if leg.name != "pick-up" and env.object_ref != self.obj:
-                await asyncio.to_thread(self.cps._locked, _load_on_module, env, self.obj)
-            return await super().dock(leg)
-
-    return ModuleTransport
-
-
-def _ModuleTransport(*args):
-    return _make_transport()(*args)
-
-
-def _load_on_module(env, obj: str) -> None:
-    """Put `obj` on the module's belts in the simulation (after a restart of the module)."""
-    from transfertwin.sim import DockingError
-
-    system = env.use(obj)
-    system.reset(DockingError(0.0, 0.0, 0.0))
-    system.place("front", 0.0, -0.2, 0.0)
-    system.clock.wait(env.scene.placement.settle_time_s)
-    env.docked_unit = None

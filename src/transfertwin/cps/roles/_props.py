@@ -26,16 +26,14 @@ import math
 from typing import TYPE_CHECKING, Any
 
 from transfertwin._errors import InputError
+from transfertwin.cps.apps import PoseGraph, PoseObservation
 from transfertwin.cps.node import Role
+from transfertwin.cps.roles._unit import UNIT_SIGMA_THETA_RAD, UNIT_SIGMA_XY_M
 
 if TYPE_CHECKING:
     from transfertwin.cps.node import AssetNode
 
-__all__ = ["UNIT_SIGMA_THETA_RAD", "UNIT_SIGMA_XY_M", "PropsRole"]
-
-#: Standard deviations of a unit's surveyed floor pose.
-UNIT_SIGMA_XY_M = 0.002
-UNIT_SIGMA_THETA_RAD = 0.002
+__all__ = ["PropsRole"]
 
 
 def _sd(cov) -> list[float]:
@@ -47,7 +45,6 @@ class PropsRole(Role):
 
     def __init__(self, node: AssetNode) -> None:
         super().__init__(node)
-        from transfertwin.cps.apps import PoseGraph
 
         self.poses = PoseGraph()
         self.docking: dict[str, dict[str, Any]] = {}  # module -> its last docking error
@@ -58,7 +55,6 @@ class PropsRole(Role):
                 "FusedPose": self._fused, "DockingError": self._docking_error}  # fmt: skip
 
     async def start(self) -> None:
-        from transfertwin.cps.apps import PoseObservation
 
         floor = self.node.floor
         shop = floor.shop_floor()
@@ -70,7 +66,6 @@ class PropsRole(Role):
         await self._publish()
 
     async def _report(self, source, subject, x, y, theta, sigma_xy, sigma_theta) -> bool:
-        from transfertwin.cps.apps import PoseObservation
 
         obs = PoseObservation(source, subject, x, y, theta, sigma_xy, sigma_theta)
         if source == subject:  # it moved: what others saw of it is stale
@@ -82,7 +77,6 @@ class PropsRole(Role):
 
     async def _report_relative(self, source, subject, relative_to, x, y, theta, sigma_xy,
                                sigma_theta) -> bool:  # fmt: skip
-        from transfertwin.cps.apps import PoseObservation
 
         self.poses.put(PoseObservation(source, subject, x, y, theta, sigma_xy, sigma_theta,
                                        relative_to=relative_to))  # fmt: skip

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from transfertwin.cps.aas import AssetKind
 from transfertwin.cps.node import Role
 from transfertwin.cps.roles._graph import GraphRole
 from transfertwin.cps.roles._unit import ObjectRole, UnitRole
@@ -21,6 +22,10 @@ def role_for(node: AssetNode) -> Role:
     stack or the dispatcher are imported when a node of their class is made: a unit's or an
     object's process imports none of them (`prepare_forking` keeps their pages shared)."""
     cls = node.desc.asset_class
+    if node.desc.kind is AssetKind.PHYSICAL and cls == "transfer_unit":  # the plant's own
+        from transfertwin.cps.roles._plant_unit import PlantUnitRole
+
+        return PlantUnitRole(node)
     if cls == "transport_module":
         if node.cfg.hal.kind == "remote":  # on real hardware, behind its HAL gateway
             from transfertwin.cps.roles._remote_module import RemoteModuleRole

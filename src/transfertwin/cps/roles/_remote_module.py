@@ -35,6 +35,8 @@ import time
 
 import numpy as np
 
+from transfertwin._errors import InputError
+from transfertwin.cps.apps import HandOverRetries, StepResult, form_ots, take_back, transfer_step
 from transfertwin.cps.hal import (
     GatewayError,
     ModuleGateway,
@@ -43,107 +45,100 @@ from transfertwin.cps.hal import (
     gateway_refusal,
     poll_gateway,
 )
+from transfertwin.cps.opcua import OpcUaUnitHAL
+from transfertwin.cps.roles._docking import props_docking_estimate
 from transfertwin.cps.roles._module import ModuleRole
+from transfertwin.navigation import relative
+from transfertwin.ots import BeltThresholds, TransferDirection
+from transfertwin.perception import AABB
+from transfertwin.sim import DockingError
 
 __all__ = ["RemoteModuleRole"]
 
 log = logging.getLogger("transfertwin.cps")
 
 
-def _make_skills():
-    from transfertwin._errors import InputError
-    from transfertwin.cps.apps import HandOverRetries, StepResult, form_ots, transfer_step
-    from transfertwin.navigation import relative
-    from transfertwin.ots import BeltThresholds, TransferDirection
-    from transfertwin.perception import AABB
-    from transfertwin.sim import DockingError
+class GatewaySteps:
+    """The steps of a leg (`TransportSkills`) on the module's hardware, one try each."""
 
-    class GatewaySteps:
-        """The steps of a leg (`TransportSkills`) on the module's hardware, one try each."""
+    load_state: dict | None = None
+    camera = False
+    face = "front"
 
-        load_state: dict | None = None
-        camera = False
-        face = "front"
+    def __init__(self, host: RemoteModuleRole, source: str, target: str, obj: str):
+        self.host = host
+        self.obj, self.source, self.target = obj, source, target
 
-        def __init__(self, role: RemoteModuleRole, source: str, target: str, obj: str):
-            self.role = self.cps = role  # `cps`: the module's role, as `HandOverRetries` asks
-            self.obj, self.source, self.target = obj, source, target
+    def _station(self, leg) -> str:
+        return self.host.station_of(leg.unit)
 
-        def _station(self, leg) -> str:
-            station = self.role.assets[leg.unit].desc.station
-            if station is None:
-                raise ValueError(f"{leg.unit} stands at no station of the shop floor")
-            return station
+    async def navigate(self, leg) -> StepResult:
+        station = self._station(leg)
+        t0 = time.monotonic()
+        ok, why = await self.host.gateway.command("navigate", station)
+        await self.host.refresh_pose()
+        return StepResult(ok, why, {"station": station,
+                                    "drive_s": round(time.monotonic() - t0, 2)})
 
-        async def navigate(self, leg) -> StepResult:
-            station = self._station(leg)
-            t0 = time.monotonic()
-            ok, why = await self.role.gateway.command("navigate", station)
-            await self.role._refresh_pose()
-            return StepResult(ok, why, {"station": station,
-                                        "drive_s": round(time.monotonic() - t0, 2)})
+    async def dock(self, leg) -> StepResult:
+        role, station = self.host, self._station(leg)
+        role.at_station = station  # a failed dock is undocked from too
+        ok, why = await role.gateway.command("dock", station)
+        pose = await role.refresh_pose()
+        goal = role.robot.floor.station(station).goal_pose()
+        xi = tuple(float(v) for v in relative(goal, pose))
+        info = {"station": station, **_error_info(xi),
+                "source": "the module's localisation at the gateway"}  # fmt: skip
+        if not ok:
+            return StepResult(False, f"docking at {leg.unit}: {why}", info)
+        try:
+            err = DockingError(*xi)
+        except InputError as exc:  # an error the pair cannot work with
+            await role.undock()
+            return StepResult(False, f"docking at {leg.unit}: {exc}", info)
+        used, props = await role.fused_error(leg.unit, err, pose)
+        if props is not None:  # PropS in the loop: its fused estimate is the record's
+            info["props"] = props
+            if props["used"] == "fused":
+                info |= {**_error_info((used.x_m, used.y_m, used.theta_rad)),
+                         "source": "PropS's fused estimate"}  # fmt: skip
+        role.robot.docked_at = station
+        role.env.docked_unit = leg.unit
+        await role.dock(leg.unit)
+        return StepResult(True, info=info)
 
-        async def dock(self, leg) -> StepResult:
-            role, station = self.role, self._station(leg)
-            role.at_station = station  # a failed dock is undocked from too
-            ok, why = await role.gateway.command("dock", station)
-            pose = await role._refresh_pose()
-            goal = role.robot.floor.station(station).goal_pose()
-            xi = tuple(float(v) for v in relative(goal, pose))
-            info = {"station": station, **_error_info(xi),
-                    "source": "the module's localisation at the gateway"}  # fmt: skip
-            if not ok:
-                return StepResult(False, f"docking at {leg.unit}: {why}", info)
-            try:
-                err = DockingError(*xi)
-            except InputError as exc:  # an error the pair cannot work with
-                await role._undock(role.aid)
-                return StepResult(False, f"docking at {leg.unit}: {exc}", info)
-            used, props = await role._fused_error(leg.unit, err, pose)
-            if props is not None:  # PropS in the loop: its fused estimate is the record's
-                info["props"] = props
-                if props["used"] == "fused":
-                    info |= {**_error_info((used.x_m, used.y_m, used.theta_rad)),
-                             "source": "PropS's fused estimate"}  # fmt: skip
-            role.robot.docked_at = station
-            role.env.docked_unit = leg.unit
-            await role._dock(role.aid, leg.unit)
-            return StepResult(True, info=info)
+    async def form_ots(self, leg) -> StepResult:
+        role = self.host
+        s = await role.gateway.object_state()
+        boxes = [] if s is None else [AABB(tuple(float(v) for v in s[1:4]),
+                                           tuple(float(v) for v in s[4:7]))]  # fmt: skip
+        pickup = leg.direction is TransferDirection.TU_TO_TM
+        check = form_ots(boxes, leg.direction, BeltThresholds(t_max=role.env.scene.t_max_s),
+                         obj=self.obj, tm=role.aid, unit=leg.unit,
+                         receiver_holds=role.carried() if pickup else [],
+                         face=self.face)  # fmt: skip
+        info = {"source": "object sensor at the gateway",
+                "boxes": [b.as_dict() for b in boxes]}  # fmt: skip
+        log.info("%s: sensed %s and itself: %d object(s)%s", role.aid, leg.unit,
+                 len(boxes), "" if check.ok else f"; no OTS: {check.reason}")  # fmt: skip
+        return StepResult(check.ok, check.reason, info)
 
-        async def form_ots(self, leg) -> StepResult:
-            role = self.role
-            s = await role.gateway.object_state()
-            boxes = [] if s is None else [AABB(tuple(float(v) for v in s[1:4]),
-                                               tuple(float(v) for v in s[4:7]))]  # fmt: skip
-            pickup = leg.direction is TransferDirection.TU_TO_TM
-            check = form_ots(boxes, leg.direction, BeltThresholds(t_max=role.env.scene.t_max_s),
-                             obj=self.obj, tm=role.aid, unit=leg.unit,
-                             receiver_holds=role._objects_at(role.aid) if pickup else [],
-                             face=self.face)  # fmt: skip
-            info = {"source": "object sensor at the gateway",
-                    "boxes": [b.as_dict() for b in boxes]}  # fmt: skip
-            log.info("%s: sensed %s and itself: %d object(s)%s", role.aid, leg.unit,
-                     len(boxes), "" if check.ok else f"; no OTS: {check.reason}")  # fmt: skip
-            return StepResult(check.ok, check.reason, info)
+    async def transfer(self, leg) -> StepResult:
+        rec = await self.host.transfer(leg.unit, leg.direction)
+        log.info("%s: %s %s at %s: y = %d", self.host.aid, leg.name, self.obj, leg.unit,
+                 rec.y)  # fmt: skip
+        return transfer_step(rec)
 
-        async def transfer(self, leg) -> StepResult:
-            rec = await self.role._gateway_transfer(leg.unit, leg.direction, self.face)
-            log.info("%s: %s %s at %s: y = %d", self.role.aid, leg.name, self.obj, leg.unit,
-                     rec.y)  # fmt: skip
-            return transfer_step(rec)
+    async def resolve(self, leg, success: bool) -> None:
+        role = self.host
+        if success:
+            await role.moved(self.obj, role.aid if leg.name == "pick-up" else leg.unit)
+        await role.undock()
 
-        async def resolve(self, leg, success: bool) -> None:
-            role = self.role
-            if success:
-                await role._moved(self.obj, role.aid if leg.name == "pick-up" else leg.unit)
-            await role._undock(role.aid)
-
-    class GatewayTransport(HandOverRetries, GatewaySteps):
-        """The steps of a leg on the module's hardware with the hand-over policy: a failed
-        transfer is taken back with the belts at the gateway and tried again after a dock
-        commanded anew."""
-
-    return GatewayTransport
+class GatewaySkills(HandOverRetries, GatewaySteps):
+    """The steps of a leg on the module's hardware with the hand-over policy: a failed
+    transfer is taken back with the belts at the gateway and tried again after a dock
+    commanded anew."""
 
 
 def _error_info(xi) -> dict[str, float]:
@@ -162,41 +157,40 @@ class RemoteModuleRole(ModuleRole):
         self.at_station: str | None = None  # a dock was commanded there (done or not)
 
     def _transport(self, source: str, target: str, obj: str):
-        return _make_skills()(self, source, target, obj)
+        return GatewaySkills(self, source, target, obj)
 
     async def start(self) -> None:
         with contextlib.suppress(GatewayError):  # where the machine stands, if it answers
-            await self._refresh_pose()
+            await self.refresh_pose()
         await super().start()
         self.node.spawn(self._poll_pose())
 
     async def stop(self) -> None:
         await self.gateway.close()
 
-    async def _refresh_pose(self) -> np.ndarray:
+    async def refresh_pose(self) -> np.ndarray:
+        """The module's pose at the gateway, published when it changed."""
         pose = await self.gateway.pose()
         if not np.array_equal(pose, self.robot.pose):
             self.robot.pose = pose
-            await self._publish_pose(self.aid)
+            await self.publish_pose()
         return pose
 
-    async def _fused_error(self, unit: str, error, pose):
+    async def fused_error(self, unit: str, error, pose):
         """PropS in the loop: the module's localisation fix at the gateway (`pose`, with
         the σ of the module's navigation model) reported to PropS, and the docking error
         taken from its fused estimate ((error used, the record's ``props``), as
-        `ModuleRole._docking_estimate` does with a simulated fix). No unit camera is seen
+        `ModuleRole.docking_estimate` does with a simulated fix). No unit camera is seen
         from here (a unit on real hardware would report its own)."""
-        from transfertwin.cps.roles._module import _props_docking_estimate
-
         noise = self.robot.cfg.noise
         own = (*(float(v) for v in pose), noise.loc_xy_sd_m, noise.loc_theta_sd_rad)
-        return await _props_docking_estimate(self, self.aid, unit, error, lambda: (own, None),
-                                             measured="gateway")  # fmt: skip
+        return await props_docking_estimate(self, unit, error, lambda: (own, None),
+                                            measured="gateway")  # fmt: skip
 
     async def _poll_pose(self) -> None:
         """Publish the module's pose as the gateway reports it (a gateway away: said once,
         kept trying)."""
-        await poll_gateway(self.aid, self._refresh_pose, max(self.node.cfg.hal.poll_s, 0.2))
+        await poll_gateway(self.aid, self.refresh_pose, max(self.node.cfg.hal.poll_s, 0.2))
 
     async def _set_belt(self, belt: str, speed: float) -> bool:
         try:  # the drive first: then publish
@@ -209,16 +203,16 @@ class RemoteModuleRole(ModuleRole):
     async def _dock_op(self, unit: str) -> bool:
         if unit not in self.node.floor.units:
             raise ValueError(f"no transfer unit {unit!r}")
-        station = self.assets[unit].desc.station
+        station = self.station_of(unit)
         for verb in ("navigate", "dock"):
             self.at_station = station if verb == "dock" else self.at_station
             ok, why = await self.gateway.command(verb, station)
             if not ok:
                 raise RuntimeError(why)
-        await self._refresh_pose()
-        return await self._dock(self.aid, unit)
+        await self.refresh_pose()
+        return await self.dock(unit)
 
-    async def _undock(self, tm: str) -> bool:
+    async def undock(self) -> bool:
         """Leave the docked unit, or the station a dock was tried at (the drive first); the
         unit's barriers are its hardware's."""
         unit = await self.get("DockedAt")
@@ -243,7 +237,6 @@ class RemoteModuleRole(ModuleRole):
     async def _pair(self, unit: str, work):
         """Run `work(tm, tu)` in a worker thread with the docked pair's HALs: the module's
         at the gateway (`ThreadHAL`) and `unit`'s OPC UA interface."""
-        from transfertwin.cps.opcua import OpcUaUnitHAL
 
         loop = asyncio.get_running_loop()
         session = await self.node.peers.session(unit)
@@ -255,11 +248,13 @@ class RemoteModuleRole(ModuleRole):
             await self.node.peers.drop(unit)
             raise
 
-    async def _gateway_transfer(self, unit: str, direction, face: str):
+    async def transfer(self, unit: str, direction):
         """One transfer between the module and the docked `unit` on the hardware: the OTS
         controller with the module's gateway, the unit's OPC UA interface and the wall
         clock."""
         from transfertwin.study.experiment import scene_controller
+
+        face = self.face
 
         def work(tm, tu):
             ctl = scene_controller(self.env.scene, tm, tu, tm, WallClock())
@@ -267,11 +262,10 @@ class RemoteModuleRole(ModuleRole):
 
         return await self._pair(unit, work)
 
-    async def _take_back(self, unit: str, to_unit: bool = False) -> bool:
+    async def take_back(self, unit: str, to_unit: bool = False) -> bool:
         """Reverse the module's belts at the gateway and `unit`'s through its interface
         until the object sensor sees the object back (`cps.apps._hand_over.take_back`, on the
         wall clock)."""
-        from transfertwin.cps.apps import take_back
 
         def work(tm, tu):
             return take_back(tm, tu, tm.sensed, WallClock(), self.env.scene, to_unit)

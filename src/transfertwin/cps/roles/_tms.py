@@ -1,5 +1,8 @@
-"""The Transport Module System in its own process: the owner of the object ledger and of
-the operations (docs/architecture.md, "Deployment").
+"""The Transport Module System on its node: the owner of the object ledger and of the
+operations (its `OrderBook`), and the dispatcher that runs them: the plan (the state to
+load the object in: the twin's ranking and the floor's own transfers), the auction among
+the idle modules, the assignment and the watch over the module's lease (docs/architecture.md,
+"Operation").
 
 An order is checked against the ledger and its object reserved in one step; it gets an id
 that is unique on the floor across restarts (the counter is persisted), then waits for an
@@ -24,12 +27,22 @@ import logging
 import time
 from typing import TYPE_CHECKING, Any
 
+from transfertwin.cps.dispatch import (
+    Bid,
+    OrderBook,
+    choose,
+    fallback,
+    order_view,
+    rerank,
+    study_predictions,
+)
 from transfertwin.cps.node import Role
+from transfertwin.cps.opcua import OperationRefused
 
 if TYPE_CHECKING:
     from transfertwin.cps.node import AssetNode
 
-__all__ = ["TmsRole", "order_view"]
+__all__ = ["TmsRole"]
 
 log = logging.getLogger("transfertwin.cps")
 
@@ -42,23 +55,14 @@ class TmsRole(Role):
 
     def __init__(self, node: AssetNode) -> None:
         super().__init__(node)
-        from transfertwin.cps.apps import ObjectLedger
-
-        data = self.state.data
-        modules = [m.asset_id for m in node.floor.modules]
-        self.ledger = ObjectLedger(data["locations"], node.floor.units, modules)
-        self.ops: dict[str, dict[str, Any]] = data["operations"]
-        for op in self.ops.values():
-            if op["state"] != "finished":
-                self.ledger.hold(op["operation"], op["object"])
+        self.book = OrderBook(node.floor, self.state.data, self.state.save)
+        self.ledger, self.ops = self.book.ledger, self.book.ops
         self.policy = node.floor.operation.policy
         self._claimed: dict[str, str] = {}  # module -> operation
         self._done: dict[str, asyncio.Event] = {}
-        self._pending: set[str] = set()  # holders/objects whose published location is stale
 
     def initial(self) -> dict[str, Any]:
-        return {"next_op": 1, "locations": self.node.floor.placement(), "unknown": {},
-                "operations": {}, "predictions": {}, "evidence": {}}  # fmt: skip
+        return OrderBook.initial(self.node.floor)
 
     def handlers(self) -> dict[str, Any]:
         return {"SubmitTransportOperation": self._submit, "OrderTo": self._order_to,
@@ -67,7 +71,7 @@ class TmsRole(Role):
                 "Locate": self._locate}  # fmt: skip
 
     async def start(self) -> None:
-        self._pending |= set(self.node.floor.units) | {o for o, _ in self.node.floor.objects}
+        self.book.pending |= set(self.node.floor.units) | {o for o, _ in self.node.floor.objects}
         for op_id, op in self.ops.items():
             if op["state"] != "finished":
                 log.info("TMS: resuming %s (%s)", op_id, op["phase"])
@@ -78,13 +82,8 @@ class TmsRole(Role):
         await self._counters()
         self.node.spawn(self._publisher())
 
-    def _save(self) -> None:
-        self.state.data["locations"] = self.ledger.locations()
-        self.state.save()
-
     async def live(self) -> dict[str, Any]:
-        running = sum(op["state"] != "finished" for op in self.ops.values())
-        return {"state": "busy" if running else "idle"}
+        return {"state": "busy" if self.book.running() else "idle"}
 
     # -- orders ---------------------------------------------------------------------------
     async def _submit(self, source: str, target: str, obj: str) -> str:
@@ -96,142 +95,28 @@ class TmsRole(Role):
         where the object is once its earlier orders have ended."""
         return await self._accept(obj, destination, None)
 
-    def _targets(self, destination: str) -> tuple[str, ...]:
-        from transfertwin.cps.opcua import OperationRefused
-
-        if destination in self.node.floor.units:
-            return (destination,)
-        group = self.node.floor.operation.group(destination)
-        if group is None:
-            groups = [g for g, _ in self.node.floor.operation.groups]
-            raise OperationRefused(
-                f"no transfer unit or destination group {destination!r}; units: "
-                f"{', '.join(self.node.floor.units)}"
-                + (f"; groups: {', '.join(groups)}" if groups else ""), argument="target")
-        return group
-
-    def _tail(self, obj: str) -> str | None:
-        """The last unfinished operation of `obj` (the one a new order chains after)."""
-        mine = [o for o in self.ops.values() if o["object"] == obj and o["state"] != "finished"]
-        return max(mine, key=lambda o: int(o["operation"][2:]))["operation"] if mine else None
-
     async def _accept(self, obj: str, destination: str, source: str | None) -> str:
-        """Check an order, refuse what cannot start (with the reason), else queue it: at
-        once, or after the object's unfinished order (orders for one object chain)."""
-        from transfertwin.cps.opcua import OperationRefused
-
-        if obj not in self.ledger.locations():
-            raise OperationRefused(f"{obj!r} is not an object of this floor; objects: "
-                                   f"{', '.join(self.ledger.locations())}",
-                                   argument="object")  # fmt: skip
-        unknown = self.state.data["unknown"].get(obj)
-        if unknown is not None:
-            raise OperationRefused(
-                f"where {obj} is is unknown since {unknown['operation']} "
-                f"(last seen at {unknown['last_seen']}); say where it is with "
-                f"'transfertwin cps locate'", status="BadInvalidState", argument="object")
-        targets = self._targets(destination)
-        after = self._tail(obj)
-        if after is not None and source is not None:
-            raise OperationRefused(f"{obj} is being moved by {after}; order it by destination "
-                                   "to chain after it", status="BadInvalidState",
-                                   argument="object")  # fmt: skip
-        where = source or self.ledger.location(obj)
-        modules = await self._modules()
-        online = [m for m in modules or () if m["online"]]
-        if modules is not None and not online:
-            raise OperationRefused("no transport module is online",
-                                   status="BadResourceUnavailable")  # fmt: skip
-        if after is None and where in self.node.floor.units and online and all(
-                m.get("possesses") for m in online):  # fmt: skip
-            held = "; ".join(f"{m['id']} carries {', '.join(m['possesses'])}" for m in online)
-            raise OperationRefused(f"every transport module carries an object ({held}): order "
-                                   "those onward first", status="BadResourceUnavailable",
-                                   argument="object")  # fmt: skip
-        if after is None and where in targets:
-            raise OperationRefused(f"{obj} is at {where} already, a unit of {destination}",
-                                   argument="target")  # fmt: skip
-        free = [t for t in targets if not self._occupied(t)]
-        if not free:
-            held = "; ".join(f"{t} holds {', '.join(self.ledger.objects_at(t))}" for t in targets)
-            raise OperationRefused(f"the destination is occupied ({held}): order that away "
-                                   "first", status="BadResourceUnavailable",
-                                   argument="target")  # fmt: skip
-        data = self.state.data
-        op_id = f"op{data['next_op']}"
-        if after is None:
-            self.ledger.reserve(op_id, where, free[0], obj)
-        data["next_op"] += 1
-        single = len(targets) == 1
-        self.ops[op_id] = {"operation": op_id, "object": obj,
-                           "source": where if after is None else None,
-                           "target": targets[0] if single else None,
-                           "destination": destination, "targets": list(targets),
-                           "after": after, "state": "queued", "phase": "queued",
-                           "module": None, "submitted": time.time(), "steps": [],
-                           "history": [[time.time(), "queued" if after is None else
-                                        f"queued after {after}"]]}  # fmt: skip
-        self._save()
-        log.info("TMS: %s %s -> %s (%s) accepted%s", op_id, where, destination, obj,
-                 f", after {after}" if after else "")  # fmt: skip
+        """Check and queue an order (`OrderBook.accept`), then run it."""
+        op_id = self.book.accept(obj, destination, source, await self._modules())
         await self._counters()
         self.node.spawn(self._execute(op_id))
         return op_id
-
-    def _occupied(self, unit: str) -> bool:
-        """`unit` holds as many objects as the floor's capacity allows (0: no limit),
-        counting none that an unfinished order takes away."""
-        capacity = self.node.floor.operation.capacity
-        if capacity == 0:
-            return False
-        leaving = {o["object"] for o in self.ops.values() if o["state"] != "finished"}
-        return sum(o not in leaving for o in self.ledger.objects_at(unit)) >= capacity
 
     async def _orders(self) -> str:
         return json.dumps([order_view(op) for op in self.ops.values()])
 
     async def _kpis(self) -> str:
-        return json.dumps(self._kpi_doc())
-
-    def _kpi_doc(self) -> dict[str, Any]:
-        from transfertwin.cps.dispatch import kpis
-
-        doc = kpis(self.ops.values(), [m.asset_id for m in self.node.floor.modules],
-                   self.node.floor.units, time.time())  # fmt: skip
-        return {"policy": self.policy, **doc}
+        return json.dumps(self.book.kpi_doc(self.policy))
 
     async def _status(self, op_id: str) -> str:
-        from transfertwin.cps.opcua import OperationRefused
-
-        if op_id not in self.ops:
-            raise OperationRefused(f"no operation {op_id!r}", argument="operation_id")
-        return json.dumps(self.ops[op_id])
+        return json.dumps(self.book.status(op_id))
 
     async def _ledger(self) -> str:
-        data = self.state.data
-        return json.dumps({"locations": self.ledger.locations(), "unknown": data["unknown"],
-                           "moving": self.ledger.moving(),
-                           "operations": list(self.ops.values())})  # fmt: skip
+        return json.dumps(self.book.ledger_doc())
 
     async def _locate(self, obj: str, holder: str) -> bool:
-        if obj not in self.ledger.locations():
-            raise ValueError(f"{obj!r} is not an object of this floor")
-        if holder not in self.ledger.holders:
-            raise ValueError(f"{holder!r} is no transfer unit or transport module of this floor")
-        if holder not in self.node.floor.units:  # type E keeps its own state (Table 3.1)
-            raise ValueError(f"{holder} is a transport module: it says itself what it carries; "
-                             "put the object on a transfer unit and locate it there")
-        if obj in self.ledger.moving():
-            raise ValueError(f"{obj} is being moved by {self.ledger.moving()[obj]}")
-        self._move(obj, holder)
-        log.info("TMS: an operator located %s at %s", obj, holder)
+        self.book.locate(obj, holder)
         return True
-
-    def _move(self, obj: str, holder: str) -> None:
-        previous = self.ledger.move(obj, holder)
-        self.state.data["unknown"].pop(obj, None)
-        self._save()
-        self._pending |= {previous, holder, obj}
 
     # -- execution ------------------------------------------------------------------------
     async def _modules(self) -> list[dict[str, Any]] | None:
@@ -263,13 +148,12 @@ class TmsRole(Role):
     async def _allocate(self, op_id: str) -> tuple[str, str, dict[str, Any]]:
         """Run the auction for `op_id` (`_dispatch`) until a module wins; claim it.
         Returns (module, target unit, the bids' record)."""
-        from transfertwin.cps.dispatch import Bid, choose
 
         op = self.ops[op_id]
         p = (op.get("plan") or {}).get("prediction") or {}
         while True:
             # the destination's units whose belts are free (or will be), the source excepted
-            targets = [t for t in op["targets"] if t != op["source"] and not self._occupied(t)]
+            targets = [t for t in op["targets"] if t != op["source"] and not self.book.occupied(t)]
             if self.policy != "predictive":
                 targets = targets[:1]
             if not targets:
@@ -299,28 +183,17 @@ class TmsRole(Role):
             await asyncio.sleep(0.5)
 
     async def _after(self, op_id: str) -> bool:
-        """Wait for the order `op_id` chains after; then take the object from where it is.
-        False when the order ended here (the object lost, or already at the destination)."""
+        """Wait for the order `op_id` chains after; then take the object from where it is
+        (`OrderBook.chain`). False when the order ended here."""
         op = self.ops[op_id]
         if op.get("after") is None or op["source"] is not None:
             return True
         prev = op["after"]
         if self.ops[prev]["state"] != "finished":
             await self._done.setdefault(prev, asyncio.Event()).wait()
-        obj = op["object"]
-        if obj in self.state.data["unknown"]:
-            self._finish(op_id, {"status": "failed before start", "failed_step": "queued",
-                                 "reason": f"{obj} was lost by {prev}: its place is unknown"})
+        if not self.book.chain(op_id):
+            self._ended(op_id)
             return False
-        where = self.ledger.location(obj)
-        if where in op["targets"]:
-            self._finish(op_id, {"status": "delivered", "reason": f"{obj} is at {where} "
-                                 f"already (after {prev})"})  # fmt: skip
-            return False
-        op["source"] = where
-        self.ledger.hold(op_id, obj)
-        op["history"].append([time.time(), f"{prev} ended: {obj} is at {where}"])
-        self._save()
         return True
 
     async def _plan(self, op: dict[str, Any]) -> dict[str, Any]:
@@ -338,7 +211,6 @@ class TmsRole(Role):
                     "note": "no prediction for this object: default state"}  # fmt: skip
         keys = ("face", "conveyor", "theta_deg")
         if self.node.floor.operation.learn:
-            from transfertwin.cps.dispatch import fallback, rerank
 
             evidence = self.state.data.setdefault("evidence", {}).get(op["object"], {})
             ranked = rerank(preds, evidence)
@@ -355,7 +227,6 @@ class TmsRole(Role):
     async def _predictions(self, obj: str, op_id: str) -> list[dict[str, Any]]:
         """The twin's ranked states for `obj`: cached; else the study store; else the
         Experiment Manager's on-the-fly experiments (not cached when it cannot answer)."""
-        from transfertwin.cps.dispatch import study_predictions
 
         cache = self.state.data.setdefault("predictions", {})
         if obj in cache:
@@ -380,7 +251,7 @@ class TmsRole(Role):
                                   "state"])  # fmt: skip
                 return []
         cache[obj] = preds
-        self._save()
+        self.book.save()
         return preds
 
     async def _ask_em(self, obj: str) -> list[dict[str, Any]]:
@@ -394,7 +265,6 @@ class TmsRole(Role):
             await asyncio.sleep(1.0)
 
     async def _execute(self, op_id: str) -> None:
-        from transfertwin.cps.opcua import OperationRefused
 
         op = self.ops[op_id]
         done = self._done.setdefault(op_id, asyncio.Event())
@@ -411,7 +281,7 @@ class TmsRole(Role):
                         + (f"; with the floor's transfers p = {pr['p']:.2f} (pick-up "
                            f"{pr['p_pickup']:.2f}, delivery {pr['p_delivery']:.2f})"
                            if "p" in pr else ""))])  # fmt: skip
-                self._save()
+                self.book.save()
         while op["module"] is None:
             module, target, record = await self._allocate(op_id)
             try:
@@ -439,7 +309,7 @@ class TmsRole(Role):
                       assigned=time.time(), auction=record)  # fmt: skip
             op["history"].append([time.time(), f"assigned to {module} for {target} "
                                                f"(expected {record['cost_s']:.0f} s)"])
-            self._save()
+            self.book.save()
             log.info("TMS: %s allocated to %s", op_id, module)
         await self._watch(op_id, done)
 
@@ -476,74 +346,29 @@ class TmsRole(Role):
                 })  # fmt: skip
 
     def _finish(self, op_id: str, result: dict[str, Any]) -> None:
-        op = self.ops[op_id]
-        obj = op["object"]
-        if result.get("location_unknown"):
-            self.state.data["unknown"][obj] = {"last_seen": self.ledger.location(obj),
-                                               "operation": op_id}  # fmt: skip
-            self._pending |= {self.ledger.location(obj), obj}
-        self.ledger.release(op_id, obj)
-        from transfertwin.cps.dispatch import record
+        self.book.finish(op_id, result)
+        self._ended(op_id)
 
-        record(self.state.data.setdefault("evidence", {}), obj,
-               (op.get("plan") or {}).get("state"), result)  # fmt: skip
-        ok = result.get("status") == "delivered"
-        op.update(state="finished", phase="done" if ok else "failed", result=result,
-                  location=self._where(obj), finished=time.time())  # fmt: skip
-        op["history"].append([time.time(), op["phase"]])
-        if op.get("module"):
-            self._claimed.pop(op["module"], None)
-        self._save()
+    def _ended(self, op_id: str) -> None:
+        """`op_id` has ended: its module is free, its waiters wake, the counters follow."""
+        module = self.ops[op_id].get("module")
+        if module:
+            self._claimed.pop(module, None)
         self._done.setdefault(op_id, asyncio.Event()).set()
         self.node.spawn(self._counters())
-        log.info("TMS: %s finished: %s; %s is at %s", op_id, result.get("status"), obj,
-                 op["location"])  # fmt: skip
-
-    def _where(self, obj: str) -> str:
-        unknown = self.state.data["unknown"].get(obj)
-        if unknown is None:
-            return self.ledger.location(obj)
-        return f"unknown, last seen at {unknown['last_seen']}"
 
     async def _progress(self, op_id: str, payload: str) -> bool:
         """A module's report: applied once (the TMS saves it before acknowledging)."""
-        event = json.loads(payload)
-        op = self.ops.get(op_id)
-        if op is None:
-            raise ValueError(f"no operation {op_id!r}")
-        kind = event.get("event")
-        if kind == "moved":
-            self._move(event["object"], event["holder"])
-            op["history"].append([event.get("t", time.time()),
-                                  f"{event['object']} onto {event['holder']}"])  # fmt: skip
-        elif kind == "step" and op["state"] != "finished":
-            op["phase"] = event["state"] if event["state"] != "idle" else op["phase"]
-            op["history"].append([event.get("t", time.time()), event["state"]])
-            op.setdefault("steps", []).append(
-                [event.get("t", time.time()), event["state"], event.get("unit")])
-        elif kind == "result":
-            if op["state"] == "finished":
-                late = event["result"]
-                op["history"].append([time.time(), f"late result: {late['status']}"])
-                obj = op["object"]
-                if (late.get("location_unknown") and obj not in self.ledger.moving()
-                        and obj not in self.state.data["unknown"]):  # fmt: skip
-                    # the module knows better than the lease did: the object may be in the gap
-                    self.state.data["unknown"][obj] = {"last_seen": self.ledger.location(obj),
-                                                       "operation": op_id}  # fmt: skip
-                    self._pending |= {self.ledger.location(obj), obj}
-            else:
-                self._finish(op_id, event["result"])
-                return True
-        self._save()
+        if self.book.progress(op_id, json.loads(payload)):
+            self._ended(op_id)
         return True
 
     # -- publication ----------------------------------------------------------------------
     async def _counters(self) -> None:
-        running = sum(op["state"] != "finished" for op in self.ops.values())
+        running = self.book.running()
         await self.set("QueuedOperations", running)
         await self.set("CompletedOperations", len(self.ops) - running)
-        k = self._kpi_doc()
+        k = self.book.kpi_doc(self.policy)
         low, high = k["success_share_ci95"]
         for prop, value in (("OperationsPerHour", k["operations_per_hour"]),
                             ("SuccessShare", k["success_share"]), ("SuccessShareLow", low),
@@ -556,38 +381,18 @@ class TmsRole(Role):
         ledger, retrying whatever could not be written (an asset that is away)."""
         units = set(self.node.floor.units)
         while True:
-            for aid in sorted(self._pending):
+            for aid in sorted(self.book.pending):
                 try:
                     if aid in units:
                         objs = [o for o in self.ledger.objects_at(aid)
-                                if o not in self.state.data["unknown"]]  # fmt: skip
+                                if o not in self.book.data["unknown"]]  # fmt: skip
                         await asyncio.wait_for(self.node.peers.call(
                             aid, "SetPossessedObjects", ",".join(objs)), 5)  # fmt: skip
                     elif aid in self.ledger.locations():
-                        lost = aid in self.state.data["unknown"]
+                        lost = aid in self.book.data["unknown"]
                         where = "" if lost else self.ledger.location(aid)
                         await asyncio.wait_for(self.node.peers.write(aid, "PossessedBy", where), 5)
-                    self._pending.discard(aid)
+                    self.book.pending.discard(aid)
                 except Exception as exc:
                     log.debug("TMS: %s not updated yet: %s", aid, exc)
             await asyncio.sleep(0.5)
-
-
-#: Order states of `cps orders` by the operation's phase (the module's steps, Fig. 5.9a).
-_ORDER_STATE = {"queued": "queued", "assigned": "assigned", "navigating": "driving",
-                "docking": "docking", "scanning": "docking", "transferring": "transferring",
-                "done": "done", "failed": "failed"}  # fmt: skip
-
-
-def order_view(op: dict[str, Any]) -> dict[str, Any]:
-    """One row of the order queue: id, object, from, to, state, module, reason."""
-    result = op.get("result") or {}
-    reason = result.get("reason") or None
-    if op["phase"] == "queued" and op.get("after") and op["source"] is None:
-        reason = f"waiting for {op['after']}"
-    return {"operation": op["operation"], "object": op["object"], "source": op["source"],
-            "destination": op.get("destination", op["target"]), "target": op["target"],
-            "state": _ORDER_STATE.get(op["phase"], op["phase"]), "module": op.get("module"),
-            "submitted": op["submitted"], "finished": op.get("finished"),
-            "reason": reason, "location": op.get("location"),
-            "loaded_state": (op.get("plan") or {}).get("state")}  # fmt: skip

@@ -8,15 +8,20 @@ import asyncio
 import logging
 from typing import TYPE_CHECKING, Any
 
+from transfertwin.cps.hal import GatewayHAL, poll_gateway
 from transfertwin.cps.node import Role
 
 if TYPE_CHECKING:
     from transfertwin.cps.node import AssetNode
 
-__all__ = ["POSE_REPORT_S", "ObjectRole", "UnitRole"]
+__all__ = ["POSE_REPORT_S", "UNIT_SIGMA_THETA_RAD", "UNIT_SIGMA_XY_M", "ObjectRole", "UnitRole"]
 
 log = logging.getLogger("transfertwin.cps")
 
+
+#: Standard deviations of a unit's surveyed floor pose (what it tells PropS).
+UNIT_SIGMA_XY_M = 0.002
+UNIT_SIGMA_THETA_RAD = 0.002
 
 #: How often a unit tells PropS its pose again, s.
 POSE_REPORT_S = 60.0
@@ -35,7 +40,6 @@ class UnitRole(Role):
         super().__init__(node)
         self.gateway = None
         if node.cfg.hal.kind == "remote":
-            from transfertwin.cps.hal import GatewayHAL
 
             self.gateway = GatewayHAL(node.cfg)
 
@@ -62,7 +66,6 @@ class UnitRole(Role):
     async def _report_pose(self) -> None:
         """Tell PropS where this unit stands (its surveyed docking goal on the floor), and
         again every `POSE_REPORT_S` (a restarted PropS hears it then)."""
-        from transfertwin.cps.roles._props import UNIT_SIGMA_THETA_RAD, UNIT_SIGMA_XY_M
 
         floor = self.node.floor
         spec = next(s for s in floor.stations if s.unit == self.aid)
@@ -85,7 +88,6 @@ class UnitRole(Role):
     async def _poll_barriers(self) -> None:
         """Publish the gateway's barriers as they change (a gateway away: said once, kept
         trying; the last values stay)."""
-        from transfertwin.cps.hal import poll_gateway
 
         shown: dict[str, bool] | None = None
 

@@ -169,7 +169,7 @@ function renderOrders(orders) {
     const steps = el("ol", { class: "steps" }, ...o.steps.map((s) => el("li", { text: when(s.t) + s.text })));
     const tr = el("tr", { id: "order-" + o.id, "data-state": o.state, "data-operation": o.operation || "",
       "data-placed-by": o.placed_by || "console" });
-    const by = o.placed_by === "console" ? o.id + (o.earlier_run ? " (earlier run)" : "") : "command line";
+    const by = o.placed_by === "console" ? o.id : "command line";
     for (const v of [by, o.operation || "", o.object, o.source, o.target, o.state, o.outcome || ""]) {
       tr.append(el("td", { text: v }));
     }

@@ -1,0 +1,153 @@
+"""Floor files read and written (the format: `transfertwin.cps.floor._floor_file`):
+`parse_floor` and `load_floor` check a document at the edge and give the frozen
+`FloorSpec`; `floor_toml` writes one back (what `load_floor` reads to an equal spec)."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+from transfertwin._errors import InputError
+from transfertwin.cps.floor._floor_file import (
+    LOGICAL_ASSETS,
+    FloorSpec,
+    ModuleSpec,
+    OperationSpec,
+    StationSpec,
+)
+from transfertwin.cps.floor._toml import finite, nonempty, read_toml
+
+__all__ = ["floor_toml", "load_floor", "parse_floor"]
+
+
+def parse_floor(doc: dict, name: str) -> FloorSpec:
+    """A `FloorSpec` from a parsed floor document (see the module docstring)."""
+    known = {"name", "size_m", "station", "module", "object", "logical", "operation", "hal"}
+    if unknown := sorted(set(doc) - known):
+        raise InputError(f"floor {name}: unknown key {unknown[0]!r}; known: "
+                         f"{', '.join(sorted(known))}")  # fmt: skip
+    name = str(doc.get("name", name))
+    size = doc.get("size_m", [12.0, 8.0])
+    if not isinstance(size, list) or len(size) != 2:
+        raise InputError(f"floor {name}: size_m must be [width, height] in metres")
+    size_m = (finite({"w": size[0]}, "w", f"floor {name}: size_m"),
+              finite({"h": size[1]}, "h", f"floor {name}: size_m"))  # fmt: skip
+    hal = doc.get("hal", "virtual")
+    if hal not in ("virtual", "plant"):
+        raise InputError(f"floor {name}: hal must be virtual or plant, got {hal!r} (a remote "
+                         "HAL is set per station, with its gateway)")  # fmt: skip
+    stations = []
+    for i, t in enumerate(doc.get("station", [])):
+        where = f"floor {name}: station {i + 1}"
+        gateway = t.get("gateway")
+        stations.append(StationSpec(nonempty(t, "name", where), finite(t, "x_m", where),
+                                    finite(t, "y_m", where), finite(t, "yaw_deg", where),
+                                    nonempty(t, "mount", where), str(t.get("hal", hal)),
+                                    None if gateway is None else str(gateway)))  # fmt: skip
+    modules = []
+    for i, t in enumerate(doc.get("module", [])):
+        where = f"floor {name}: module {i + 1}"
+        gateway = t.get("gateway")
+        modules.append(ModuleSpec(nonempty(t, "id", where), finite(t, "x_m", where),
+                                  finite(t, "y_m", where), float(t.get("theta_deg", 0.0)),
+                                  bool(t.get("standby", False)), str(t.get("hal", hal)),
+                                  None if gateway is None else str(gateway)))  # fmt: skip
+    objects = []
+    for i, t in enumerate(doc.get("object", [])):
+        where = f"floor {name}: object {i + 1}"
+        objects.append((nonempty(t, "id", where), nonempty(t, "at", where)))
+    logical = doc.get("logical", list(LOGICAL_ASSETS))
+    if not isinstance(logical, list) or not all(isinstance(a, str) for a in logical):
+        raise InputError(f"floor {name}: logical must be a list of asset ids")
+    return FloorSpec(name, size_m, tuple(stations), tuple(modules), tuple(objects),
+                     tuple(logical), _operation(doc.get("operation", {}), name))  # fmt: skip
+
+
+def _operation(table: object, name: str) -> OperationSpec:
+    where = f"floor {name}: [operation]"
+    if not isinstance(table, dict):
+        raise InputError(f"{where} must be a table")
+    known = {"policy", "study", "runs", "groups", "capacity", "sensor", "learn"}
+    if unknown := sorted(set(table) - known):
+        raise InputError(f"{where}: unknown key {unknown[0]!r}; known: {', '.join(sorted(known))}")
+    study = table.get("study")
+    if study is not None and (not isinstance(study, str) or not study):
+        raise InputError(f"{where}: study must be the path of a study store")
+    runs, capacity = table.get("runs", 4), table.get("capacity", 0)
+    for key, value in (("runs", runs), ("capacity", capacity)):
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise InputError(f"{where}: {key} must be an integer, got {value!r}")
+    groups = table.get("groups", {})
+    if not isinstance(groups, dict) or not all(
+            isinstance(v, list) and all(isinstance(u, str) for u in v) for v in groups.values()):
+        raise InputError(f"{where}: groups must map a name to a list of unit ids")  # fmt: skip
+    learn = table.get("learn", True)
+    if not isinstance(learn, bool):
+        raise InputError(f"{where}: learn must be true or false, got {learn!r}")
+    return OperationSpec(str(table.get("policy", "nearest-idle")), study, runs,
+                         tuple((g, tuple(u)) for g, u in groups.items()), capacity,
+                         str(table.get("sensor", "truth")), learn)  # fmt: skip
+
+
+def load_floor(path: Path | str, *, check_cores: bool = True) -> FloorSpec:
+    """Read a floor file; one `InputError` line for a missing, unreadable or invalid file.
+
+    Args:
+        path: The floor file.
+        check_cores: Also check that every object is a built-in core (imports the mesh
+            library; an asset process whose launcher checked it skips this).
+    """
+    path = Path(path)
+    doc = read_toml(path, missing="no such floor file",
+                    unreadable="not a readable TOML floor file")  # fmt: skip
+    spec = parse_floor(doc, path.stem)
+    study = spec.operation.study
+    if study is not None and not Path(study).is_absolute():  # relative to the floor file
+        op = replace(spec.operation, study=str((path.parent / study).resolve()))
+        spec = replace(spec, operation=op)
+    if not check_cores:
+        return spec
+    from transfertwin.objects import builtin_ids
+
+    cores = set(builtin_ids())
+    for obj, _ in spec.objects:
+        if obj not in cores:
+            raise InputError(f"{path}: object {obj!r} is not a built-in core (o1..o37)")
+    return spec
+
+
+def floor_toml(floor: FloorSpec) -> str:
+    """`floor` as a floor file (what `load_floor` reads back to an equal `FloorSpec`)."""
+    lines = [f"name = {json.dumps(floor.name)}",
+             f"size_m = [{floor.size_m[0]!r}, {floor.size_m[1]!r}]",
+             f"logical = [{', '.join(json.dumps(a) for a in floor.logical)}]"]  # fmt: skip
+    for s in floor.stations:
+        lines += ["", "[[station]]", f"name = {json.dumps(s.name)}", f"x_m = {s.x_m!r}",
+                  f"y_m = {s.y_m!r}", f"yaw_deg = {s.yaw_deg!r}",
+                  f"mount = {json.dumps(s.mount)}"]  # fmt: skip
+        if s.hal != "virtual":
+            lines.append(f"hal = {json.dumps(s.hal)}")
+        if s.gateway is not None:
+            lines.append(f"gateway = {json.dumps(s.gateway)}")
+    for m in floor.modules:
+        lines += ["", "[[module]]", f"id = {json.dumps(m.asset_id)}", f"x_m = {m.x_m!r}",
+                  f"y_m = {m.y_m!r}", f"theta_deg = {m.theta_deg!r}",
+                  f"standby = {'true' if m.standby else 'false'}"]  # fmt: skip
+        if m.hal != "virtual":
+            lines.append(f"hal = {json.dumps(m.hal)}")
+        if m.gateway is not None:
+            lines.append(f"gateway = {json.dumps(m.gateway)}")
+    for obj, at in floor.objects:
+        lines += ["", "[[object]]", f"id = {json.dumps(obj)}", f"at = {json.dumps(at)}"]
+    op = floor.operation
+    lines += ["", "[operation]", f"policy = {json.dumps(op.policy)}", f"runs = {op.runs}",
+              f"capacity = {op.capacity}", f"sensor = {json.dumps(op.sensor)}",
+              f"learn = {'true' if op.learn else 'false'}"]
+    if op.study is not None:
+        lines.append(f"study = {json.dumps(op.study)}")
+    if op.groups:
+        lines += ["", "[operation.groups]"]
+        lines += [f"{json.dumps(g)} = [{', '.join(json.dumps(u) for u in units)}]"
+                  for g, units in op.groups]  # fmt: skip
+    return "\n".join(lines) + "\n"

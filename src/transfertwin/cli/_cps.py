@@ -250,7 +250,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "200; docs/scaling.md)")  # fmt: skip
     p.add_argument("--policy", choices=("nearest-idle", "predictive"),
                    help="how the TMS assigns orders and chooses pre-transfer "
-                        "states (default: the floor file's, else nearest-idle)")  # fmt: skip
+                        "states (default: the floor file's, else predictive: the twin ranks the "
+                        "object's states, learnt on by the floor's own transfers)")  # fmt: skip
     p.add_argument("--study", metavar="STORE",
                    help="a study store whose per-state success shares the "
                         "predictive policy uses (default: the floor file's)")  # fmt: skip

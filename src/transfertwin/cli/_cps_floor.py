@@ -461,7 +461,8 @@ def register(csub: argparse._SubParsersAction) -> None:
     p.add_argument("--timeout", type=float, default=20.0,
                    help="seconds to wait for each to leave before killing it (default 20)")
     p.set_defaults(func=cmd_down)
-    p = csub.add_parser("locate", help="say where an object whose location is unknown lies")
+    p = csub.add_parser("locate", help="say where an object lies (its place unknown, or a module "
+                        "still carries it by its own record)")
     p.add_argument("--workdir", required=True)
     p.add_argument("--object", required=True)
     p.add_argument("--at", required=True, help="transfer unit or transport module")

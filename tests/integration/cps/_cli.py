@@ -109,7 +109,8 @@ class RunningCps:
         self._err = self.stderr_path.open("w")
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "transfertwin", "cps", "up", "--workdir", str(wd),
-             "--time-scale", "0", *extra], stdout=subprocess.PIPE, stderr=self._err, text=True,
+             "--time-scale", "0", "--policy", "nearest-idle", *extra],
+            stdout=subprocess.PIPE, stderr=self._err, text=True,
         )  # fmt: skip
         self.first_line: str | None = None
 
@@ -148,7 +149,7 @@ class EarlyFloor:
         self.wd = base / "w"
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "transfertwin", "cps", "up", "--floor", str(base / "floor.toml"),
-             "--workdir", str(self.wd), "--detach", *args],
+             "--workdir", str(self.wd), "--detach", "--policy", "nearest-idle", *args],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
         self._result: subprocess.CompletedProcess | None = None
         self.down = False

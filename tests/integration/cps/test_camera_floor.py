@@ -43,7 +43,8 @@ def _scans(node) -> list[dict]:
 def test_the_camera_learns_a_height_its_model_gets_wrong_and_expects_it(tmp_path):
     (tmp_path / "floor.toml").write_text(FLOOR)
     wd = tmp_path / "w"
-    up = tt("cps", "up", "--floor", str(tmp_path / "floor.toml"), "--workdir", str(wd),
+    up = tt("cps", "up", "--policy", "nearest-idle",
+            "--floor", str(tmp_path / "floor.toml"), "--workdir", str(wd),
             "--detach", "--time-scale", "0", "--plant-seed", "7", "--lease", "10",
             "--start-timeout", "150", timeout=200)  # fmt: skip
     assert up.returncode == 0, up.stderr

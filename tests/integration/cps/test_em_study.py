@@ -128,7 +128,8 @@ def floor(tmp_path_factory):
     base = tmp_path_factory.mktemp("emfloor")
     (base / "floor.toml").write_text(FLOOR)
     wd = base / "w"
-    up = tt("cps", "up", "--floor", str(base / "floor.toml"), "--workdir", str(wd), "--detach",
+    up = tt("cps", "up", "--policy", "nearest-idle",
+            "--floor", str(base / "floor.toml"), "--workdir", str(wd), "--detach",
             "--lease", "2", "--start-timeout", "150", timeout=200)  # fmt: skip
     assert up.returncode == 0, up.stderr
     started: list[subprocess.Popen] = []

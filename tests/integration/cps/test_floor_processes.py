@@ -71,9 +71,14 @@ def start(wd: Path, aid: str) -> subprocess.Popen:
     return proc
 
 
-def module_at_work(wd: Path, obj: str, timeout_s: float = 60.0) -> dict:
-    """The module the TMS assigned the running operation for `obj`, once it has started
-    (from the TMS's ledger: the graph's view of a module's state lags by a heartbeat)."""
+#: The steps of an operation in which its module works.
+WORKING = ("navigating", "docking", "scanning", "transferring")
+
+
+def module_at_work(wd: Path, obj: str, timeout_s: float = 60.0, phases=WORKING) -> dict:
+    """The module the TMS assigned the running operation for `obj`, once it is in one of
+    `phases` (from the TMS's ledger: the graph's view of a module's state lags by a
+    heartbeat)."""
     import asyncio
 
     from transfertwin.cli._cps_client import call_asset, load_info
@@ -84,10 +89,29 @@ def module_at_work(wd: Path, obj: str, timeout_s: float = 60.0) -> dict:
         ledger = json.loads(asyncio.run(call_asset(info, creds, "TMS", "Ledger")))
         for op in ledger["operations"]:
             if (op["object"] == obj and op["state"] == "running"
-                    and op["phase"] in ("navigating", "docking", "scanning", "transferring")):
+                    and op["phase"] in phases):
                 return asset(status(wd), op["module"])
         time.sleep(0.1)
     raise AssertionError(f"no operation for {obj} started within {timeout_s} s")
+
+
+def unit_drive(wd: Path, unit: str) -> tuple[float, float, str]:
+    """(left belt m/s, right belt m/s, docked module) as the unit's server shows them."""
+    import asyncio
+
+    from transfertwin.cli._cps_client import load_info
+    from transfertwin.cps.opcua import connect
+
+    info, creds = load_info(wd)
+    url = next(a["endpoint"] for a in info["assets"] if a["id"] == unit)
+
+    async def read():
+        async with connect(url, unit, credentials=creds, role="viewer",
+                           cert_dir=Path(info["cert_dir"])) as s:  # fmt: skip
+            return tuple([await s.read("OperationalData", p) for p in
+                          ("BeltSpeedLeft", "BeltSpeedRight", "DockedTransportModule")])
+
+    return asyncio.run(read())
 
 
 def objects_consistent(doc: dict) -> None:
@@ -211,10 +235,14 @@ def test_orders_flow_and_a_module_killed_mid_operation_loses_nothing(floor):
                              str(floor), "--to", target, "--object", obj],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
 
-    busy = module_at_work(floor, obj)
+    busy = module_at_work(floor, obj, phases=("scanning", "transferring"))  # docked
     os.kill(busy["pid"], signal.SIGKILL)
     out, err = proc.communicate(timeout=120)
     assert proc.returncode == 3, out + err  # failed, with the module and the step named
+    # no unit is left docked to the dead module with its belts running: each stopped its
+    # belts and undocked it once the module's lease lapsed
+    for unit in ("TU_A", "TU_B"):
+        assert unit_drive(floor, unit) == (0.0, 0.0, ""), unit
     op2 = out.split()[1].rstrip(":")
     assert op2 != op1  # ids are unique on the floor
     assert "finished: failed" in out and f"{busy['id']} went offline" in out, out

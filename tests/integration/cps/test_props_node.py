@@ -100,7 +100,8 @@ def test_an_order_on_a_floor_docks_with_the_fused_estimate(tmp_path):
 
     (tmp_path / "floor.toml").write_text(PROPS_FLOOR)
     wd = tmp_path / "w"
-    up = tt("cps", "up", "--floor", str(tmp_path / "floor.toml"), "--workdir", str(wd),
+    up = tt("cps", "up", "--policy", "nearest-idle",
+            "--floor", str(tmp_path / "floor.toml"), "--workdir", str(wd),
             "--detach", "--time-scale", "0", "--lease", "3", "--start-timeout", "150",
             timeout=200)  # fmt: skip
     assert up.returncode == 0, up.stderr

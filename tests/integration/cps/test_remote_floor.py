@@ -44,7 +44,8 @@ def test_a_floor_of_remote_machines_runs_an_order_after_cps_up_and_cps_trust(tmp
     (tmp_path / "floor.toml").write_text(_floor(plant.url))
     wd = tmp_path / "w"
     try:
-        up = tt("cps", "up", "--floor", str(tmp_path / "floor.toml"), "--workdir", str(wd),
+        up = tt("cps", "up", "--policy", "nearest-idle",
+                "--floor", str(tmp_path / "floor.toml"), "--workdir", str(wd),
                 "--detach", "--lease", "2", timeout=240)  # fmt: skip
         assert up.returncode == 0, up.stderr
         for aid in (*UNITS, "TM_1"):

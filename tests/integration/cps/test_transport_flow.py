@@ -86,8 +86,11 @@ def test_a_navigated_order_runs_navigate_dock_scan_transfer_in_order(tmp_path, c
             got = (xi[0] * 1000, xi[1] * 1000, math.degrees(xi[2]))
             assert np.allclose(got, (last["x_mm"], last["y_mm"], last["theta_deg"]), atol=1e-3)
             assert not np.allclose(pose, HOME_POSE)
-            # ... and it is the error the MuJoCo environment docked with.
-            err = DockingError.from_mm_deg(last["x_mm"], last["y_mm"], last["theta_deg"])
+            # ... and the MuJoCo environment docked with it, or with PropS's fused estimate
+            # of it where PropS answered (what the twin knows of the docking)
+            props = last.get("props") or {}
+            used = props["fused"] if props.get("used") == "fused" else last
+            err = DockingError.from_mm_deg(used["x_mm"], used["y_mm"], used["theta_deg"])
             module = cps.nodes["TM_1"].role
             scene = module.env.scene
             want = tu_pose_in_tip_frame(err, scene.gap_m, scene.layout.tip_to_centre_m)

@@ -48,7 +48,8 @@ def cps_workdir(tmp_path_factory: pytest.TempPathFactory):
     """`transfertwin cps up` in a temporary work folder (as in tests/integration/cps)."""
     wd = tmp_path_factory.mktemp("cps") / "wd"
     up = subprocess.Popen(
-        [sys.executable, "-m", "transfertwin", "cps", "up", "--single-process", "--workdir",
+        [sys.executable, "-m", "transfertwin", "cps", "up", "--single-process",
+         "--policy", "nearest-idle", "--workdir",
          str(wd),
          "--time-scale", "0"], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
     )  # fmt: skip

@@ -27,7 +27,8 @@ def floor(tmp_path_factory):
     base = tmp_path_factory.mktemp("floor3d")
     (base / "floor.toml").write_text(two_module_floor("floor-3d", {"o1": "TU_A"}))
     wd = base / "w"
-    up = tt("cps", "up", "--floor", str(base / "floor.toml"), "--workdir", str(wd), "--detach",
+    up = tt("cps", "up", "--policy", "nearest-idle",
+            "--floor", str(base / "floor.toml"), "--workdir", str(wd), "--detach",
             "--time-scale", "1", "--lease", "2", "--start-timeout", "150", timeout=200)
     try:
         assert up.returncode == 0, up.stdout + up.stderr

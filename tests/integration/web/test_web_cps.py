@@ -150,7 +150,8 @@ def test_browser_sees_assets_and_places_an_order(cps_workdir, console_factory, p
 
 def _cps_up(wd) -> subprocess.Popen:
     up = subprocess.Popen(
-        [sys.executable, "-m", "transfertwin", "cps", "up", "--single-process", "--workdir",
+        [sys.executable, "-m", "transfertwin", "cps", "up", "--single-process",
+         "--policy", "nearest-idle", "--workdir",
          str(wd),
          "--time-scale", "0"], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
     )  # fmt: skip

@@ -33,7 +33,8 @@ def floor(tmp_path_factory):
     base = tmp_path_factory.mktemp("webfloor")
     (base / "floor.toml").write_text(FLOOR)
     wd = base / "w"
-    up = tt("cps", "up", "--floor", str(base / "floor.toml"), "--workdir", str(wd), "--detach",
+    up = tt("cps", "up", "--policy", "nearest-idle",
+            "--floor", str(base / "floor.toml"), "--workdir", str(wd), "--detach",
             "--time-scale", "0", "--lease", "2", "--start-timeout", "150", timeout=200)
     try:
         assert up.returncode == 0, up.stdout + up.stderr

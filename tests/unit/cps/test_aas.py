@@ -52,8 +52,8 @@ EXPECTED_ELEMENTS = {
             *BELTS, "PoseX", "PoseY", "PoseTheta", "DockedAt", "State", "CurrentTask",
         ],
         "ControlInterface": [
-            "SetBeltSpeed", "Dock", "Undock", "QueueTransportTask", "StartTransfer",
-            "AssignOperation", "Bid",
+            "SetBeltSpeed", "Dock", "Undock", "ReleaseObject", "QueueTransportTask",
+            "StartTransfer", "AssignOperation", "Bid",
         ],
     },
     "o5": {

@@ -56,3 +56,25 @@ def test_kpis_of_a_floor_without_orders_and_with_one_running():
     assert (k["in_progress"], k["window_s"]) == (1, 10.0)
     assert k["utilisation"]["modules"]["TM_1"] == 0.9
     assert k["utilisation"]["units"]["TU_A"] == 0.8
+
+
+def test_a_fault_is_counted_apart_from_the_transfer_outcomes():
+    """A module that went offline mid-transfer (or restarted) is a fault of the floor, not
+    a failed transfer: the success share and its interval are over the outcomes only."""
+    lapsed = _op(3, 0.0, 1.0, 50.0, "failed while transferring", failed_step="transferring")
+    lapsed["result"].update(reason="TM_1 went offline (lease expired) while transferring",
+                            fault=True)
+    restarted = _op(4, 0.0, 1.0, 60.0, "failed while docking", failed_step="docking")
+    restarted["result"]["reason"] = "TM_1 restarted while docking"  # a record without the flag
+    ops = [_op(1, 0.0, 1.0, 10.0, "delivered"),
+           _op(2, 0.0, 1.0, 20.0, "failed at pick-up", failed_step="transferring"),
+           lapsed, restarted]  # fmt: skip
+    k = kpis(ops, ["TM_1"], ["TU_A"], now=100.0)
+    assert (k["finished"], k["delivered"], k["failed"], k["faults"]) == (4, 1, 1, 2)
+    assert k["success_share"] == pytest.approx(1 / 2)  # 1 of the 2 transfer outcomes
+    low, high = k["success_share_ci95"]
+    assert low == pytest.approx(beta.ppf(0.025, 1, 2)) and high == pytest.approx(
+        beta.ppf(0.975, 2, 1))
+    assert k["failed_by_reason"] == {"failed while transferring": 1}
+    assert k["faults_by_reason"] == {"TM_1 restarted while docking": 1,
+                                     "TM_1 went offline (lease expired) while transferring": 1}

@@ -34,8 +34,10 @@ def test_operation_round_trips_and_a_relative_study_is_the_floor_files(tmp_path)
     assert load_floor(tmp_path / "again.toml") == spec
 
 
-def test_the_default_is_nearest_idle_without_a_study():
-    assert default_floor_spec().operation == OperationSpec("nearest-idle", None, 4, (), 0,
+def test_the_default_is_predictive_without_a_study():
+    """The floor uses the twin by default (its ranking, learnt on by the floor's own
+    transfers); nearest-idle is the explicit choice of a floor file or `cps up --policy`."""
+    assert default_floor_spec().operation == OperationSpec("predictive", None, 4, (), 0,
                                                            "truth", True)
 
 

@@ -228,6 +228,12 @@ CONTROL_INTERFACE: Mapping[str, tuple[OperationSpec, ...]] = MappingProxyType(
             OperationSpec("Dock", (Arg("unit", _S),), _OK, "Dock to a transfer unit."),
             OperationSpec("Undock", (), _OK, "Undock from the current unit."),
             OperationSpec(
+                "ReleaseObject",
+                (Arg("object", _S),),
+                _OK,
+                "An operator took the object off the belts: the module no longer carries it.",
+            ),
+            OperationSpec(
                 "QueueTransportTask",
                 _TRANSFER_ARGS,
                 (Arg("task_id", _S),),

@@ -19,7 +19,7 @@ if TYPE_CHECKING:
         estimate,
         floor_seconds,
     )
-    from transfertwin.cps.dispatch._kpis import UNIT_STEPS, kpis
+    from transfertwin.cps.dispatch._kpis import UNIT_STEPS, is_fault, kpis
     from transfertwin.cps.dispatch._learn import (
         FACE_POOL,
         LEGS,
@@ -58,6 +58,7 @@ __all__ = [
     "estimate",
     "fallback",
     "floor_seconds",
+    "is_fault",
     "kpis",
     "order_view",
     "posterior",

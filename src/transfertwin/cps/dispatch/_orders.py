@@ -149,6 +149,12 @@ class OrderBook:
 
     def locate(self, obj: str, holder: str) -> None:
         """An operator says where `obj` is (on a transfer unit); ValueError if it cannot be."""
+        self.check_locate(obj, holder)
+        self.move(obj, holder)
+        log.info("TMS: an operator located %s at %s", obj, holder)
+
+    def check_locate(self, obj: str, holder: str) -> None:
+        """ValueError when `obj` cannot be located at `holder` (`locate`)."""
         if obj not in self.ledger.locations():
             raise ValueError(f"{obj!r} is not an object of this floor")
         if holder not in self.ledger.holders:
@@ -158,8 +164,6 @@ class OrderBook:
                              "put the object on a transfer unit and locate it there")
         if obj in self.ledger.moving():
             raise ValueError(f"{obj} is being moved by {self.ledger.moving()[obj]}")
-        self.move(obj, holder)
-        log.info("TMS: an operator located %s at %s", obj, holder)
 
     def move(self, obj: str, holder: str) -> None:
         """`obj` is on `holder` now (its place known again)."""
@@ -176,7 +180,8 @@ class OrderBook:
         obj = op["object"]
         if obj in self.data["unknown"]:
             self.finish(op_id, {"status": "failed before start", "failed_step": "queued",
-                                "reason": f"{obj} was lost by {prev}: its place is unknown"})
+                                "reason": f"{obj} was lost by {prev}: its place is unknown",
+                                "fault": True})  # fmt: skip
             return False
         where = self.ledger.location(obj)
         if where in op["targets"]:

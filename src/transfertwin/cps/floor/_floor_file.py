@@ -36,7 +36,7 @@ at = "TU_A"
 logical = ["TMS", "EM", "PropS", "KG"]    # optional; these four by default
 
 [operation]                               # optional: how the TMS schedules (docs: Operation)
-policy = "predictive"                     # or "nearest-idle" (the default)
+policy = "predictive"                     # the default; or "nearest-idle"
 study = "out/quick.sqlite"                # a study store with the twin's per-state shares
 runs = 4                                  # runs per state of on-the-fly virtual experiments
 capacity = 1                              # objects a unit may hold (0, the default: no limit)
@@ -138,7 +138,7 @@ class OperationSpec:
     """How the TMS runs orders: its policy, where the twin's predictions come from, and
     the destinations that name a group of units (group -> units)."""
 
-    policy: str = "nearest-idle"
+    policy: str = "predictive"
     study: str | None = None
     runs: int = 4
     groups: tuple[tuple[str, tuple[str, ...]], ...] = ()

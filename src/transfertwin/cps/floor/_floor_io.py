@@ -85,7 +85,7 @@ def _operation(table: object, name: str) -> OperationSpec:
     learn = table.get("learn", True)
     if not isinstance(learn, bool):
         raise InputError(f"{where}: learn must be true or false, got {learn!r}")
-    return OperationSpec(str(table.get("policy", "nearest-idle")), study, runs,
+    return OperationSpec(str(table.get("policy", "predictive")), study, runs,
                          tuple((g, tuple(u)) for g, u in groups.items()), capacity,
                          str(table.get("sensor", "truth")), learn)  # fmt: skip
 

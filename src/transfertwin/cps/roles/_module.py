@@ -80,6 +80,7 @@ class ModuleRole(Role):
     def handlers(self) -> dict[str, Any]:
         return {"SetBeltSpeed": self._set_belt, "SetPossessedObjects": self._set_possessed,
                 "AssignOperation": self._assign, "Dock": self._dock_op,
+                "ReleaseObject": self._release,
                 "Undock": self._undock_op, "Bid": self._bid}  # fmt: skip
 
     async def start(self) -> None:
@@ -95,7 +96,7 @@ class ModuleRole(Role):
                 "event": "result",
                 "result": {"status": f"failed while {step}", "failed_step": step,
                            "reason": f"{self.aid} restarted while {step}",
-                           "location_unknown": lost},
+                           "location_unknown": lost, "fault": True},
             })  # fmt: skip
             if lost:
                 data["possesses"] = [o for o in data["possesses"] if o != cur["object"]]
@@ -131,6 +132,17 @@ class ModuleRole(Role):
             if self.env.object_ref is not None:
                 self.env.system.tm.set_belt_speed(belt, speed)
         await self.set(f"BeltSpeed{belt.capitalize()}", float(speed))
+        return True
+
+    async def _release(self, obj: str) -> bool:
+        """An operator took `obj` off this module's belts (`cps locate`): it no longer
+        carries it (its own record, Table 3.1). Refused while an operation moves it."""
+        if self.op is not None and self.op.get("object") == obj:
+            raise ValueError(f"{obj} is being moved by {self.aid} in {self.op['operation']}")
+        if obj in self.state.data["possesses"]:
+            await self._set_possessed(",".join(o for o in self.state.data["possesses"]
+                                               if o != obj))  # fmt: skip
+            log.info("%s: an operator took %s off its belts", self.aid, obj)
         return True
 
     async def _set_possessed(self, objects: str) -> bool:
@@ -229,7 +241,7 @@ class ModuleRole(Role):
             log.warning("%s: %s failed while %s: %s", self.aid, op_id, step, exc)
             result = {"status": f"failed while {step}", "failed_step": step,
                       "reason": f"{type(exc).__name__}: {exc}",
-                      "location_unknown": step in UNCERTAIN_STEPS}  # fmt: skip
+                      "location_unknown": step in UNCERTAIN_STEPS, "fault": True}  # fmt: skip
             if step in UNCERTAIN_STEPS:
                 self.state.data["possesses"] = [o for o in self.state.data["possesses"]
                                                 if o != obj]  # fmt: skip

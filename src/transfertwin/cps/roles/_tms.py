@@ -115,6 +115,24 @@ class TmsRole(Role):
         return json.dumps(self.book.ledger_doc())
 
     async def _locate(self, obj: str, holder: str) -> bool:
+        """An operator says where `obj` lies (`OrderBook.locate`). A module whose own record
+        still says it carries `obj` (a delivery it gave up on) is told it does not any more
+        (``ReleaseObject``), so that it takes orders again; one that does not answer makes
+        the TMS refuse, saying what to do."""
+        self.book.check_locate(obj, holder)
+        carriers = {m["id"] for m in await self._modules() or () if obj in m.get("possesses", ())}
+        if self.ledger.location(obj) in {m.asset_id for m in self.node.floor.modules}:
+            carriers.add(self.ledger.location(obj))
+        for module in sorted(carriers):
+            try:
+                await asyncio.wait_for(self.node.peers.call(module, "ReleaseObject", obj), 10)
+            except OperationRefused:
+                raise
+            except Exception as exc:
+                raise OperationRefused(
+                    f"{module} carries {obj} by its own record and does not answer "
+                    f"({type(exc).__name__}); start {module} again, then locate {obj}",
+                    status="BadResourceUnavailable", argument="object") from None
         self.book.locate(obj, holder)
         return True
 
@@ -342,7 +360,7 @@ class TmsRole(Role):
                 self._finish(op_id, {
                     "status": f"failed while {step}", "failed_step": step,
                     "reason": f"{module} went offline (lease expired) while {step}",
-                    "location_unknown": step == "transferring",
+                    "location_unknown": step == "transferring", "fault": True,
                 })  # fmt: skip
 
     def _finish(self, op_id: str, result: dict[str, Any]) -> None:

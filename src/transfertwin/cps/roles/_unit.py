@@ -5,6 +5,7 @@ objects (`ObjectRole`: others keep their state; they persist what is written to 
 from __future__ import annotations
 
 import asyncio
+import json
 import logging
 from typing import TYPE_CHECKING, Any
 
@@ -62,6 +63,42 @@ class UnitRole(Role):
             self.node.spawn(self._poll_barriers())
         if "PropS" in self.node.floor.logical:
             self.node.spawn(self._report_pose())
+        self.node.spawn(self._watch_docked())
+
+    async def _watch_docked(self) -> None:
+        """A module that dies while docked here must not leave the belts running: while a
+        module is docked, its lease at the knowledge graph is checked every half lease;
+        once the graph says it is offline (lapsed or left), the unit stops its belts (its
+        drive first, on a gateway) and undocks it. A graph that does not answer decides
+        nothing (the belts are the docked module's to command meanwhile)."""
+        period = max(0.25, self.node.cfg.lease_s / 2)
+        while True:
+            await asyncio.sleep(period)
+            docked = await self.get("DockedTransportModule")
+            if not docked or await self._online(docked) is not False:
+                continue
+            for belt in ("left", "right"):
+                try:
+                    await self._set_belt(belt, 0.0)
+                except Exception as exc:  # a gateway away: said, and tried again next time
+                    log.warning("%s: belt %s not stopped: %s", self.aid, belt, exc)
+                    break
+            else:
+                await self.set("DockedTransportModule", "")
+                self._written("OperationalData", "DockedTransportModule", "")
+                log.warning("%s: %s went offline while docked here: belts stopped, undocked",
+                            self.aid, docked)  # fmt: skip
+
+    async def _online(self, module: str) -> bool | None:
+        """Whether the knowledge graph holds `module`'s lease (None: the graph is away)."""
+        try:
+            status = json.loads(await asyncio.wait_for(self.node.peers.call("KG", "Status"),
+                                                       5.0))  # fmt: skip
+        except Exception as exc:
+            log.debug("%s: knowledge graph not answering: %s", self.aid, exc)
+            return None
+        row = next((a for a in status["assets"] if a.get("id") == module), None)
+        return None if row is None else bool(row.get("online"))
 
     async def _report_pose(self) -> None:
         """Tell PropS where this unit stands (its surveyed docking goal on the floor), and

@@ -15,13 +15,18 @@ object in the twin's best state from a study store of the floor's cores (made fi
 ``nearest-idle`` in the default state. ``predictive`` also learns from the floor's own
 transfers (`cps.dispatch._learn`: each finished transfer updates the twin's per-state shares of its
 object, pick-up and delivery); ``twin-only`` is the same policy with ``learn = false``, the
-ablation that shows what the twin's study alone is worth on this plant.
+ablation that shows what the twin's study alone is worth on this plant; ``learning-alone``
+is the same policy with ``twin = false`` (every state of the grid from a flat prior, ranked
+by the floor's transfers only), the baseline that shows what the twin adds to learning
+(``predictive - learning-alone``).
 
 Prints, per policy: orders, delivered, success share with its Clopper–Pearson 95 % interval,
 operations per hour of modelled floor time (each operation's ``floor_s``: driving from the
 planner, docking, the transfers' simulated time; the work divided among the modules) with a
-bootstrap 95 % interval; then predictive minus nearest-idle: the success-share difference
-with its Newcombe interval and the operations-per-hour difference with a bootstrap interval.
+bootstrap 95 % interval; then each arm minus nearest-idle, and predictive minus
+learning-alone: the success-share difference with its Newcombe interval (better, worse, or
+undecided where the interval holds 0) and the operations-per-hour difference with a
+bootstrap interval.
 ``--camera`` runs the predictive policy a second time with the modules' depth cameras in
 the loop (floor ``sensor = "camera"``) and says whether its success share lies inside the
 ground-truth run's interval. Writes ``benchmarks/results/operations.json``.
@@ -152,9 +157,12 @@ def drive(wd: Path, orders: list[tuple[str, str]], inflight: int, timeout_s: flo
 
 
 def summarise(ops: list[dict], modules: int, rng: np.random.Generator) -> dict:
+    from transfertwin.cps.dispatch import is_fault
     from transfertwin.study.fullstate import clopper_pearson
 
-    finished = [o for o in ops if o["state"] == "finished"]
+    ended = [o for o in ops if o["state"] == "finished"]
+    faults = [o for o in ended if is_fault(o["result"])]  # not transfer outcomes: apart
+    finished = [o for o in ended if not is_fault(o["result"])]
     ok = np.array([o["result"].get("status") == "delivered" for o in finished], dtype=float)
     floor_s = np.array([float(o["result"].get("floor_s") or 0.0) for o in finished])
     ci = clopper_pearson(int(ok.sum()), len(ok))
@@ -167,7 +175,8 @@ def summarise(ops: list[dict], modules: int, rng: np.random.Generator) -> dict:
     return {"n": len(ok), "delivered": int(ok.sum()), "share": float(ok.mean()),
             "share_ci95": [ci.low, ci.high], "ops_per_floor_hour": per_hour(ok, floor_s),
             "ops_ci95": [float(np.percentile(boot, 2.5)), float(np.percentile(boot, 97.5))],
-            "boot": boot, "failed_by_reason": _reasons(finished)}  # fmt: skip
+            "boot": boot, "failed_by_reason": _reasons(finished),
+            "faults": len(faults)}  # fmt: skip
 
 
 def _by_leg(ops: list[dict]) -> dict[str, int]:
@@ -290,6 +299,7 @@ def main() -> int:
         return str(path)
 
     runs = [("nearest-idle", "nearest-idle", args.floor),
+            ("learning-alone", "predictive", variant("learning-alone", "twin = false")),
             ("twin-only", "predictive", variant("twin-only", "learn = false")),
             ("predictive", "predictive", args.floor)]  # fmt: skip
     res = ROOT / "benchmarks" / "results" / "operations.json"
@@ -301,15 +311,17 @@ def main() -> int:
         out[name] = run_arm(args, floor, name, policy, floor_file, study, wd, orders, rng)
         if out[name] is None:
             return 1
-    a, b = out["nearest-idle"], out["predictive"]
+    b = out["predictive"]
     diffs = {}
-    for name in ("twin-only", "predictive"):
-        r = out[name]
-        d = newcombe_difference(r["delivered"], r["n"], a["delivered"], a["n"])
-        dboot = r["boot"] - a["boot"]
-        diffs[name] = {"share": d, "ops": r["ops_per_floor_hour"] - a["ops_per_floor_hour"],
-                       "ops_ci95": [float(np.percentile(dboot, 2.5)),
-                                    float(np.percentile(dboot, 97.5))]}  # fmt: skip
+    # each arm against nearest-idle, and the twin's part: twin + learning against learning
+    for name, base in (("learning-alone", "nearest-idle"), ("twin-only", "nearest-idle"),
+                       ("predictive", "nearest-idle"), ("predictive", "learning-alone")):
+        r, a0 = out[name], out[base]
+        d = newcombe_difference(r["delivered"], r["n"], a0["delivered"], a0["n"])
+        dboot = r["boot"] - a0["boot"]
+        diffs[f"{name} - {base}"] = {
+            "share": d, "ops": r["ops_per_floor_hour"] - a0["ops_per_floor_hour"],
+            "ops_ci95": [float(np.percentile(dboot, 2.5)), float(np.percentile(dboot, 97.5))]}
     for r in out.values():
         r.pop("boot")
     print(f"\n{args.orders} orders on {floor.name}, plant seed {args.plant_seed}")
@@ -324,9 +336,9 @@ def main() -> int:
               f"{len(r['refused']):>9}")
     for name, d in diffs.items():
         sd, (olo, ohi) = d["share"], d["ops_ci95"]
-        print(f"{name} - nearest-idle: success share {sd.estimate:+.3f} "
-              f"[{sd.low:+.3f}, {sd.high:+.3f}] (Newcombe"
-              f"{', significant' if sd.low > 0 or sd.high < 0 else ', not significant'}); "
+        verdict = ("better" if sd.low > 0 else "worse" if sd.high < 0 else "undecided")
+        print(f"{name}: success share {sd.estimate:+.3f} "
+              f"[{sd.low:+.3f}, {sd.high:+.3f}] (Newcombe: {verdict}); "
               f"ops/floor-hour {d['ops']:+.1f} [{olo:+.1f}, {ohi:+.1f}] (bootstrap)")
     if "predictive+camera" in out:
         c = out["predictive+camera"]

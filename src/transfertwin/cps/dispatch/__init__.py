@@ -30,6 +30,7 @@ if TYPE_CHECKING:
         rerank,
         state_key,
         tries,
+        uninformed,
     )
     from transfertwin.cps.dispatch._orders import OrderBook, order_view
     from transfertwin.cps.dispatch._predict import (
@@ -68,6 +69,7 @@ __all__ = [
     "state_key",
     "study_predictions",
     "tries",
+    "uninformed",
     "virtual_predictions",
 ]
 

@@ -1,5 +1,5 @@
 """The floor's own transfers as evidence: the twin's per-state predictions updated with
-what the plant did (issue 28, item 7; docs/architecture.md, "Operation").
+what the plant did (docs/architecture.md, "Operation").
 
 The study's twin is calibrated against a handful of real experiments (Sec. 6.5) and
 predicts the delivery leg (TM → TU) only; a floor runs many transfers of both legs, each a
@@ -17,6 +17,11 @@ each leg a Beta–binomial posterior mean (w·m + k) / (w + n):
   it counts as a few runs, not as many as it simulated);
 - pick-up (TU → TM): the twin has no prediction, so a Laplace prior (m = ½, w = 2).
 
+Learning alone (``[operation] twin = false``, the benchmark's baseline): no twin at all,
+both legs start from the Laplace prior and every state of the grid is ranked by the
+floor's own transfers only (`uninformed`); the order of the grid breaks ties, so an
+object's first order is loaded in the default state.
+
 Evidence is pooled within a face: the transfers of the object in other states on the same
 face count with weight `FACE_POOL` (the face decides most of an object's outcome; θ and
 the conveyor shift it). Only transfers that ran (a valid pre-transfer state, the transfer
@@ -31,7 +36,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 __all__ = ["FACE_POOL", "LEGS", "PRIOR_RUNS", "fallback", "posterior", "record", "rerank",
-           "state_key", "tries"]  # fmt: skip
+           "state_key", "tries", "uninformed"]  # fmt: skip
 
 #: How many plant runs the twin's prediction of a state is worth at most.
 PRIOR_RUNS = 4.0
@@ -97,13 +102,21 @@ def _pooled(cells: Mapping[str, Sequence[int]], key: str) -> tuple[float, float]
     return k, n
 
 
+def uninformed(states: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """The states of the grid as predictions without a twin (k = n = 0, ``source`` 'none'),
+    in the grid's order: what learning alone ranks."""
+    return [{"face": s["face"], "conveyor": s["conveyor"], "theta_deg": int(s["theta_deg"]),
+             "k": 0, "n": 0, "share": None, "source": "none"} for s in states]  # fmt: skip
+
+
 def posterior(pred: Mapping[str, Any], evidence: Mapping[str, Any]) -> dict[str, float]:
     """p_pickup, p_delivery and their product p for the state of `pred` (a ranked state of
     `transfertwin.cps.dispatch._predict`: face, conveyor, theta_deg, k, n) given one object's
-    evidence (leg -> state key -> [k, n])."""
+    evidence (leg -> state key -> [k, n]). A state the twin did not simulate (n = 0:
+    learning alone, `uninformed`) has the Laplace prior on the delivery leg too."""
     key = state_key(pred)
     n_v = float(pred["n"])
-    twin = ((float(pred["k"]) + 0.5) / (n_v + 1.0), min(n_v, PRIOR_RUNS))
+    twin = ((float(pred["k"]) + 0.5) / (n_v + 1.0), min(n_v, PRIOR_RUNS)) if n_v else _LAPLACE
     out: dict[str, float] = {}
     for leg, (m, w) in (("pick-up", _LAPLACE), ("delivery", twin)):
         k, n = _pooled(evidence.get(leg, {}), key)

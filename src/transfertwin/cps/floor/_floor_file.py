@@ -44,6 +44,9 @@ sensor = "camera"                         # the module's depth camera forms the 
                                           # the delivery's controller ("truth": the default)
 learn = true                              # predictive: the floor's own outcomes update the
                                           # twin's shares (the default; false: the twin alone)
+twin = true                               # predictive: rank with the twin's shares as the
+                                          # prior (the default; false: learning alone, the
+                                          # benchmark's baseline: every state from a flat prior)
 
 [operation.groups]                        # destinations with a choice of unit
 inspection = ["TU_C", "TU_D"]
@@ -145,6 +148,7 @@ class OperationSpec:
     capacity: int = 0
     sensor: str = "truth"
     learn: bool = True
+    twin: bool = True
 
     def group(self, name: str) -> tuple[str, ...] | None:
         """The units of destination group `name` (None: no such group)."""
@@ -318,6 +322,9 @@ def _check(floor: FloorSpec) -> None:
         raise InputError(f"{where}: operation.runs must be 1..1000, got {op.runs}")
     if op.capacity < 0:
         raise InputError(f"{where}: operation.capacity must be >= 0, got {op.capacity}")
+    if not (op.twin or op.learn):
+        raise InputError(f"{where}: operation.twin = false needs learn = true (without the "
+                         "twin and without learning nothing ranks the states)")  # fmt: skip
     if op.sensor not in SENSORS:
         raise InputError(f"{where}: operation.sensor must be one of {', '.join(SENSORS)}, "
                          f"got {op.sensor!r}")  # fmt: skip

@@ -68,7 +68,7 @@ def _operation(table: object, name: str) -> OperationSpec:
     where = f"floor {name}: [operation]"
     if not isinstance(table, dict):
         raise InputError(f"{where} must be a table")
-    known = {"policy", "study", "runs", "groups", "capacity", "sensor", "learn"}
+    known = {"policy", "study", "runs", "groups", "capacity", "sensor", "learn", "twin"}
     if unknown := sorted(set(table) - known):
         raise InputError(f"{where}: unknown key {unknown[0]!r}; known: {', '.join(sorted(known))}")
     study = table.get("study")
@@ -82,12 +82,13 @@ def _operation(table: object, name: str) -> OperationSpec:
     if not isinstance(groups, dict) or not all(
             isinstance(v, list) and all(isinstance(u, str) for u in v) for v in groups.values()):
         raise InputError(f"{where}: groups must map a name to a list of unit ids")  # fmt: skip
-    learn = table.get("learn", True)
-    if not isinstance(learn, bool):
-        raise InputError(f"{where}: learn must be true or false, got {learn!r}")
+    learn, twin = table.get("learn", True), table.get("twin", True)
+    for key, value in (("learn", learn), ("twin", twin)):
+        if not isinstance(value, bool):
+            raise InputError(f"{where}: {key} must be true or false, got {value!r}")
     return OperationSpec(str(table.get("policy", "predictive")), study, runs,
                          tuple((g, tuple(u)) for g, u in groups.items()), capacity,
-                         str(table.get("sensor", "truth")), learn)  # fmt: skip
+                         str(table.get("sensor", "truth")), learn, twin)  # fmt: skip
 
 
 def load_floor(path: Path | str, *, check_cores: bool = True) -> FloorSpec:
@@ -143,7 +144,8 @@ def floor_toml(floor: FloorSpec) -> str:
     op = floor.operation
     lines += ["", "[operation]", f"policy = {json.dumps(op.policy)}", f"runs = {op.runs}",
               f"capacity = {op.capacity}", f"sensor = {json.dumps(op.sensor)}",
-              f"learn = {'true' if op.learn else 'false'}"]
+              f"learn = {'true' if op.learn else 'false'}",
+              f"twin = {'true' if op.twin else 'false'}"]
     if op.study is not None:
         lines.append(f"study = {json.dumps(op.study)}")
     if op.groups:

@@ -28,6 +28,8 @@ import time
 from typing import TYPE_CHECKING, Any
 
 from transfertwin.cps.dispatch import (
+    DEFAULT_STATE,
+    ON_THE_FLY_THETA_STEP,
     Bid,
     OrderBook,
     choose,
@@ -35,9 +37,11 @@ from transfertwin.cps.dispatch import (
     order_view,
     rerank,
     study_predictions,
+    uninformed,
 )
 from transfertwin.cps.node import Role
 from transfertwin.cps.opcua import OperationRefused
+from transfertwin.ots import experiment_states, filter_theta_step
 
 if TYPE_CHECKING:
     from transfertwin.cps.node import AssetNode
@@ -217,13 +221,21 @@ class TmsRole(Role):
     async def _plan(self, op: dict[str, Any]) -> dict[str, Any]:
         """The state to load the object in: the twin's best for it (predictive; not for
         an object already on a module), else the default. With `learn` (the default), the
-        twin's shares are updated with the floor's own transfers of the object (`_learn`)."""
+        twin's shares are updated with the floor's own transfers of the object (`_learn`);
+        with ``twin = false`` the states are ranked by those transfers alone (learning
+        alone, from a flat prior: the default state first)."""
         if self.policy != "predictive":
             return {"policy": self.policy, "state": None}
         if op["source"] not in self.node.floor.units:
             return {"policy": self.policy, "state": None,
                     "note": "loaded already: the state it lies in is kept"}  # fmt: skip
-        preds = await self._predictions(op["object"], op["operation"])
+        if self.node.floor.operation.twin:
+            preds = await self._predictions(op["object"], op["operation"])
+        else:  # learning alone: every state of the grid, ranked by the floor's transfers
+            grid = filter_theta_step(experiment_states(), ON_THE_FLY_THETA_STEP)
+            default = tuple(DEFAULT_STATE.values())  # first: the cold start's state
+            preds = uninformed(sorted(grid, key=lambda s: (s.face, s.conveyor,
+                                                           s.theta_deg) != default))
         if not preds:
             return {"policy": self.policy, "state": None,
                     "note": "no prediction for this object: default state"}  # fmt: skip

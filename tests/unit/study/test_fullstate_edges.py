@@ -23,6 +23,7 @@ from transfertwin.study.fullstate import (
     clopper_pearson,
     clopper_pearson_array,
     moving_average,
+    object_sort_key,
     select,
     state_table,
 )
@@ -145,3 +146,29 @@ def test_sec_6_6_states_csv_and_selection_json_texts() -> None:
     js = selection_json_text(result)
     assert js.startswith('{\n  "o2": {\n    "') and js.endswith("}\n")
     assert list(json.loads(js)) == ["o2", "o10"]
+
+
+def test_eq_6_27_the_default_window_is_21_degrees() -> None:
+    y = CircularSeries((0, 10, 20, 30), (Fraction(1), Fraction(0), Fraction(1), Fraction(1)))
+    assert moving_average(y) == moving_average(y, 21)
+
+
+def test_eq_6_27_a_series_needs_strictly_ascending_angles() -> None:
+    with pytest.raises(InputError):
+        CircularSeries((0, 0), (Fraction(1), Fraction(0)))
+    s = CircularSeries([np.int64(0), np.int64(10)], [1, 0])
+    assert s.theta_deg == (0, 10) and all(type(t) is int for t in s.theta_deg)
+
+
+def test_eq_6_26_rows_parse_empty_status_string_success_and_missing_object() -> None:
+    as_text = {**_row("o1", "front", "left", 0, 0), "success": "0"}
+    rows = [_row("o1", "front", "left", 0, 1, ""), as_text]
+    (st,) = state_table(rows)
+    assert (st.n, st.k) == (2, 1)
+    with pytest.raises(InputError, match="empty object_id"):
+        state_table([{**_row("o1", "front", "left", 0, 1), "object_id": None}])
+
+
+def test_sec_6_6_object_ids_with_letters_and_digits_sort_naturally() -> None:
+    ids = ["ob", "o10", "o2", "oa"]
+    assert sorted(ids, key=object_sort_key) == ["o2", "o10", "oa", "ob"]

@@ -10,6 +10,9 @@ from statsmodels, which the code under test calls.
 
 Edge rows: a state whose virtual runs all errored but which ran physically is compared
 nowhere and counted as physical-only (and the mirror case as virtual-only).
+
+Last, the pure parts of the scene-agreement check (`_agreement`): what counts as a success,
+when two shares agree (each inside the other's Clopper–Pearson interval) and its summary line.
 """
 
 from __future__ import annotations
@@ -22,6 +25,8 @@ import pytest
 from scipy.stats import beta, norm
 
 from transfertwin._errors import InputError
+from transfertwin.study.experiment import ExperimentResult
+from transfertwin.study.validation._agreement import Agreement, SideOutcome, _outcome
 from transfertwin.study.validation._validation import (
     compare,
     newcombe_difference,
@@ -210,3 +215,32 @@ def test_sec_6_7_csv_rows_at_a_level() -> None:
     low, high = newcombe(9, 10, 3, 10, 0.01)
     assert float(first[10]) == pytest.approx(low, abs=1e-12)
     assert float(first[11]) == pytest.approx(high, abs=1e-12)
+
+
+# --- the scene-agreement check's pure parts (study.validation._agreement) -------------
+
+
+def _result(status: str, success: int | None):
+    return ExperimentResult("o1", "front", "left", 0, 0, 1, 0.0, 0.0, 0.0, success, success,
+                            success, 1.0, status)  # fmt: skip
+
+
+def test_an_experiment_counts_as_a_success_only_when_ok_and_successful() -> None:
+    assert [_outcome(_result(s, y)) for s, y in
+            [("ok", 1), ("ok", 0), ("invalid", None), ("error", 1)]] == [1, 0, 0, 0]  # fmt: skip
+
+
+def test_two_scenes_agree_when_each_share_is_in_the_others_interval() -> None:
+    fast = SideOutcome(9, 10, 1, 500, 2.0, (1,) * 9 + (0,))
+    ref = SideOutcome(3, 10, 0, 900, 4.0, (1, 1, 1) + (0,) * 7)
+    assert fast.share == 0.9 and fast.rate == 5.0 and ref.rate == 2.5
+    assert (fast.interval.low, fast.interval.high) == pytest.approx(cp(9, 10, 0.05), abs=1e-9)
+    differ = Agreement("o1 front", fast, ref)
+    assert not differ.agree and differ.paired_same == 4
+    assert differ.line() == (
+        "o1 front       n=  10  fast    9 =  90.0% [0.555, 0.997]  ref    3 =  30.0% "
+        "[0.067, 0.652]  paired same  40.0%  DIFFER"
+    )
+    same = Agreement("x", fast, SideOutcome(8, 10, 0, 1, 0.0, (1,) * 8 + (0, 0)))
+    assert same.agree and same.line().endswith("AGREE") and math.isnan(same.reference.rate)
+    assert math.isnan(SideOutcome(0, 0, 0, 0, 1.0, ()).share)

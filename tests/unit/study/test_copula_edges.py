@@ -101,3 +101,17 @@ def test_sec_6_4_a_bad_model_description_says_what_it_got() -> None:
         copula_from_dict({"kind": "copula-per-station", "version": 1})
     with pytest.raises(InputError, match=r"^copula model: unsupported version 2$"):
         copula_from_dict({"kind": "copula", "version": 2})
+
+
+def test_sec_6_4_per_station_fit_passes_families_and_level_and_one_sample_is_the_first() -> None:
+    data = np.vstack([_data(12, 1), _data(15, 2)])
+    units = ["TU_A"] * 12 + ["TU_B"] * 15
+    per = PerStationCopula.fit(data, units, families=NORMAL, ks_alpha=0.001)
+    assert per.units == ("TU_A", "TU_B") and per.counts == (12, 15)
+    for cop in per.copulas:
+        assert [m.marginal.family for m in cop.marginals] == ["normal"] * 3
+        assert [m.ks_alpha for m in cop.marginals] == [0.001] * 3
+    one = per.sample(7)
+    first = per.sample_n(1, 7)[0]
+    assert (one.x_m, one.y_m) == pytest.approx((first[0] / 1000, first[1] / 1000))
+    assert one.theta_rad == pytest.approx(np.radians(first[2]))

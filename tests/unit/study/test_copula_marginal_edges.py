@@ -3,7 +3,8 @@ where the mutation run (issue 40) found them open: each candidate's BIC and KS s
 written out with scipy (BIC = k ln n − 2 ln L at the family's own maximum-likelihood
 parameters), the truncated normal's fit against the maximum of its log-likelihood written
 out (Φ-normalised normal density), the beta fit on the range's bounds, a record turned down
-by the KS gate keeping its figures, and the bounds of what can be fitted.
+by the KS gate keeping its figures, the bounds of what can be fitted, and a KDE marginal's
+density and exact CDF against scipy's gaussian_kde at its own bandwidth factor.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import pytest
 from scipy import optimize, stats
 
 from transfertwin._errors import InputError
-from transfertwin.study.docking._marginals import FAMILIES, RANGE_MARGIN, fit_marginal
+from transfertwin.study.docking._marginals import FAMILIES, RANGE_MARGIN, Marginal, fit_marginal
 
 FAM = {f.name: f for f in FAMILIES}
 
@@ -99,3 +100,17 @@ def test_sec_6_4_no_family_fits_lists_every_family() -> None:
     with pytest.raises(InputError, match=r"^v: no marginal family fits: normal failed \("
                                          r"ValueError: zero spread\); kde failed"):  # fmt: skip
         fit_marginal(x, "v", families=(FAM["normal"], FAM["kde"]))
+
+
+def test_sec_6_4_kde_marginal_uses_its_bandwidth_factor_against_scipy() -> None:
+    pts = (0.0, 0.4, 1.1, 2.0, 2.2, 3.5)
+    m = Marginal("kde", (0.5,), (-1.0, 4.5), pts)
+    ref = stats.gaussian_kde(np.array(pts), bw_method=0.5)
+    x = np.array([-0.5, 0.7, 2.1, 4.0])
+    assert m.dist.logpdf(x) == pytest.approx(ref.logpdf(x), rel=1e-12)
+    h = math.sqrt(ref.covariance[0, 0])  # the exact CDF: mean of normal CDFs at the points
+    cdf = [float(np.mean(stats.norm.cdf((v - np.array(pts)) / h))) for v in x]
+    assert m.dist.cdf(x) == pytest.approx(cdf, rel=1e-12)
+    assert m.dist.cdf(np.array([])).shape == (0,)
+    assert m.to_dict()["points"] == list(pts)
+    assert "points" not in fit_marginal(_sample(), families=(FAM["normal"],)).marginal.to_dict()

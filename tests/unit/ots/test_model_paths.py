@@ -97,3 +97,9 @@ def test_eq_4_1_a_state_of_component_0_alone_is_a_state() -> None:
     assert owned.contains(np.array([[1.0], [0.0]])).tolist() == [True, False]
     with pytest.raises(InputError, match="at least component 0"):
         owned.contains(np.zeros((2, 0)))
+
+
+def test_eq_4_11_early_timeout_without_a_time_component() -> None:
+    trace = _run(np.array([0.0, 0.0]), dt=0.5, t_max=2.0, stop=lambda s: True)
+    assert trace.timed_out and trace.times.tolist() == [0.0, 0.5, 2.0]
+    assert trace.t_end == 2.0 and trace.n_transitions == 2

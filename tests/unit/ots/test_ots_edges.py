@@ -18,6 +18,7 @@ from transfertwin._errors import InputError
 from transfertwin.ots import (
     ASSET_TM,
     ASSET_TU,
+    BeltPreTransferSet,
     BeltThresholds,
     Col,
     Conveyor,
@@ -203,3 +204,10 @@ def test_eq_4_11_max_steps_of_one_is_allowed(max_steps: int) -> None:
                          failure=sets.failure, dt=0.5, t_max=10.0, time_index=int(Col.T),
                          max_steps=max_steps)  # fmt: skip
     assert trace.n_transitions == max_steps and trace.timed_out
+
+
+def test_eq_5_7_pre_transfer_time_is_measured_from_t0() -> None:
+    pre = BeltPreTransferSet(ASSET_TM, -0.5, 0.0, -0.2, 0.2, t0=5.0, t0_tol=0.125)
+    at = make_states(x=-0.25, y=0.0, s_x=0.125, s_y=0.125, t=[5.125, 4.875, 5.25, 0.0])
+    assert pre.contains(at).tolist() == [True, True, False, False]
+    assert [pre.contains_one(s) for s in at] == [True, True, False, False]

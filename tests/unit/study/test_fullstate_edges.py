@@ -172,3 +172,11 @@ def test_eq_6_26_rows_parse_empty_status_string_success_and_missing_object() -> 
 def test_sec_6_6_object_ids_with_letters_and_digits_sort_naturally() -> None:
     ids = ["ob", "o10", "o2", "oa"]
     assert sorted(ids, key=object_sort_key) == ["o2", "o10", "oa", "ob"]
+
+
+def test_eq_6_7_labels_seen_before_parse_the_same_the_second_time() -> None:
+    # labels written in a way no other test uses, so the first lookup is not cached yet
+    rows = [{**_row("o1", "front", "left", 0, 1), "face": "  FrOnT ", "theta_deg": 7}] * 2
+    first, second = state_table(rows[:1]), state_table(rows)
+    assert first[0].key == second[0].key == ("o1", "front", "left", 7)
+    assert second[0].n == 2

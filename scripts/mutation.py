@@ -3,6 +3,7 @@
     ./dev.sh exec .venv/bin/python scripts/mutation.py                 # fresh run, then report
     ./dev.sh exec .venv/bin/python scripts/mutation.py --keep          # reuse mutants/ results
     ./dev.sh exec .venv/bin/python scripts/mutation.py --report-only --diffs
+    ./dev.sh exec .venv/bin/python scripts/mutation.py --rerun-survivors  # after adding tests
     ./dev.sh exec .venv/bin/python scripts/mutation.py --out benchmarks/results/mutation.json
 
 mutmut (configured in pyproject.toml, `[tool.mutmut]`) copies src/ to mutants/, changes one
@@ -134,6 +135,22 @@ def in_scope(path: str) -> bool:
     cfg = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["mutmut"]
     only, never = cfg.get("only_mutate", ["*"]), cfg.get("do_not_mutate", [])
     return any(fnmatch(path, p) for p in only) and not any(fnmatch(path, p) for p in never)
+
+
+def rerun_survivors(listed: Listed, workers: int, log: Path) -> float:
+    """Run the mutants of the last run that no test killed again (after adding tests), in
+    the same mutants/ (mutmut copies the tests anew); returns the wall time in seconds."""
+    names = [m.name for m in classify(read_mutants(), listed)
+             if m.status in ("survived", "no tests", "not checked", "suspicious")]  # fmt: skip
+    mutmut = Path(sys.executable).with_name("mutmut")
+    start = time.monotonic()
+    with log.open("a") as fh:
+        for i in range(0, len(names), 300):  # mutmut takes the names as arguments
+            cmd = [str(mutmut), "run", "--max-children", str(workers), *names[i : i + 300]]
+            rc = subprocess.call(cmd, cwd=ROOT, stdout=fh, stderr=subprocess.STDOUT)
+            if rc != 0:
+                sys.exit(f"mutmut run failed (exit {rc}); its output: {log}")
+    return time.monotonic() - start
 
 
 def read_mutants() -> list[Mutant]:
@@ -270,9 +287,9 @@ def report(mutants: list[Mutant], listed: Listed, diffs: bool, min_score: float)
     """Print the per-module table, the survivors and stale list entries; the JSON record."""
     classified = classify(mutants, listed)
     scores = score(classified)
-    print(f"{'module':<31}{'mutants':>8}" + "".join(f"{c:>11}" for c in COLUMNS) + "    score")
+    print(f"{'module':<31}{'mutants':>8}" + "".join(f"{c:>12}" for c in COLUMNS) + "    score")
     for s in scores:
-        cells = "".join(f"{s.counts[k]:>11}" for k in COLUMNS)
+        cells = "".join(f"{s.counts[k]:>12}" for k in COLUMNS)
         print(f"{s.module:<31}{sum(s.counts.values()):>8}{cells}{100 * s.score:>8.1f}%")
     survivors = [m for m in classified if not m.killed and m.status not in EXCLUDED]
     print(f"\n{len(survivors)} surviving mutants (status, name):")
@@ -320,13 +337,17 @@ def main() -> int:
     keep_help = "reuse mutants/ and its results (mutmut reruns the changed functions)"
     parser.add_argument("--keep", action="store_true", help=keep_help)
     parser.add_argument("--report-only", action="store_true", help="report the last run only")
+    parser.add_argument("--rerun-survivors", action="store_true",
+                        help="run the last run's surviving mutants again, then report")  # fmt: skip
     parser.add_argument("--diffs", action="store_true", help="print each survivor's diff")
     parser.add_argument("--min-score", type=float, default=95.0, help="percent, per module")
     parser.add_argument("--out", type=Path, help="write the report as JSON here")
     args = parser.parse_args()
     os.chdir(ROOT)  # mutmut reads pyproject.toml and mutants/ from the working directory
     wall = None
-    if not args.report_only:
+    if args.rerun_survivors:
+        wall = rerun_survivors(load_listed(), args.workers, MUTANTS / "run.log")
+    elif not args.report_only:
         wall = run_mutmut(args.workers, args.keep, MUTANTS / "run.log")
     if not MUTANTS.exists():
         sys.exit("no mutants/ folder: run without --report-only first")

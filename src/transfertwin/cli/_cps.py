@@ -49,7 +49,7 @@ def cmd_order(args: argparse.Namespace) -> int:
 
     A refused order (checked here first, then by the TMS against where the objects are)
     exits 2 with the reason at once. A transport that fails physically is an outcome, not
-    an error: it is printed and the exit code is 0.
+    an error: it is printed with the step and the reason, and the exit code is 3.
     """
     if not 0 < args.timeout < float("inf"):
         raise InputError(f"--timeout must be a positive number of seconds, got {args.timeout}")
@@ -267,8 +267,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = csub.add_parser("order", help="run a transport operation end to end over OPC UA")
     p.add_argument("--workdir", required=True)
     p.add_argument("--from", dest="source",
-                   help="the unit (or, on a --floor floor, the transport module) the object "
-                        "lies on; a --floor floor finds it when left out")  # fmt: skip
+                   help="the unit (or the transport module) the object lies on; the TMS "
+                        "finds it when left out")  # fmt: skip
     p.add_argument("--to", dest="target", required=True)
     p.add_argument("--object", required=True)
     p.add_argument("--timeout", type=float, default=600.0,

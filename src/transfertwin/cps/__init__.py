@@ -1,12 +1,12 @@
-"""The cyber-physical runtime (Ch. 3, Sec. 5.2–5.3): assets, AAS virtual representations
-served over OPC UA, the knowledge graph and the logical assets; optionally an emulated plant
-as the physical assets (`CpsConfig.plant_seed`).
+"""The cyber-physical system at runtime (Ch. 3, Sec. 5.2–5.3): one asset node per asset of a
+floor (`asset_node`: the node of `cps.node` with the role of its class from `cps.roles`),
+each serving its AAS over OPC UA, the knowledge graph and the logical assets; a floor's
+nodes started as processes (`prepare_floor`, `launch`) or in one event loop (`LocalFloor`),
+optionally on an emulated plant with its physical units beside the virtual models.
 
-The emulated plant's assets (`check_plant_seed`, `plant_descriptors`, ...), the runtime and
-the applications (`Cps`, `CpsConfig`, `DOCKING_MODES`, `PoseGraph`,
-`PoseObservation`) and the knowledge graph (`KnowledgeGraph`) load on first use: they bring
-the simulation, the study stack and rdflib/pySHACL, which a client command (`cps status`,
-`cps order`) or the web console's gateway does not need.
+Every name loads on first use (`transfertwin._lazy`): the simulation, the study stack and
+rdflib/pySHACL are imported only by what needs them, not by a client command (`cps
+status`, `cps order`) or the web console's gateway.
 """
 
 from typing import TYPE_CHECKING

@@ -1,11 +1,13 @@
-"""The Experiment Manager in its own process (`AssetNode`): single experiments against a
-unit (``RunExperiment``) and studies on request (``StartStudy``, ``StopStudy``,
-``StudyStatus``; docs/architecture.md, "Studies through the Experiment Manager").
+"""The Experiment Manager on its node: single experiments against a unit (``RunExperiment``:
+E^V, or E^P on a plant's physical unit) and studies on request (``StartStudy``,
+``StopStudy``, ``StudyStatus``; docs/architecture.md, "Studies through the Experiment
+Manager").
 
-A study runs in a thread of this process (`StudyJob`); its progress and ETA are the
-``Study*`` OperationalData properties. What the manager was asked last is persisted: a
-study that was running when the process ended (a crash, ``cps down``) resumes when it comes
-back; one stopped with ``StopStudy`` stays stopped until ``StartStudy`` names it again.
+A study runs as a job of this node (`StudyJob`: a thread that runs the study in a process
+of its own); its progress and ETA are the ``Study*`` OperationalData properties. What the
+manager was asked last is persisted: a study that was running when the process ended (a
+crash, ``cps down``) resumes when it comes back; one stopped with ``StopStudy`` stays
+stopped until ``StartStudy`` names it again.
 """
 
 from __future__ import annotations

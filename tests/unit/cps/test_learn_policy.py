@@ -3,7 +3,7 @@ where the existing examples give the same answer either way: a fallback that the
 failed pick-up changes, counts that accumulate, a leg after one that did not run, the
 rounding of the posteriors; the documented constants pinned by value (docs/architecture.md,
 "Learning from the floor's transfers" and "The twin's predictions"); the ranking of a study
-store and its single-run states.
+store and its single-run states; learning alone (`uninformed`), a flat prior on both legs.
 
 Expected values are worked by hand from the Beta–binomial posterior mean (w·m + k)/(w + n)
 of docs/architecture.md: the delivery's prior m = (k_V + ½)/(n_V + 1), w = min(n_V, 4);
@@ -26,6 +26,7 @@ from transfertwin.cps.dispatch._learn import (
     record,
     rerank,
     tries,
+    uninformed,
 )
 from transfertwin.cps.dispatch._predict import (
     DEFAULT_STATE,
@@ -138,3 +139,22 @@ def test_study_predictions_rank_the_objects_states_in_a_store(tmp_path) -> None:
     with pytest.raises(InputError, match="no such result database"):  # never created
         study_predictions(tmp_path / "missing.sqlite", "o1")
     assert not (tmp_path / "missing.sqlite").exists()
+
+
+def test_learning_alone_ranks_the_grid_from_a_flat_prior() -> None:
+    """A state the twin did not simulate (n = 0) has Laplace's prior (m = ½, w = 2) on both
+    legs: ½ · ½ without evidence, (2·½ + 1)/(2 + 1) = 2/3 after one delivery."""
+    grid = [{"face": "front", "conveyor": "both", "theta_deg": 0.0},
+            {"face": "back", "conveyor": "left", "theta_deg": 30}]  # fmt: skip
+    preds = uninformed(grid)
+    assert preds == [
+        {"face": "front", "conveyor": "both", "theta_deg": 0, "k": 0, "n": 0, "share": None,
+         "source": "none"},
+        {"face": "back", "conveyor": "left", "theta_deg": 30, "k": 0, "n": 0, "share": None,
+         "source": "none"},
+    ]  # fmt: skip
+    assert type(preds[0]["theta_deg"]) is int
+    assert posterior(preds[0], {}) == {"p_pickup": 0.5, "p_delivery": 0.5, "p": 0.25}
+    ev = {"delivery": {"back/left/30": [1, 1]}}
+    assert posterior(preds[1], ev)["p_delivery"] == pytest.approx(2 / 3)
+    assert [p["face"] for p in rerank(preds, ev)] == ["back", "front"]

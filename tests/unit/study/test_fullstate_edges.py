@@ -110,11 +110,10 @@ def _row(obj: str, face: str, conveyor: str, theta: int, success: int, status: s
 
 
 def _rows() -> list[dict]:
-    """o10 and o2 on the front/left series: success at θ 0 and 5, failure at 10 and 15;
-    o3 run only with an invalid result."""
-    out = []
-    for obj in ("o10", "o2"):
-        out += [_row(obj, "front", "left", t, int(t < 8)) for t in (0, 5, 10, 15)]
+    """o2 on the front/left series: success at θ 0 and 5, failure at 10 and 15; o10 the
+    other way round; o3 run only with an invalid result."""
+    out = [_row("o10", "front", "left", t, int(t > 8)) for t in (0, 5, 10, 15)]  # the mirror
+    out += [_row("o2", "front", "left", t, int(t < 8)) for t in (0, 5, 10, 15)]
     out.append(_row("o3", "front", "left", 0, 0, "invalid"))
     return out
 
@@ -126,6 +125,7 @@ def test_sec_6_6_analyze_passes_its_window_and_skips_only_the_empty_object() -> 
     assert [s.object_id for s in narrow.selections] == ["o2", "o10"]
     (series,) = narrow.series_of("o2")
     assert series.y_ma == (1, 1, 0, 0)  # window 1: ȳ^MA = ȳ
+    assert narrow.series_of("o10")[0].y_ma == (0, 0, 1, 1)
     wide = analyze(_rows(), window=21)  # θ ± 10°: the mean of the run angles within it
     assert wide.series_of("o2")[0].y_ma == (Fraction(2, 3), Fraction(1, 2), Fraction(1, 2),
                                             Fraction(1, 3))  # fmt: skip

@@ -28,6 +28,7 @@ from transfertwin._errors import InputError
 from transfertwin.study.experiment import ExperimentResult
 from transfertwin.study.validation._agreement import Agreement, SideOutcome, _outcome
 from transfertwin.study.validation._validation import (
+    ValidationResult,
     compare,
     newcombe_difference,
     summary_json_text,
@@ -244,3 +245,14 @@ def test_two_scenes_agree_when_each_share_is_in_the_others_interval() -> None:
     same = Agreement("x", fast, SideOutcome(8, 10, 0, 1, 0.0, (1,) * 8 + (0, 0)))
     assert same.agree and same.line().endswith("AGREE") and math.isnan(same.reference.rate)
     assert math.isnan(SideOutcome(0, 0, 0, 0, 1.0, ()).share)
+
+
+def test_sec_6_7_a_bad_level_is_named_before_the_tables_are_compared() -> None:
+    with pytest.raises(InputError, match="alpha"):
+        validate(rows(A, 1, 2), rows(B, 1, 2), alpha=1.5)  # nothing in common, bad level
+
+
+def test_sec_6_7_a_result_without_comparisons_has_no_power_entry() -> None:
+    empty = ValidationResult(())
+    assert empty.to_dict()["power"] is None and empty.power_note == ""
+    assert empty.summary_line == "0/0 objects differ"

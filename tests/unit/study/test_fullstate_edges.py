@@ -25,6 +25,7 @@ from transfertwin.study.fullstate import (
     moving_average,
     object_sort_key,
     select,
+    series_table,
     state_table,
 )
 from transfertwin.study.fullstate._analysis import selection_json_text, states_csv_text
@@ -180,3 +181,11 @@ def test_eq_6_7_labels_seen_before_parse_the_same_the_second_time() -> None:
     first, second = state_table(rows[:1]), state_table(rows)
     assert first[0].key == second[0].key == ("o1", "front", "left", 7)
     assert second[0].n == 2
+
+
+def test_eq_6_28_a_missing_series_does_not_end_the_list_and_records_are_kept() -> None:
+    rows = [_row("o1", "front", "left", 0, 1), _row("o1", "back", "left", 0, 0)]
+    series = series_table(state_table(rows), "o1", window=1)
+    assert [(s.face, s.side) for s in series] == [("front", "left"), ("back", "left")]
+    result = analyze(rows, window=1)
+    assert len(result.records) == 2 and result.records[1].face == "back"

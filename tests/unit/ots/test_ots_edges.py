@@ -211,3 +211,9 @@ def test_eq_5_7_pre_transfer_time_is_measured_from_t0() -> None:
     at = make_states(x=-0.25, y=0.0, s_x=0.125, s_y=0.125, t=[5.125, 4.875, 5.25, 0.0])
     assert pre.contains(at).tolist() == [True, True, False, False]
     assert [pre.contains_one(s) for s in at] == [True, True, False, False]
+
+
+def test_eq_5_7_the_tm_belts_need_a_length() -> None:
+    """tm_x_min == tm_x_max with every other check satisfied (the return threshold set)."""
+    with pytest.raises(InputError, match=r"^BeltThresholds: need tm_x_min < tm_x_max <= "):
+        BeltThresholds(tm_x_min=0.0, tm_x_max=0.0, x_success_return=0.1)

@@ -21,8 +21,10 @@ def test_locate_frees_the_module_that_still_carries_the_object(tmp_path, cps_cer
         wd = cps_certs(tmp_path)
         async with LocalFloor(default_floor_spec(), wd, time_scale=0.0) as floor:
             graph = floor.nodes["KG"].role  # its last heartbeat of each asset: .info
-            # TM_1's own record says it carries o5 (what a delivery that failed leaves)
+            # what a delivery that failed and was given up leaves: o5 on TM_1, in TM_1's own
+            # record and in the TMS's ledger
             assert await floor.nodes["TM_1"].role._set_possessed("o5")
+            floor.nodes["TMS"].role.book.move("o5", "TM_1")
             loop = asyncio.get_running_loop()
             deadline = loop.time() + 30
             while "o5" not in graph.info.get("TM_1", {}).get("possesses", []):

@@ -105,8 +105,9 @@ class OrderBook:
             raise OperationRefused("no transport module is online",
                                    status="BadResourceUnavailable")  # fmt: skip
         if after is None and where in self.floor.units and online and all(
-                m.get("possesses") for m in online):  # fmt: skip
-            held = "; ".join(f"{m['id']} carries {', '.join(m['possesses'])}" for m in online)
+                self.carried_by(m["id"]) for m in online):  # fmt: skip
+            held = "; ".join(f"{m['id']} carries {', '.join(self.carried_by(m['id']))}"
+                             for m in online)  # fmt: skip
             raise OperationRefused(f"every transport module carries an object ({held}): order "
                                    "those onward first", status="BadResourceUnavailable",
                                    argument="object")  # fmt: skip
@@ -137,6 +138,12 @@ class OrderBook:
         log.info("TMS: %s %s -> %s (%s) accepted%s", op_id, where, destination, obj,
                  f", after {after}" if after else "")  # fmt: skip
         return op_id
+
+    def carried_by(self, module: str) -> list[str]:
+        """The objects the ledger places on `module` (not those whose place is unknown).
+        The ledger, not the module's last heartbeat, decides: a heartbeat may still list an
+        object the module has just handed over."""
+        return [o for o in self.ledger.objects_at(module) if o not in self.data["unknown"]]
 
     def occupied(self, unit: str) -> bool:
         """`unit` holds as many objects as the floor's capacity allows (0: no limit),

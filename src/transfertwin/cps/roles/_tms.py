@@ -161,7 +161,7 @@ class TmsRole(Role):
         for m in await self._modules() or []:
             if carrier is not None and m["id"] != carrier:
                 continue
-            if carrier is None and m.get("possesses"):
+            if carrier is None and self.book.carried_by(m["id"]):
                 continue
             if m["online"] and m["state"] == "idle" and m["id"] not in self._claimed:
                 out.append(m["id"])

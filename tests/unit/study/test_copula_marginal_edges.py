@@ -112,5 +112,6 @@ def test_sec_6_4_kde_marginal_uses_its_bandwidth_factor_against_scipy() -> None:
     cdf = [float(np.mean(stats.norm.cdf((v - np.array(pts)) / h))) for v in x]
     assert m.dist.cdf(x) == pytest.approx(cdf, rel=1e-12)
     assert m.dist.cdf(np.array([])).shape == (0,)
+    assert m.dist.cdf(0.7).shape == () and float(m.dist.cdf(0.7)) == pytest.approx(cdf[1])
     assert m.to_dict()["points"] == list(pts)
     assert "points" not in fit_marginal(_sample(), families=(FAM["normal"],)).marginal.to_dict()

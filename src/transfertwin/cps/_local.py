@@ -26,9 +26,12 @@ from transfertwin.cps.floor import AssetConfig, FloorSpec
 from transfertwin.cps.node import AssetNode
 from transfertwin.cps.opcua import connect, load_credentials
 
-__all__ = ["LocalFloor"]
+__all__ = ["STOP_LIMIT_S", "LocalFloor"]
 
 log = logging.getLogger("transfertwin.cps")
+
+#: Seconds one node may take to stop (its leave, its role, its sessions and server).
+STOP_LIMIT_S = 15.0
 
 
 class LocalFloor:
@@ -103,10 +106,13 @@ class LocalFloor:
         return node
 
     async def stop(self, aid: str) -> None:
-        """Take asset `aid` off the floor: it announces its leave and stops serving."""
+        """Take asset `aid` off the floor: it announces its leave and stops serving (within
+        `STOP_LIMIT_S`; a stop that hangs is logged and given up, as a process's is)."""
         node = self.nodes.pop(aid)
         try:
-            await node.__aexit__(None, None, None)
+            await asyncio.wait_for(node.__aexit__(None, None, None), STOP_LIMIT_S)
+        except TimeoutError:
+            log.warning("%s did not stop within %g s; left behind", aid, STOP_LIMIT_S)
         finally:
             (self.configs[aid].state_dir / "pid").unlink(missing_ok=True)
 

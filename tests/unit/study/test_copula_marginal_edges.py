@@ -115,3 +115,20 @@ def test_sec_6_4_kde_marginal_uses_its_bandwidth_factor_against_scipy() -> None:
     assert m.dist.cdf(0.7).shape == () and float(m.dist.cdf(0.7)) == pytest.approx(cdf[1])
     assert m.to_dict()["points"] == list(pts)
     assert "points" not in fit_marginal(_sample(), families=(FAM["normal"],)).marginal.to_dict()
+
+
+def test_sec_6_4_a_p_value_equal_to_the_level_passes_the_gate() -> None:
+    """The gate rejects p < α: at p = α exactly the family stays fitted."""
+    x = _sample()
+    p = fit_marginal(x, families=(FAM["normal"],), ks_alpha=0.0).candidates[0].ks_pvalue
+    at = fit_marginal(x, families=(FAM["normal"],), ks_alpha=p).candidates[0]
+    assert at.status == "fitted"
+    above = fit_marginal(x, families=(FAM["normal"], FAM["kde"]), ks_alpha=np.nextafter(p, 1))
+    assert above.candidates[0].status == "rejected"
+
+
+def test_sec_6_4_unnamed_values_and_empty_bounds_are_refused_by_name() -> None:
+    with pytest.raises(InputError, match=r"^values: needs at least 2 distinct values"):
+        fit_marginal(np.array([1.0, 1.0, 1.0]))
+    with pytest.raises(InputError):
+        Marginal("normal", (0.0, 1.0), (0.5, 0.5), ())

@@ -18,6 +18,7 @@ import pytest
 from scipy.stats import beta
 
 from transfertwin._errors import InputError
+from transfertwin.study.fullstate import _states as fullstate_states
 from transfertwin.study.fullstate import (
     analyze,
     clopper_pearson,
@@ -175,8 +176,8 @@ def test_sec_6_6_object_ids_with_letters_and_digits_sort_naturally() -> None:
     assert sorted(ids, key=object_sort_key) == ["o2", "o10", "oa", "ob"]
 
 
-def test_eq_6_7_labels_seen_before_parse_the_same_the_second_time() -> None:
-    # labels written in a way no other test uses, so the first lookup is not cached yet
+def test_eq_6_7_labels_seen_before_parse_the_same_the_second_time(monkeypatch) -> None:
+    monkeypatch.setattr(fullstate_states, "_STATE_CACHE", {})  # the first lookup is a miss
     rows = [{**_row("o1", "front", "left", 0, 1), "face": "  FrOnT ", "theta_deg": 7}] * 2
     first, second = state_table(rows[:1]), state_table(rows)
     assert first[0].key == second[0].key == ("o1", "front", "left", 7)

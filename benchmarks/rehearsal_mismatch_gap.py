@@ -5,10 +5,11 @@ item 4) — reads the plant's hidden parameters.
 private experiment machinery (`EmulatedPlant._jobs`, `transfertwin.plant._plant._run_job`),
 which no part of the twin or of `transfertwin rehearse` may do.
 
-For a rehearsal folder on the mismatch plant it rebuilds the held-out experiments (the
-oracle's way: the same states, logged docking errors and ids) and runs each again on
-variants of the same plant, ``--n`` times with fresh placement seeds and no outcome flips:
-the full mismatch plant, the mismatch plant with one part switched off
+For a rehearsal folder on the mismatch plant (its plant seed read from ``plant.secret``
+beside ``rehearsal.json``) it rebuilds the held-out experiments (the oracle's way: the
+same states, logged docking errors and ids) and runs each again on variants of the same
+plant, ``--n`` times with fresh placement seeds and no outcome flips: the full mismatch
+plant, the mismatch plant with one part switched off
 (`transfertwin.plant._mismatch.MISMATCH_PARTS`), and the in-class plant. Per variant it
 prints the variant's success share on those rows and the calibrated twin's held-out
 decisions (``p_after >= 0.5`` in ``held_out_predictions.csv``) scored against the variant's
@@ -34,7 +35,12 @@ from pathlib import Path
 import numpy as np
 
 from rehearsal_oracle import _f05, rerun_wins  # ORACLE: reruns the plant's private jobs
-from transfertwin.plant import MISMATCH_PARTS, EmulatedPlant
+from transfertwin.plant import (
+    MISMATCH_PARTS,
+    PLANT_SEED_FILE,
+    EmulatedPlant,
+    read_plant_seed,
+)
 from transfertwin.rehearsal import calibration_design
 
 
@@ -65,7 +71,7 @@ def main() -> None:
     ids = [(int(r["experiment_id"]), (r["face"], int(r["theta_deg"]))) for r in rows]
     y = np.array([int(r["success"]) for r in rows])
     twin = np.array([float(r["p_after"]) >= 0.5 for r in rows])
-    seed = int(cfg["plant_seed"])
+    seed = read_plant_seed(args.folder / PLANT_SEED_FILE)  # not in rehearsal.json
     design = calibration_design(tuple(cfg["objects"]), int(cfg["calibration_experiments"]),
                                 int(cfg["seed"]))  # fmt: skip
     variants = {"mismatch (full)": EmulatedPlant(seed, kind="mismatch")}

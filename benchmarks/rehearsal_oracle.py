@@ -5,7 +5,8 @@
 of `transfertwin rehearse` may do. It answers one question: how high can *any* twin's F0.5 on
 a rehearsal's held-out plant experiments be, given the plant's own outcome noise?
 
-For each rehearsal folder (``rehearsal.json``, ``plant_calibration.csv`` and, with
+For each rehearsal folder (``rehearsal.json``, the plant's seed in ``plant.secret`` beside
+it, ``plant_calibration.csv`` and, with
 ``--test-experiments``, ``plant_test.csv``; a curve folder's ``K*/`` sub-folders in turn) it
 rebuilds the held-out rows exactly as `rehearse` chose them and the plant's own jobs for them
 (the first experiments of a fresh plant of the same seed), then prints beside the twin's F0.5
@@ -38,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from transfertwin.plant import EmulatedPlant
+from transfertwin.plant import PLANT_SEED_FILE, EmulatedPlant, read_plant_seed
 from transfertwin.plant._plant import _run_job  # ORACLE: private plant machinery
 from transfertwin.rehearsal import calibration_design, f05_intervals, holdout_split
 
@@ -101,7 +102,8 @@ def oracle(folder: Path, n: int, workers: int) -> dict[str, object]:
     else:  # the split `rehearse` made of the K experiments (ids 0..K-1)
         _, test = holdout_split(rows, float(cfg["holdout"]), seed)
         design = calibration_design(objects, k, seed)
-    plant = EmulatedPlant(int(cfg["plant_seed"]), kind=cfg.get("plant_kind", "in-class"),
+    plant_seed = read_plant_seed(folder / PLANT_SEED_FILE)  # rehearsal.json does not hold it
+    plant = EmulatedPlant(plant_seed, kind=cfg.get("plant_kind", "in-class"),
                           mismatch_off=tuple(cfg.get("mismatch_off", ())))  # fmt: skip
     jobs = plant._jobs(design)
     by_id = {j.experiment_id: j for j in jobs}
@@ -115,7 +117,7 @@ def oracle(folder: Path, n: int, workers: int) -> dict[str, object]:
     flip_p = test_jobs[0].scene.flip_p
     flipped = np.array([j.flip_u < flip_p for j in test_jobs])
     y = np.array([int(r["success"]) for r in test])
-    per_run = rerun_wins(test_jobs, 0x4F52434C, int(cfg["plant_seed"]), n, workers).T  # (N, n)
+    per_run = rerun_wins(test_jobs, 0x4F52434C, plant_seed, n, workers).T  # (N, n)
     majority = (per_run.mean(axis=0) >= 0.5).astype(int)[None, :]
     exact = np.where(flipped, 1 - y, y)[None, :]  # the plant's physics before the flip
     preds = {"oracle": per_run, "majority": majority, "exact": exact}

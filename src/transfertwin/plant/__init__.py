@@ -10,15 +10,19 @@ from transfertwin.plant._mismatch import MISMATCH_PARTS, PLANT_KINDS
 from transfertwin.plant._physics import PlantPhysics
 from transfertwin.plant._plant import PLANT_COLUMNS, EmulatedPlant, MassReading, PlantRequest
 from transfertwin.plant._recording import CAMERA_RESOLUTION, PlantRecording
+from transfertwin.plant._secret import PLANT_SEED_FILE, read_plant_seed, write_plant_seed
 
 __all__ = [
     "CAMERA_RESOLUTION",
     "MISMATCH_PARTS",
     "PLANT_COLUMNS",
     "PLANT_KINDS",
+    "PLANT_SEED_FILE",
     "EmulatedPlant",
     "MassReading",
     "PlantPhysics",
     "PlantRecording",
     "PlantRequest",
+    "read_plant_seed",
+    "write_plant_seed",
 ]

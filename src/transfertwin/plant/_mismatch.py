@@ -38,6 +38,10 @@ streams (so the in-class draws do not move):
 - **contact model and solver**: MuJoCo's PGS solver with a pyramidal friction cone,
   condim 4 (torsional friction), impratio 1.5–5 and a softer, wider impedance (solimp
   width 2–5 mm), against the twin's Newton solver, elliptic cone, condim 3, impratio 1.
+  Unlike the other parts this one is not structural: every one of these is a setting of
+  the twin's own `PhysicsConfig` (solver, cone, condim, impratio, solimp), which the twin
+  could search but its rehearsal does not (it tunes μ and the gap). It is a mismatch in
+  the calibration's space, not outside the model class.
 
 The jointed parts are stiff or light against the plant's 5 ms step: each joint carries an
 armature (rotor inertia) that keeps its undamped period at least 12 steps and makes its

@@ -4,8 +4,11 @@ On a process floor in plant mode (`transfertwin cps up --floor F --plant-seed N`
 transport module's process runs the physics of itself and the unit it is docked at. There
 the "real" hardware is the plant's: the object with its hidden features, mass and centre of
 mass, the plant's friction, gap, belt slip, and the docked unit's height step and pitch.
-`PlantPhysics.system` hands out that compiled system; as with `EmulatedPlant`, the hidden
-values live in name-mangled slots and nothing public returns them.
+`PlantPhysics.system` hands out that compiled system. The `PlantPhysics` object keeps its
+seed and scene in name-mangled slots, but the system it returns is a compiled MuJoCo model
+that holds the hidden values (the object's hulls, mass and inertia, μ, the gap, the TU's
+step and pitch, the belts' slip) in plain arrays: whoever holds the system can read them.
+Only the unit's process holds it, behind its HAL; nothing that process publishes carries it.
 """
 
 from __future__ import annotations
@@ -41,7 +44,12 @@ class PlantPhysics:
 
     def system(self, object_id: str) -> VirtualTransferSystem:
         """The plant's transfer system (TM + docked TU + object `object_id`), cached: its
-        belts slip as the plant's do, and it steps the plant's hidden scene."""
+        belts slip as the plant's do, and it steps the plant's hidden scene.
+
+        The returned system is a compiled model holding the hidden values (geometry, mass,
+        friction, gap, TU pose) readable from its `MjModel`: hand it only to the code that
+        plays the hardware (the HAL), never to the twin.
+        """
         from transfertwin.objects import builtin_ids
 
         if object_id not in set(builtin_ids()):

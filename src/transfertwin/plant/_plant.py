@@ -476,7 +476,14 @@ class EmulatedPlant:
                              self.__off)  # fmt: skip
 
     def weigh(self, object_id: str) -> MassReading:
-        """Weigh and balance plant object `object_id` (the same reading every time)."""
+        """Weigh and balance plant object `object_id` (the same reading every time).
+
+        A scale (0.2 % error) and knife-edge balances (about 1 mm per axis) read the
+        object's real mass and centre of mass. On a mismatch plant that centre includes the
+        mismatch's centre-of-mass shift (part 'mass'), read with the same noise: the twin
+        is handed that shift as a measurement, so of the mass part only the per-axis
+        inertia scaling stays hidden from a twin that weighs.
+        """
         if object_id not in set(builtin_ids()):
             raise InputError(f"the plant has no object {object_id} (it holds o1..o37)")
         obj = draw_object(self.__seed, object_id)

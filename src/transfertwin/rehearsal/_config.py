@@ -184,9 +184,11 @@ class RehearsalConfig:
 
 
 def config_record(cfg: RehearsalConfig) -> dict[str, object]:
-    """The configuration for ``rehearsal.json`` (without the scene; `proxy_positions` only
-    when positions were searched, so that a default rehearsal writes what it wrote before)."""
-    out = {k: v for k, v in asdict(cfg).items() if k != "scene"}
+    """The configuration for ``rehearsal.json``: without the scene, and without the plant
+    seed, which draws every hidden value of the plant (`rehearse` writes it to the
+    owner-only ``plant.secret`` beside the record); `proxy_positions` only when positions
+    were searched, so that a default rehearsal writes what it wrote before."""
+    out = {k: v for k, v in asdict(cfg).items() if k not in ("scene", "plant_seed")}
     if set(cfg.proxy_positions) == {0.5}:
         del out["proxy_positions"]
     if cfg.plant_kind == "in-class":

@@ -39,8 +39,10 @@ from transfertwin.objects import PROXY_SUFFIX, ProxySpec, write_proxy
 from transfertwin.ots import experiment_states, filter_theta_step
 from transfertwin.plant import (
     PLANT_COLUMNS,
+    PLANT_SEED_FILE,
     EmulatedPlant,
     PlantRequest,
+    write_plant_seed,
 )
 from transfertwin.rehearsal._config import (
     COUNTER_MEASURES,
@@ -341,7 +343,8 @@ def rehearse(
     """Run one rehearsal and write its outputs into `out` (created if needed).
 
     Writes ``rehearsal.json``, ``plant_calibration.csv``, ``plant_validation.csv``,
-    ``virtual_validation.csv``, ``fullstate.csv`` and ``objects/<id>.proxy.json``; with
+    ``virtual_validation.csv``, ``fullstate.csv`` and ``objects/<id>.proxy.json``, and the
+    plant's seed in ``plant.secret`` (owner-only; ``rehearsal.json`` does not hold it); with
     ``config.ablate`` one folder ``ablate-<measure>/`` per switched-off counter-measure
     (the same files of that twin), and with ``config.operations`` ``operations.json``.
 
@@ -353,6 +356,7 @@ def rehearse(
     cfg, t0 = config, time.perf_counter()
     plant = EmulatedPlant(cfg.plant_seed, kind=cfg.plant_kind, mismatch_off=cfg.mismatch_off)
     out.mkdir(parents=True, exist_ok=True)
+    write_plant_seed(out / PLANT_SEED_FILE, cfg.plant_seed)
 
     test_rows: list[dict[str, object]] = []
     if cfg.test_experiments:  # first, so that every K of a curve gets the same ones

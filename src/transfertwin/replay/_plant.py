@@ -12,8 +12,9 @@ and the object drawn with the twin's mesh of the core (not the plant's hidden on
 The rows come from a plant's log (`PLANT_COLUMNS`): a rehearsal's ``plant_calibration.csv``,
 ``plant_test.csv``, ``plant_validation.csv`` (and those of its ``ablate-*`` folders), or a
 CPS's ``plant_experiments.csv``. The plant is the one of ``--plant-seed`` or
-``--plant-seed-file``, else the one beside the table: a plant floor's ``plant.secret``, or
-the plant a rehearsal's ``rehearsal.json`` names.
+``--plant-seed-file``, else the one beside the table: the owner-only ``plant.secret`` of a
+plant floor's work folder or of a rehearsal's folder (whose ``rehearsal.json`` names the
+plant's kind and the mismatch parts switched off, never its seed).
 """
 
 from __future__ import annotations
@@ -26,7 +27,14 @@ from pathlib import Path
 import numpy as np
 
 from transfertwin._errors import InputError
-from transfertwin.plant import PLANT_COLUMNS, PLANT_KINDS, EmulatedPlant, PlantRecording
+from transfertwin.plant import (
+    PLANT_COLUMNS,
+    PLANT_KINDS,
+    PLANT_SEED_FILE,
+    EmulatedPlant,
+    PlantRecording,
+    read_plant_seed,
+)
 from transfertwin.replay._record import OTS_CODES, Marker, Replay, compile_system
 from transfertwin.sim import DockingError, SceneConfig
 from transfertwin.study.experiment import ExperimentSpec
@@ -53,38 +61,34 @@ class PlantRow:
     note: str
 
 
-def _read_seed(path: Path) -> int:
+def _read_seed(path: Path, what: str) -> int:
     try:
-        text = path.read_text(encoding="utf-8").strip()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"--plant-seed-file {path}: unreadable ({exc})") from None
-    if not text.isdigit():
-        raise InputError(f"--plant-seed-file {path}: must hold a non-negative integer")
-    return int(text)
+        return read_plant_seed(path)
+    except InputError as exc:
+        raise InputError(f"{what}: {exc}") from None
 
 
 def _plant_beside(table: Path) -> tuple[int, str, str, tuple[str, ...]] | None:
-    """(seed, kind, where, mismatch parts switched off) of the plant that wrote `table`: a
-    plant floor's ``plant.secret`` beside it, else the ``rehearsal.json`` beside it or one
-    folder up."""
-    secret = table.parent / "plant.secret"
-    if secret.is_file():
-        return (_read_seed(secret), "in-class", f"the plant of {table.parent.name}/plant.secret",
-                ())  # fmt: skip
+    """(seed, kind, where, mismatch parts switched off) of the plant that wrote `table`: the
+    ``plant.secret`` beside it or one folder up (a plant floor's work folder, a rehearsal's
+    folder and its ``ablate-*`` folders), of the kind and parts the ``rehearsal.json`` beside
+    that secret names (none: a plant floor's in-class plant)."""
     for folder in (table.parent, table.parent.parent):
-        path = folder / "rehearsal.json"
-        if not path.is_file():
+        secret = folder / PLANT_SEED_FILE
+        record = folder / "rehearsal.json"
+        if not secret.is_file():
             continue
+        seed = _read_seed(secret, f"{folder.name}/{PLANT_SEED_FILE}")
+        if not record.is_file():
+            return seed, "in-class", f"the plant of {folder.name}/{PLANT_SEED_FILE}", ()
         try:
-            config = json.loads(path.read_text(encoding="utf-8"))["config"]
-            seed = config["plant_seed"]
+            config = json.loads(record.read_text(encoding="utf-8"))["config"]
             kind = str(config.get("plant_kind", "in-class"))
             off = tuple(str(p) for p in config.get("mismatch_off", ()))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError) as exc:
-            raise InputError(f"{path}: not a rehearsal's record ({type(exc).__name__}: "
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError,
+                AttributeError) as exc:  # fmt: skip
+            raise InputError(f"{record}: not a rehearsal's record ({type(exc).__name__}: "
                              f"{exc})") from None  # fmt: skip
-        if isinstance(seed, bool) or not isinstance(seed, int):
-            raise InputError(f"{path}: its config has no plant seed")
         return seed, kind, f"the plant of {folder.name}/rehearsal.json", off
     return None
 
@@ -98,9 +102,9 @@ def plant_row(
     plant_kind: str | None = None,
 ) -> PlantRow:
     """Row `index` of the plant table `table` and the plant that made it: the plant of
-    `plant_seed` or of the seed in `plant_seed_file`, else the one beside the table (a plant
-    floor's ``plant.secret``, or a rehearsal's ``rehearsal.json`` beside it or one folder
-    up); of kind `plant_kind` (default: the rehearsal's, else 'in-class')."""
+    `plant_seed` or of the seed in `plant_seed_file`, else the one beside the table: the
+    ``plant.secret`` beside it or one folder up (a plant floor's, or a rehearsal's beside its
+    ``rehearsal.json``); of kind `plant_kind` (default: the rehearsal's, else 'in-class')."""
     path = Path(table)
     if plant_seed is not None and plant_seed_file is not None:
         raise InputError("--plant-seed and --plant-seed-file: give one of them")
@@ -122,13 +126,14 @@ def plant_row(
     if plant_seed is not None:
         seed, note = plant_seed, "the plant of --plant-seed"
     elif plant_seed_file is not None:
-        seed, note = _read_seed(Path(plant_seed_file)), "the plant of --plant-seed-file"
+        seed = _read_seed(Path(plant_seed_file), f"--plant-seed-file {plant_seed_file}")
+        note = "the plant of --plant-seed-file"
     elif found is not None:
         seed, note = found[0], found[2]
     else:
         raise InputError(f"--plant-rows {path.name}: which plant made it? Give --plant-seed "
-                         "or --plant-seed-file (no plant.secret or rehearsal.json beside "
-                         "it)")  # fmt: skip
+                         "or --plant-seed-file (no plant.secret beside it or one folder "
+                         "up: a rehearsal keeps its plant's seed there)")  # fmt: skip
     kind = plant_kind or (found[1] if found is not None else "in-class")
     if kind not in PLANT_KINDS:
         raise InputError(f"--plant-kind must be one of {', '.join(PLANT_KINDS)}, got {kind!r}")

@@ -227,8 +227,8 @@ def _what_was_done(doc: Mapping[str, object]) -> str:
         split = (f"{doc['training']} of them calibrated the twin and {doc['held_out']} were "
                  "held out, never used in calibration")  # fmt: skip
     return (
-        f"<p>An emulated plant (seed {html.escape(str(cfg.get('plant_seed', '?')))}, its "
-        "physical parameters hidden from the twin) stood in for the real one. It ran "
+        "<p>An emulated plant (its physical parameters hidden from the twin, its seed kept "
+        "in plant.secret beside the record) stood in for the real one. It ran "
         f"{html.escape(str(cfg.get('calibration_experiments', '?')))} calibration experiments "
         f"on random pre-transfer states of {html.escape(objects)}; {split}. Calibration fitted "
         "each object's proxy (a protrusion depth per face, with the measured mass) to the "

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import stat
 from pathlib import Path
 
 import pytest
@@ -51,6 +52,11 @@ def test_tiny_rehearsal_writes_every_key(tiny) -> None:
     assert (out / "objects" / "o3.proxy.json").is_file()
     assert "x_frac" not in on_disk["objects"]["o3"]["calibration"]  # positions not searched
     assert doc["virtual_experiments"] > 0
+    # The plant's seed is in the owner-only plant.secret beside the record, not in it.
+    assert "plant_seed" not in on_disk["config"] and "plant_seed" not in doc["config"]
+    secret = out / "plant.secret"
+    assert secret.read_text() == f"{TINY.plant_seed}\n"
+    assert stat.S_IMODE(secret.stat().st_mode) == 0o600
     tuned = on_disk["tuned_scene"]  # one TPE trial over mu and gap, inside their bounds
     assert set(tuned) == {"mu", "gap_mm", "f05"}
     assert 0.3 <= tuned["mu"] <= 0.7 and 8.0 <= tuned["gap_mm"] <= 18.0

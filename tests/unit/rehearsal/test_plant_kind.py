@@ -84,3 +84,10 @@ def test_the_training_threshold_maximises_f05_on_the_training_rows() -> None:
     assert training_threshold([], []) == 0.5
     with pytest.raises(ValueError, match="training_threshold"):
         training_threshold([0.5], [1, 0])
+
+
+def test_the_record_leaves_out_the_plant_seed() -> None:
+    cfg = RehearsalConfig(plant_seed=918273, objects=("o3",), calibration_experiments=20)
+    record = config_record(cfg)
+    assert "plant_seed" not in record and 918273 not in record.values()
+    assert record["seed"] == 0  # the twin's own master seed stays

@@ -9,6 +9,7 @@ import csv
 import dataclasses
 import json
 import re
+import stat
 
 import numpy as np
 import pytest
@@ -16,7 +17,7 @@ import pytest
 from tests.integration.cps.test_plant_assets import _hidden_numbers, _patterns
 from transfertwin._errors import InputError
 from transfertwin.objects import load_object
-from transfertwin.plant import PLANT_COLUMNS, EmulatedPlant, PlantRequest
+from transfertwin.plant import PLANT_COLUMNS, EmulatedPlant, PlantRequest, write_plant_seed
 from transfertwin.replay import (
     OTS_CODES,
     gif_frame_times,
@@ -135,12 +136,15 @@ def test_the_rehearsal_beside_the_table_names_the_plant(table, tmp_path):
     copy = tmp_path / "K10" / "plant_calibration.csv"
     copy.parent.mkdir()
     copy.write_bytes(path.read_bytes())
-    (tmp_path / "rehearsal.json").write_text(json.dumps({"config": {"plant_seed": SEED}}))
+    (tmp_path / "rehearsal.json").write_text(json.dumps({"config": {"objects": ["o3"]}}))
+    # The record names the plant's kind, not its seed: that is in plant.secret beside it.
+    with pytest.raises(InputError, match=r"no plant\.secret beside it"):
+        plant_row(copy, 1)
+    seed_file = write_plant_seed(tmp_path / "plant.secret", SEED)
+    assert stat.S_IMODE(seed_file.stat().st_mode) == 0o600
     found = plant_row(copy, 1)
     assert found.note == f"the plant of {tmp_path.name}/rehearsal.json (in-class)"
-    assert found.plant.kind == "in-class"
-    seed_file = tmp_path / "plant.secret"
-    seed_file.write_text(f"{SEED}\n")
+    assert found.plant.kind == "in-class" and str(SEED) not in found.note
     assert plant_row(copy, 1, plant_seed_file=seed_file).note.startswith("the plant of --plant")
     # A plant floor's work folder: its plant.secret beside the table.
     (copy.parent / "plant.secret").write_text(f"{SEED}\n")
@@ -151,8 +155,9 @@ def test_a_rehearsal_with_mismatch_parts_off_names_that_plant(table, tmp_path):
     path, _ = table
     copy = tmp_path / "plant_calibration.csv"
     copy.write_bytes(path.read_bytes())
-    config = {"plant_seed": SEED, "plant_kind": "mismatch", "mismatch_off": ["sag", "contact"]}
+    config = {"plant_kind": "mismatch", "mismatch_off": ["sag", "contact"]}
     (tmp_path / "rehearsal.json").write_text(json.dumps({"config": config}))
+    write_plant_seed(tmp_path / "plant.secret", SEED)
     found = plant_row(copy, 0)
     where = f"the plant of {tmp_path.name}/rehearsal.json"
     assert found.note == f"{where} (mismatch without sag, contact)"

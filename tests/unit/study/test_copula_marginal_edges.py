@@ -130,5 +130,5 @@ def test_sec_6_4_a_p_value_equal_to_the_level_passes_the_gate() -> None:
 def test_sec_6_4_unnamed_values_and_empty_bounds_are_refused_by_name() -> None:
     with pytest.raises(InputError, match=r"^values: needs at least 2 distinct values"):
         fit_marginal(np.array([1.0, 1.0, 1.0]))
-    with pytest.raises(InputError):
+    with pytest.raises(InputError, match=r"params and bounds must be finite, lo < hi$"):
         Marginal("normal", (0.0, 1.0), (0.5, 0.5), ())

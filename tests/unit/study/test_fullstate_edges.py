@@ -193,8 +193,8 @@ def test_eq_6_28_a_missing_series_does_not_end_the_list_and_records_are_kept() -
 
 
 def test_eq_6_27_a_361_degree_window_is_the_mean_of_the_whole_series_once() -> None:
-    y = CircularSeries((0, 10, 20), (Fraction(1), Fraction(0), Fraction(1)))
-    assert moving_average(y, 361).values == (Fraction(2, 3),) * 3
+    y = CircularSeries((0, 10, 180), (Fraction(1), Fraction(0), Fraction(1)))
+    assert moving_average(y, 361).values == (Fraction(2, 3),) * 3  # θ = 180 counted once
     best = select(state_table(_rows()), "o2", window=361).best
     assert best.theta_deg == 0  # every ȳ^MA ties: the lowest θ
 

@@ -220,7 +220,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "or plant_validation.csv): replay its row --row from the plant's "
                    "recording")  # fmt: skip
     p.add_argument("--plant-seed", type=int, metavar="N",
-                   help="with --plant-rows: the plant's seed (default: the rehearsal's)")
+                   help="with --plant-rows: the plant's seed (default: the plant.secret "
+                   "beside the table or one folder up)")  # fmt: skip
     p.add_argument("--plant-seed-file", metavar="FILE",
                    help="with --plant-rows: a file holding the plant's seed (a plant floor's "
                    "plant.secret)")  # fmt: skip

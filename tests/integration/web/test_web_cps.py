@@ -185,8 +185,13 @@ def test_item8_1_a_cps_restarted_in_the_same_folder_is_followed(tmp_path):
                           source, "--to", target, timeout=200)  # fmt: skip
                 assert done.returncode in (0, 3), done.stdout + done.stderr  # 3: failed there
                 op = done.stdout.strip().splitlines()[-1].split()[0]
-                rows = {r["operation"]: r for r in c.get("/api/orders").json()["orders"]}
-                return rows[op]
+
+                def ended() -> dict | None:  # the console reads the TMS's ledger each second
+                    rows = {r["operation"]: r for r in c.get("/api/orders").json()["orders"]}
+                    row = rows.get(op)
+                    return row if row is not None and row["state"] == "finished" else None
+
+                return wait_for(ended, 30, f"{op} finished in the Orders tab")
 
             before = wait_for(all_online, 120, "every asset online")
             first = cli_order("o3", "TU_C", "TU_D")  # from the command line: in the Orders tab

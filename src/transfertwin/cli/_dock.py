@@ -1,5 +1,5 @@
 """`transfertwin dock`: emergent docking errors from simulated navigation and laser docking,
-measured by the simulated ChArUco rig (issue 14, items 7, 8, 10; Sec. 5.4.1, 6.1.2).
+measured by the simulated ChArUco rig (Sec. 5.4.1, 6.1.2).
 
     dock --station A|B|C|D[,...] --runs N --seed S --out FILE.csv [--image PNG] [--real CSV]
 

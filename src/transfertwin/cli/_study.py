@@ -207,7 +207,7 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     """Per-state statistics, best/worst states, plots and report of a result table.
 
     A study db whose plan is not finished is analysed as it stands; the report opens with
-    a banner and stderr gets one line saying done/planned (issue 30.5)."""
+    a banner and stderr gets one line saying done/planned."""
     from transfertwin.report import analyze_and_report, partial_line
     from transfertwin.store import SQLITE_SUFFIXES, SQLiteResultStore, read_results
     from transfertwin.study.experiment import plan_parameters

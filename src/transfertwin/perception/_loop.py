@@ -1,4 +1,4 @@
-"""Perception in the loop (issue item 6): the OTS controller fed by the camera.
+"""Perception in the loop: the OTS controller fed by the camera.
 
 `open_sensor` forms the transport module's view of an OTS the way Sec. 5.5 describes it:
 scan the workspace from the two viewpoints (α = 20°, −30°), take the detection nearest to

@@ -1,4 +1,4 @@
-"""Scan results against what the assets say they possess (Sec. 5.5, issue item 5).
+"""Scan results against what the assets say they possess (Sec. 5.5).
 
 Before an OTS is formed, the TM scans its belts and the docked unit's. Each unit's
 representation (its asset administration shell) says which objects it possesses and how

@@ -1,4 +1,4 @@
-"""The transfer system in a second physics engine: PyBullet (issue 29, item 3).
+"""The transfer system in a second physics engine: PyBullet.
 
 `BulletTransferSystem` is the system `transfertwin.sim.VirtualTransferSystem` is — TM^V,
 TU^V docked with a docking error, one object on convex hulls — built in PyBullet

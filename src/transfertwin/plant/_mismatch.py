@@ -1,4 +1,4 @@
-"""Structural mismatch: a plant the twin's model class cannot represent exactly (issue 29).
+"""Structural mismatch: a plant the twin's model class cannot represent exactly.
 
 The in-class plant (`EmulatedPlant(seed)`, kind 'in-class') differs from the twin only in
 values of the twin's own family: one box protrusion per face, a centre-of-mass offset, μ,

@@ -1,4 +1,4 @@
-"""`EmulatedPlant`: a "physical" transfer system with hidden ground truth (issue 12).
+"""`EmulatedPlant`: a "physical" transfer system with hidden ground truth.
 
 A plant is drawn from a seed (`transfertwin.plant._truth`): per object hidden resting
 features (a protrusion per face from a wider prior than the twin's), a centre-of-mass

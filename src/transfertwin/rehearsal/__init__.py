@@ -1,4 +1,4 @@
-"""Rehearsal of the whole calibrate → predict → validate loop on an emulated plant (issue 12).
+"""Rehearsal of the whole calibrate → predict → validate loop on an emulated plant.
 
 `rehearse` drives an `transfertwin.plant.EmulatedPlant` (the physical side) and the twin
 (`transfertwin.study`): the twin's inputs from the plant are the rows of its experiments and

@@ -1,4 +1,4 @@
-"""Predictions in operation (Sec. 7.2) measured on an emulated plant (issue 12, item 5).
+"""Predictions in operation (Sec. 7.2) measured on an emulated plant.
 
 The Transport Module System uses the twin: when an order names an object, it places the
 object in the twin's recommended pre-transfer state (its best state, Alg. 1–2) and, where

@@ -1,4 +1,4 @@
-"""`rehearse`: the study's whole procedure against an emulated plant (issue 12).
+"""`rehearse`: the study's whole procedure against an emulated plant.
 
 1. K calibration experiments E^P on the plant at random states (the study's design: random
    face, conveyor and θ, objects in turn), split into training rows and held-out rows

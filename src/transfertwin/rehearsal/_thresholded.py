@@ -1,5 +1,5 @@
 """The rehearsal's held-out figures as `calibrate evaluate` states them: one decision per row
-and the Brier score of the probabilities (issue 29).
+and the Brier score of the probabilities.
 
 `f05_before`/`f05_after` are the mean over R runs of each run's F0.5 (an unthresholded
 score). Here each held-out row gets the twin's probability P = the share of its R runs that

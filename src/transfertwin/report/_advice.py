@@ -2,7 +2,7 @@
 
 Alg. 1–4 always name one best state, even where several states did equally well; the
 advice says a conveyor and an angle only where the data single them out. The
-**separation rule** (issue 30) decides that, per object, on the face of its best state b:
+**separation rule** decides that, per object, on the face of its best state b:
 
     b is *separated* on its face f  ⇔  some run state s of f (n ≥ 1) has a 95 %
     Clopper–Pearson interval wholly below b's:  ci_high(s) < ci_low(b).

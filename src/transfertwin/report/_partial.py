@@ -1,4 +1,4 @@
-"""How far a study got, and what a partial one means for its report (issue 30.5).
+"""How far a study got, and what a partial one means for its report.
 
 A study can be analysed before it has finished (``study run`` interrupted or stopped by
 ``--max-experiments``). Its report is then valid for the states run so far only: Alg. 1–4

@@ -1,4 +1,4 @@
-"""The transport module's depth camera in the loop (issue 28, item 3; docs/architecture.md,
+"""The transport module's depth camera in the loop (docs/architecture.md,
 "Operation"): before an OTS is formed, what the camera sees of the module's belts and the
 docked unit's is matched with what the ledger says each holds (`match_possessions`,
 Sec. 5.5); an object missing, seen on the other unit, or a box nobody expects stops the

@@ -1,4 +1,4 @@
-"""A study the Experiment Manager runs on request (issue 28, item 5; Sec. 6.6).
+"""A study the Experiment Manager runs on request (Sec. 6.6).
 
 A request is a JSON plan: the objects, the pre-transfer states (listed, or every state on a
 θ step), the runs per state, the seed, the docking-error model and where the experiments

@@ -1,5 +1,5 @@
-"""Who carries an order, to which unit, in which pre-transfer state (issue 28, item 2;
-docs/architecture.md, "Operation").
+"""Who carries an order, to which unit, in which pre-transfer state (docs/architecture.md,
+"Operation").
 
 The protocol is an auction run by the TMS for the order at the head of its queue, as
 Open-RMF's dispatcher runs one among fleet adapters: the TMS asks every eligible transport

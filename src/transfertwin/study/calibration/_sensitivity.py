@@ -1,4 +1,4 @@
-"""Sensitivity of the replayed outcomes to candidate gap mechanisms (issue 10, item 1).
+"""Sensitivity of the replayed outcomes to candidate gap mechanisms.
 
 Which unmeasured mechanism makes the twin fail where the real system fails? Every real row
 (face, conveyor, θ, measured docking error) is replayed as in `calibrate`, under scenes that

@@ -163,6 +163,21 @@ class AssetNode:
         """Remember where `aid` answers (from the graph's status)."""
         self._known[aid] = endpoint
 
+    async def graph_status(self, timeout_s: float = 5.0) -> list[dict[str, Any]] | None:
+        """Every asset as the knowledge graph's ``Status`` lists it (id, class, online,
+        address, ...), the addresses remembered (`learn`); None when the graph does not
+        answer within `timeout_s`."""
+        try:
+            status = json.loads(await asyncio.wait_for(self.peers.call("KG", "Status"),
+                                                       timeout_s))  # fmt: skip
+        except Exception as exc:
+            log.debug("%s: knowledge graph not answering: %s", self.desc.asset_id, exc)
+            return None
+        for a in status["assets"]:
+            if a.get("address"):
+                self.learn(a["id"], a["address"])
+        return status["assets"]
+
     def open_session(self, aid: str, timeout_s: float):
         """A session of its own with `aid` whose requests may take `timeout_s` (a call that
         runs long, such as an experiment cycle), as an async context manager."""

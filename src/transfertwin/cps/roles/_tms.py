@@ -143,15 +143,10 @@ class TmsRole(Role):
     # -- execution ------------------------------------------------------------------------
     async def _modules(self) -> list[dict[str, Any]] | None:
         """The transport modules as the knowledge graph knows them (None: graph away)."""
-        try:
-            status = json.loads(await asyncio.wait_for(self.node.peers.call("KG", "Status"), 5))
-        except Exception as exc:
-            log.debug("TMS: knowledge graph not answering: %s", exc)
+        assets = await self.node.graph_status()
+        if assets is None:
             return None
-        for a in status["assets"]:
-            if a.get("address"):
-                self.node.learn(a["id"], a["address"])
-        return [a for a in status["assets"] if a.get("class") == "transport_module"]
+        return [a for a in assets if a.get("class") == "transport_module"]
 
     async def _eligible(self, op: dict[str, Any]) -> list[str]:
         """Online, idle, unclaimed modules that may take `op`: the carrier alone for an

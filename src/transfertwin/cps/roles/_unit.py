@@ -5,7 +5,6 @@ objects (`ObjectRole`: others keep their state; they persist what is written to 
 from __future__ import annotations
 
 import asyncio
-import json
 import logging
 from typing import TYPE_CHECKING, Any
 
@@ -91,13 +90,8 @@ class UnitRole(Role):
 
     async def _online(self, module: str) -> bool | None:
         """Whether the knowledge graph holds `module`'s lease (None: the graph is away)."""
-        try:
-            status = json.loads(await asyncio.wait_for(self.node.peers.call("KG", "Status"),
-                                                       5.0))  # fmt: skip
-        except Exception as exc:
-            log.debug("%s: knowledge graph not answering: %s", self.aid, exc)
-            return None
-        row = next((a for a in status["assets"] if a.get("id") == module), None)
+        assets = await self.node.graph_status()
+        row = next((a for a in assets or () if a.get("id") == module), None)
         return None if row is None else bool(row.get("online"))
 
     async def _report_pose(self) -> None:

@@ -47,6 +47,7 @@ def _plan_from_args(args: argparse.Namespace):  # -> StudyPlan
         docking=docking,
         profile_name=profile_name,
         units=args.units,
+        leg=args.leg,
         **kwargs,
     )
 
@@ -250,6 +251,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "(default: the shipped calibration experiments)")  # fmt: skip
     p.add_argument("--dock-error", help="X_MM,Y_MM,THETA_DEG: one fixed docking error for all "
                    "experiments instead of resampled measurements")  # fmt: skip
+    p.add_argument("--leg", choices=("round-trip", "pick-up", "operation"),
+                   default="round-trip", help="what each experiment runs: the object there "
+                   "and back from the module (round-trip, the study's E^V), a floor's pick-up "
+                   "from a unit onto the module (pick-up), or the pick-up and then the "
+                   "delivery at another unit (operation)")  # fmt: skip
     p.add_argument("--max-experiments", type=int, help="stop after this many new results")
     p.add_argument("--sampling", choices=("exhaustive", "adaptive"), default="exhaustive",
                    help="exhaustive: --runs runs per state; adaptive: rounds of runs where "

@@ -29,6 +29,7 @@ from transfertwin.sim._names import (
 from transfertwin.sim._render import group_frames, render_strip, strip_camera, strip_pixels
 from transfertwin.sim._scene import BARRIERS, BELTS, UNITS, UnitGeometry, build_spec, unit_layout
 from transfertwin.sim._system import (
+    UNIT_LOAD_X_M,
     MujocoUnitHAL,
     SimClock,
     SimulationUnstable,
@@ -48,6 +49,7 @@ __all__ = [
     "PROFILES",
     "TU_BODY",
     "UNITS",
+    "UNIT_LOAD_X_M",
     "DockingError",
     "GapAreaLayout",
     "LayoutConfig",

@@ -23,6 +23,7 @@ from transfertwin.sim._names import OBJECT_BODY, OBJECT_JOINT, TU_BODY, barrier_
 from transfertwin.sim._scene import BARRIERS, BELTS, UNITS, build_spec
 
 __all__ = [
+    "UNIT_LOAD_X_M",
     "MujocoUnitHAL",
     "SimClock",
     "SimulationUnstable",
@@ -31,6 +32,10 @@ __all__ = [
     "outer_vertices",
     "tu_quat",
 ]
+
+#: Where a station puts an object down on a transfer unit's belts for a pick-up: its centre
+#: this far (m) into the unit from the unit's end at the gap.
+UNIT_LOAD_X_M = 0.25
 
 _SENSORS_OFF = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
 # The warnings on which MuJoCo resets the data: bad qpos, qvel and qacc (consecutive codes).
@@ -330,6 +335,16 @@ class VirtualTransferSystem:
         )
         mujoco.mj_forward(self.model, self.data)
         self._guard_reset()
+
+    def place_on_unit(
+        self, face: str, theta_rad: float, y_m: float = 0.0, dx_m: float = 0.0
+    ) -> None:
+        """Put the object down on the docked TU's belts where a pick-up starts: its AABB
+        centre `UNIT_LOAD_X_M` (+ `dx_m`) into the unit from its end at the gap and `y_m`
+        off the unit's centre line, yaw θ on `face` (the station's loading point; the
+        floor's pick-ups and the pick-up E^V both start here)."""
+        tx, ty, _ = self.tu_pose
+        self.place(face, theta_rad, tx + UNIT_LOAD_X_M + dx_m, ty + y_m)
 
     def place(self, face: str, theta_rad: float, x_m: float, y_m: float) -> None:
         """Put the object with its AABB centre at (x, y), yaw θ on `face`, just above the belt."""

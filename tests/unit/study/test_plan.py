@@ -147,3 +147,22 @@ def test_a_plan_of_chosen_states_runs_those_only_and_keeps_other_hashes():
         _plan(only_states=(only[0], only[0]))
     with pytest.raises(InputError):
         _plan(only_states=(("side", "left", 0),))
+
+
+def test_a_plan_of_operation_legs_draws_a_delivery_docking_error_and_keeps_other_hashes():
+    from transfertwin.study.docking import docking_model
+
+    plain = _plan(docking=docking_model("copula"))
+    assert "leg" not in plain.describe()  # round-trip plans keep their hashes
+    plan = _plan(docking=docking_model("copula"), leg="operation")
+    assert plan.describe()["leg"] == "operation" and plan.plan_hash != plain.plan_hash
+    assert StudyPlan.from_json(plan.to_json()).plan_hash == plan.plan_hash
+    ids = {"o1": "o1", "o2": "o2"}
+    for (_, a), (_, b) in zip(plain.specs(ids), plan.specs(ids), strict=True):
+        assert (a.leg, b.leg) == ("round-trip", "operation")
+        # the same pick-up draws as the round trip's; the delivery's error is its own
+        assert (a.seed, a.docking_error) == (b.seed, b.docking_error)
+        assert a.delivery_docking_error is None
+        assert b.delivery_docking_error not in (None, b.docking_error)
+    with pytest.raises(InputError, match="--leg"):
+        _plan(leg="there")

@@ -101,8 +101,7 @@ class Environment:
         `face`, yaw `theta_deg`, `y_offset_m` off the unit's centre line)."""
         self.use(object_ref)
         self._system.reset(error)
-        tx, ty, _ = self._system.tu_pose
-        self._system.place(face, math.radians(theta_deg), tx + 0.25, ty + y_offset_m)
+        self._system.place_on_unit(face, math.radians(theta_deg), y_offset_m)
         self.docked_unit = unit
         self._system.clock.wait(self.scene.placement.settle_time_s)
 

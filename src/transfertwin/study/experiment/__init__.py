@@ -7,6 +7,7 @@ from transfertwin._lazy import lazy_exports
 if TYPE_CHECKING:
     from transfertwin.study.experiment._demo import real_docking_error, run_demo
     from transfertwin.study.experiment._experiment import (
+        LEGS,
         RESULT_COLUMNS,
         SENSORS,
         ExperimentResult,
@@ -21,6 +22,7 @@ if TYPE_CHECKING:
         SAMPLING_MODES,
         Preset,
         StudyPlan,
+        delivery_docking_seed,
         experiment_seeds,
         parse_objects,
         plan_parameters,
@@ -46,6 +48,7 @@ if TYPE_CHECKING:
     from transfertwin.study.experiment._warp import WarpExecutor, warp_available
 
 __all__ = [
+    "LEGS",
     "PRESETS",
     "RESULT_COLUMNS",
     "SAMPLING_MODES",
@@ -61,6 +64,7 @@ __all__ = [
     "StudyPlan",
     "WarpExecutor",
     "check_plan",
+    "delivery_docking_seed",
     "experiment_seeds",
     "load_profile",
     "parse_objects",

@@ -1,4 +1,18 @@
-"""The virtual experiment E^V (Sec. 6.2.2, Eq. 6.16–6.18): there and, if that worked, back.
+"""The virtual experiment E^V (Sec. 6.2.2, Eq. 6.16–6.18): there and, if that worked, back;
+or the legs of a transport operation on a floor (`LEGS`).
+
+Legs (`ExperimentSpec.leg`):
+
+- ``round-trip`` (the study's, Eq. 6.18): the object in a pre-transfer state on the TM, the
+  transfer TM → TU (y1) and, if it succeeded, back TU → TM (y2);
+- ``pick-up``: the object put down on the TU at the station's loading point in the state's
+  face, θ and lateral position (`VirtualTransferSystem.place_on_unit`), the transfer TU → TM
+  (y1, Eq. 5.7–5.10 with a_pre = TU); y2 is None;
+- ``operation``: the pick-up, then, if it succeeded, the module docked at the destination
+  with a docking error of its own (``delivery_docking_error``) and the delivery TM → TU
+  (y2) from the state the pick-up left: what a floor's transport operation does.
+
+In every leg ``success`` is 1 when every transfer the leg runs succeeded.
 
 `run_experiment(spec) -> ExperimentResult` is one picklable call that runs unchanged in a
 loop, a process pool or a cluster task. Failures are data: a diverging simulation becomes
@@ -24,6 +38,7 @@ from transfertwin.control import Clock, ObjectSensor, OTSController, TransferRec
 from transfertwin.objects import ObjectModel, is_builtin_id, load_object
 from transfertwin.ots import (
     POSITIONS,
+    BeltPreTransferSet,
     BeltThresholds,
     TransferDirection,
     check_theta_deg,
@@ -31,6 +46,7 @@ from transfertwin.ots import (
     experiment_pre_transfer_set,
     parse_conveyor,
     parse_face,
+    pre_transfer_set,
 )
 from transfertwin.sim import DockingError, SceneConfig, SimulationUnstable, VirtualTransferSystem
 from transfertwin.store import DOCKING_ERROR_COLUMNS, RESULT_COLUMNS
@@ -39,6 +55,7 @@ if TYPE_CHECKING:  # perception imports Open3D: loaded only when a run asks for 
     from transfertwin.perception import PerceptionConfig
 
 __all__ = [
+    "LEGS",
     "RESULT_COLUMNS",
     "SENSORS",
     "ExperimentResult",
@@ -54,6 +71,9 @@ log = logging.getLogger(__name__)
 #: Where the OTS controller's object state comes from: the simulator's exact state
 #: ('truth', `VirtualTransferSystem.observe`) or the TM's depth camera ('perception').
 SENSORS: tuple[str, ...] = ("truth", "perception")
+#: What one E^V runs (module docstring): the study's there and back, a floor's pick-up, or
+#: a floor's whole operation (pick-up, then delivery).
+LEGS: tuple[str, ...] = ("round-trip", "pick-up", "operation")
 
 
 @dataclass(frozen=True)
@@ -70,6 +90,10 @@ class ExperimentSpec:
         seed: Seed of this experiment's random choices (placement perturbation).
         units: Length unit of a user mesh file.
         record: Keep the object's pose at every sample (for rendering).
+        leg: What the experiment runs (`LEGS`): 'round-trip' (default), 'pick-up' or
+            'operation'.
+        delivery_docking_error: The docking error at the destination of an 'operation'
+            (None: `docking_error` again); unused by the other legs.
     """
 
     object_ref: str
@@ -82,8 +106,12 @@ class ExperimentSpec:
     seed: int = 0
     units: str = "m"
     record: bool = False
+    leg: str = "round-trip"
+    delivery_docking_error: DockingError | None = None
 
     def __post_init__(self) -> None:
+        if self.leg not in LEGS:
+            raise InputError(f"leg must be one of {', '.join(LEGS)}, got {self.leg!r}")
         object.__setattr__(self, "face", parse_face(self.face))
         object.__setattr__(self, "conveyor", parse_conveyor(self.conveyor))
         object.__setattr__(self, "theta_deg", check_theta_deg(self.theta_deg))
@@ -95,7 +123,8 @@ class ExperimentSpec:
 class Frame:
     """A recorded object pose: phase, time (s) and qpos (7,).
 
-    phase is 'there' (TM → TU) or 'back' (TU → TM). t_s runs on the experiment's clock,
+    phase is 'there' (TM → TU) or 'back' (TU → TM) in a round trip, 'pick-up' (TU → TM) or
+    'delivery' (TM → TU) in the legs of an operation. t_s runs on the experiment's clock,
     as t_end_s does: 0 when the first transfer starts (settling before it is not counted);
     the return transfer goes on from t_end_1_s, so the last frame of a completed
     experiment is at t_end_s (at the stall time when a transfer stalled and ended early).
@@ -114,6 +143,8 @@ class ExperimentResult:
     y1, y2 and success are None when they were not determined (invalid pre-transfer
     state, unstable or crashed simulation); y2 is None when y1 = 0 (no return attempted).
     t_end_s is the sum of both transfers' t_end. States are (11,) vectors (Eq. 5.4).
+    In a 'pick-up' or 'operation' (`LEGS`), y1 is the pick-up and y2 the delivery (None
+    for a pick-up alone); the docking error columns are the pick-up's.
     """
 
     object_id: str
@@ -209,14 +240,20 @@ def _tuple(state: np.ndarray) -> tuple[float, ...]:
 
 
 def _place_and_settle(system: VirtualTransferSystem, spec: ExperimentSpec) -> None:
-    """Put the object into the requested state, perturbed by the seed, and let it settle."""
+    """Put the object into the requested state, perturbed by the seed, and let it settle:
+    on the TM (a round trip) or at the TU's loading point (a pick-up, `LEGS`), at the
+    conveyor's lateral position (Eq. 6.3)."""
     placement = spec.scene.placement
     rng = np.random.default_rng(spec.seed)
     dx, dy = rng.normal(0.0, placement.sigma_xy_m, size=2)
     dtheta = rng.normal(0.0, placement.sigma_theta_deg)
     x, y = POSITIONS[spec.conveyor]
+    theta = math.radians(spec.theta_deg + dtheta)
     system.reset(spec.docking_error)
-    system.place(spec.face, math.radians(spec.theta_deg + dtheta), x + dx, y + dy)
+    if spec.leg == "round-trip":
+        system.place(spec.face, theta, x + dx, y + dy)
+    else:
+        system.place_on_unit(spec.face, theta, y + dy, dx)
     settle(system, spec.scene)
 
 
@@ -238,6 +275,30 @@ def settle(system: VirtualTransferSystem, scene: SceneConfig) -> None:
         done += n
 
 
+#: Per leg: (direction, frame phase) of the first transfer and of the second (None: none).
+_LEG_TRANSFERS = {
+    "round-trip": ((TransferDirection.TM_TO_TU, "there"), (TransferDirection.TU_TO_TM, "back")),
+    "pick-up": ((TransferDirection.TU_TO_TM, "pick-up"), None),
+    "operation": ((TransferDirection.TU_TO_TM, "pick-up"), (TransferDirection.TM_TO_TU,
+                                                            "delivery")),
+}  # fmt: skip
+#: Why a settled object cannot start a leg.
+_NOT_PRE = {
+    "round-trip": "settled state is not a pre-transfer state (Eq. 6.1)",
+    "pick-up": "the object put down on the unit is not in a pre-transfer state of a pick-up "
+               "(Eq. 5.7 with a_pre = TU)",
+}  # fmt: skip
+_NOT_PRE["operation"] = _NOT_PRE["pick-up"]
+
+
+def _pre_set(leg: str, th: BeltThresholds) -> BeltPreTransferSet:
+    """The set a leg's settled start state must lie in: the study's S_pre (Eq. 6.1) on the
+    module for a round trip, Eq. 5.7's set on the unit (a_pre = TU) for a pick-up."""
+    if leg == "round-trip":
+        return experiment_pre_transfer_set(th)
+    return pre_transfer_set(th, TransferDirection.TU_TO_TM)
+
+
 def run_experiment(
     spec: ExperimentSpec,
     *,
@@ -247,7 +308,8 @@ def run_experiment(
     perception: PerceptionConfig | None = None,
     perception_seed: int | None = None,
 ) -> ExperimentResult:
-    """Run E^V (Eq. 6.18): settle, check P_pre, transfer TM → TU, and back if y1 = 1.
+    """Run E^V (Eq. 6.18): settle, check P_pre, transfer TM → TU, and back if y1 = 1; or
+    the legs of an operation (`ExperimentSpec.leg`, module docstring).
 
     Never raises for a simulation problem: the result's status says what happened
     ('ok', 'invalid', 'unstable', 'error'). With the scene's implausible-event guard on
@@ -275,6 +337,11 @@ def run_experiment(
     """
     if sensor not in SENSORS:
         raise InputError(f"sensor must be one of {', '.join(SENSORS)}, got {sensor!r}")
+    if sensor == "perception" and spec.leg != "round-trip":
+        raise InputError(
+            "the perception sensor follows an object put down on the module: "
+            f"leg 'round-trip' only, got {spec.leg!r}"
+        )
     own_system = system is None
     if system is None:
         stamp = _stamp(spec.object_ref)  # one look at the file for system and id
@@ -326,7 +393,8 @@ def _run(
     }
     base.update(zip(DOCKING_ERROR_COLUMNS, spec.docking_error.as_mm_deg(), strict=True))
     frames: list[Frame] = []
-    phase, offset = ["there"], [0.0]
+    (first, p1), second = _LEG_TRANSFERS[spec.leg]
+    phase, offset = [p1], [0.0]
 
     def record() -> None:
         t_s = round(offset[0] + system.clock.now(), 6)  # the clock of t_end, to 1 µs
@@ -350,18 +418,24 @@ def _run(
         )
         system.clock.start()
         s_pre = controller.state(spec.face, spec.conveyor)
-        if not contains_state(experiment_pre_transfer_set(controller.thresholds), s_pre):
+        if not contains_state(_pre_set(spec.leg, controller.thresholds), s_pre):
             return ExperimentResult(
                 object_id, **base, y1=None, y2=None, success=None, t_end_s=math.nan,
-                status="invalid", message="settled state is not a pre-transfer state (Eq. 6.1)",
+                status="invalid", message=_NOT_PRE[spec.leg],
                 state_pre=_tuple(s_pre), frames=tuple(frames),
             )  # fmt: skip
-        there = controller.transfer(TransferDirection.TM_TO_TU, spec.face, spec.conveyor)
+        # a round trip runs the state's conveyor; a floor's module runs the belts the object
+        # lies on (c from the observed box, Eq. 5.6), and so does the pick-up E^V
+        there = controller.transfer(
+            first, spec.face, spec.conveyor if spec.leg == "round-trip" else None
+        )
         back: TransferRecord | None = None
-        if there.y == 1:
+        if there.y == 1 and second is not None:
+            if spec.leg == "operation":  # docked at the destination with an error of its own
+                system.dock(spec.delivery_docking_error or spec.docking_error)
             settle(system, spec.scene)
-            phase[0], offset[0] = "back", there.t_end_s
-            back = controller.transfer(TransferDirection.TU_TO_TM, spec.face, None)
+            phase[0], offset[0] = second[1], there.t_end_s
+            back = controller.transfer(second[0], spec.face, None)
     except SimulationUnstable as exc:
         return ExperimentResult(
             object_id, **base, y1=None, y2=None, success=None, t_end_s=math.nan,
@@ -381,9 +455,14 @@ def _run(
     t2 = back.t_end_s if back is not None else math.nan
     message = "" if there.valid else "observed start state not in S_pre (Eq. 5.7)"
     if back is not None and not back.valid:
-        message = "object not in a return pre-transfer state after transfer 1"
+        message = (
+            "object not in a return pre-transfer state after transfer 1"
+            if spec.leg == "round-trip"
+            else "object not in a delivery pre-transfer state after the pick-up"
+        )
     return ExperimentResult(
-        object_id, **base, y1=y1, y2=y2, success=int(y1 == 1 and y2 == 1),
+        object_id, **base, y1=y1, y2=y2,
+        success=int(y1 == 1 and (y2 == 1 or spec.leg == "pick-up")),
         t_end_s=there.t_end_s + (t2 if back is not None else 0.0), status="ok",
         t_end_1_s=there.t_end_s, t_end_2_s=t2, message=message,
         state_pre=_tuple(s_pre), state_end_1=_tuple(there.end_state),

@@ -23,7 +23,7 @@ from transfertwin.objects import builtin_ids, features_version, is_builtin_id
 from transfertwin.ots import PreTransferState, experiment_states, filter_theta_step, state_index
 from transfertwin.sim import SceneConfig
 from transfertwin.study.docking import DockingErrorModel, docking_model_from_dict
-from transfertwin.study.experiment._experiment import ExperimentSpec
+from transfertwin.study.experiment._experiment import LEGS, ExperimentSpec
 from transfertwin.study.experiment._profile import scene_to_dict
 
 __all__ = [
@@ -31,6 +31,7 @@ __all__ = [
     "SAMPLING_MODES",
     "Preset",
     "StudyPlan",
+    "delivery_docking_seed",
     "experiment_seeds",
     "parse_objects",
     "plan_parameters",
@@ -78,9 +79,19 @@ def parse_objects(text: str) -> tuple[str, ...]:
 
 def experiment_seeds(master: int, object_id: str, state_idx: int, run: int) -> tuple[int, int]:
     """(experiment seed, docking-error seed) of one experiment, from the master seed."""
-    key = (zlib.crc32(object_id.encode()), state_idx, run)
-    words = np.random.SeedSequence(master, spawn_key=key).generate_state(2)
+    words = _words(master, object_id, state_idx, run, 2)
     return int(words[0]), int(words[1])
+
+
+def delivery_docking_seed(master: int, object_id: str, state_idx: int, run: int) -> int:
+    """The seed of the delivery's docking error in an 'operation' experiment: the third word
+    of the same seed sequence (the first two are `experiment_seeds`', unchanged)."""
+    return int(_words(master, object_id, state_idx, run, 3)[2])
+
+
+def _words(master: int, object_id: str, state_idx: int, run: int, n: int) -> np.ndarray:
+    key = (zlib.crc32(object_id.encode()), state_idx, run)
+    return np.random.SeedSequence(master, spawn_key=key).generate_state(n)
 
 
 @dataclass(frozen=True)
@@ -95,6 +106,11 @@ class StudyPlan:
     ``only_states`` (face, conveyor, θ) triples, when given, are the states run instead of
     every θ-step state (a small study, e.g. one the Experiment Manager runs on request); a
     plan without them has no ``states`` entry in its description, so its hash is unchanged.
+
+    ``leg`` is what each experiment runs (`LEGS`: the study's 'round-trip', a floor's
+    'pick-up' or its whole 'operation'); a round-trip plan has no ``leg`` entry in its
+    description, so its hash is unchanged. An operation's delivery docks with an error of
+    its own, drawn from `delivery_docking_seed`.
     """
 
     objects: tuple[str, ...]
@@ -108,8 +124,11 @@ class StudyPlan:
     sampling: str = "exhaustive"
     sampling_options: tuple[tuple[str, object], ...] = ()
     only_states: tuple[tuple[str, str, int], ...] = ()
+    leg: str = "round-trip"
 
     def __post_init__(self) -> None:
+        if self.leg not in LEGS:
+            raise InputError(f"--leg must be one of {', '.join(LEGS)}, got {self.leg!r}")
         if self.sampling not in SAMPLING_MODES:
             modes = ", ".join(SAMPLING_MODES)
             raise InputError(f"--sampling must be one of {modes}, got {self.sampling!r}")
@@ -146,21 +165,28 @@ class StudyPlan:
 
     def describe(self) -> dict[str, object]:
         """JSON-able description; identical plans have identical descriptions."""
-        return {
-            "objects": list(self.objects),
-            "theta_step": self.theta_step,
-            "runs": self.runs,
-            "seed": self.seed,
-            "docking": self.docking.describe(),
-            "profile": self.profile_name,
-            "units": self.units,
-            "scene": scene_to_dict(self.scene),
-            "core_features": features_version() if any(map(is_builtin_id, self.objects)) else None,
-        } | (
-            {"sampling": {"mode": self.sampling, **dict(self.sampling_options)}}
-            if self.sampling != "exhaustive"
-            else {}
-        ) | self._describe_states()
+        return (
+            {
+                "objects": list(self.objects),
+                "theta_step": self.theta_step,
+                "runs": self.runs,
+                "seed": self.seed,
+                "docking": self.docking.describe(),
+                "profile": self.profile_name,
+                "units": self.units,
+                "scene": scene_to_dict(self.scene),
+                "core_features": features_version()
+                if any(map(is_builtin_id, self.objects))
+                else None,
+            }
+            | (
+                {"sampling": {"mode": self.sampling, **dict(self.sampling_options)}}
+                if self.sampling != "exhaustive"
+                else {}
+            )
+            | self._describe_states()
+            | ({"leg": self.leg} if self.leg != "round-trip" else {})
+        )
 
     def _describe_states(self) -> dict[str, object]:
         return {"states": [list(k) for k in self.only_states]} if self.only_states else {}
@@ -194,6 +220,7 @@ class StudyPlan:
             sampling=mode,
             sampling_options=tuple(sampling.items()),
             only_states=tuple(tuple(k) for k in d.get("states", ())),
+            leg=str(d.get("leg", "round-trip")),
         )
 
     def keys(self, object_ids: dict[str, str]) -> Iterator[tuple[str, str, str, int, int]]:
@@ -220,10 +247,16 @@ class StudyPlan:
                     if (oid, s.face, s.conveyor, s.theta_deg, run) in skip:
                         continue
                     exp_seed, dock_seed = experiment_seeds(self.seed, oid, idx, run)
+                    delivery = None
+                    if self.leg == "operation":
+                        delivery = self.docking.sample(
+                            delivery_docking_seed(self.seed, oid, idx, run)
+                        )
                     spec = ExperimentSpec(
                         ref, s.face, s.conveyor, s.theta_deg,
                         docking_error=self.docking.sample(dock_seed),
                         scene=self.scene, run=run, seed=exp_seed, units=self.units,
+                        leg=self.leg, delivery_docking_error=delivery,
                     )  # fmt: skip
                     yield (oid, s.face, s.conveyor, s.theta_deg, run), spec
 

@@ -1,4 +1,5 @@
-"""Full-state statistics and the best/worst state selection (Sec. 6.6, Alg. 1–4)."""
+"""Full-state statistics, the best/worst state selection (Sec. 6.6, Alg. 1–4) and the
+placement advice decided face, conveyor, θ in turn (`decide_placement`)."""
 
 from transfertwin.study.fullstate._analysis import (
     AnalysisResult,
@@ -11,6 +12,19 @@ from transfertwin.study.fullstate._analysis import (
     selection_json_text,
     series_table,
     states_csv_text,
+)
+from transfertwin.study.fullstate._decision import (
+    DECISION_ALPHA,
+    LEVELS,
+    LevelDecision,
+    OptionCount,
+    PlacementDecision,
+    decide_placement,
+)
+from transfertwin.study.fullstate._decision_text import (
+    CONVEYOR_WORDS,
+    level_line,
+    placement_headline,
 )
 from transfertwin.study.fullstate._intervals import (
     CLOPPER_PEARSON,
@@ -44,14 +58,20 @@ from transfertwin.study.fullstate._states import (
 
 __all__ = [
     "CLOPPER_PEARSON",
+    "CONVEYOR_WORDS",
+    "DECISION_ALPHA",
     "FULL_CIRCLE_HALF_WINDOW",
+    "LEVELS",
     "STATES_COLUMNS",
     "STATUSES",
     "AnalysisResult",
     "CircularSeries",
     "GlobalChoice",
     "Interval",
+    "LevelDecision",
     "LocalChoice",
+    "OptionCount",
+    "PlacementDecision",
     "ResultRecord",
     "SelectedState",
     "Selection",
@@ -63,10 +83,13 @@ __all__ = [
     "circular_moving_average",
     "clopper_pearson",
     "clopper_pearson_array",
+    "decide_placement",
     "iter_records",
+    "level_line",
     "moving_average",
     "object_sort_key",
     "parse_row",
+    "placement_headline",
     "select",
     "select_from_series",
     "selection_json_text",

@@ -1,6 +1,18 @@
 """OPC UA servers and clients built from the AAS, security and decentralised discovery."""
 
 from transfertwin.cps.opcua._aspace import build_standard_address_space
+from transfertwin.cps.opcua._ca import (
+    BACKDATE,
+    FloorCA,
+    IssuedCertificate,
+    application_uri,
+    ensure_ca,
+    init_ca,
+    install_certificate,
+    load_ca,
+    new_request,
+    request_name,
+)
 from transfertwin.cps.opcua._client import AssetClient, connect
 from transfertwin.cps.opcua._discovery import Discovery, Peer
 from transfertwin.cps.opcua._remote_hal import OpcUaUnitHAL
@@ -10,6 +22,7 @@ from transfertwin.cps.opcua._security import (
     RoleRuleset,
     RoleUserManager,
     TrustList,
+    certificate_uris,
     ensure_certificate,
     free_port,
     load_credentials,
@@ -29,13 +42,16 @@ from transfertwin.cps.opcua._server import (
 )
 
 __all__ = [
+    "BACKDATE",
     "NAMESPACE",
     "ROLES",
     "AssetClient",
     "AssetServer",
     "Credentials",
     "Discovery",
+    "FloorCA",
     "Handler",
+    "IssuedCertificate",
     "OpcUaUnitHAL",
     "OperationRefused",
     "Peer",
@@ -43,14 +59,22 @@ __all__ = [
     "RoleUserManager",
     "ServerConfig",
     "TrustList",
+    "application_uri",
     "build_standard_address_space",
+    "certificate_uris",
     "connect",
+    "ensure_ca",
     "ensure_certificate",
     "free_port",
+    "init_ca",
+    "install_certificate",
+    "load_ca",
     "load_credentials",
     "new_credentials",
+    "new_request",
     "node_id",
     "read_certificate",
+    "request_name",
     "trust_certificate",
     "trust_certificates",
     "write_credentials",

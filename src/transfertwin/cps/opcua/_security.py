@@ -33,7 +33,9 @@ from asyncua import ua
 from asyncua.common.utils import ServiceError
 from asyncua.crypto.cert_gen import setup_self_signed_certificate
 from asyncua.crypto.permission_rules import PermissionRuleset, User, UserRole
+from asyncua.crypto.truststore import TrustStore
 from asyncua.crypto.uacrypto import check_certificate
+from asyncua.crypto.validator import CertificateValidator, CertificateValidatorOptions
 from cryptography import x509
 from cryptography.hazmat.primitives.asymmetric.types import PrivateKeyTypes
 from cryptography.hazmat.primitives.serialization import Encoding, load_pem_private_key
@@ -47,6 +49,7 @@ __all__ = [
     "RoleRuleset",
     "RoleUserManager",
     "TrustList",
+    "certificate_uris",
     "ensure_certificate",
     "free_port",
     "load_credentials",
@@ -273,19 +276,26 @@ def _sync_dir(folder: Path) -> None:
 
 
 class TrustList:
-    """The client certificates a server accepts: every DER/PEM file in `folder` (pinned).
+    """The certificates a server (or client) accepts: every DER/PEM file in `folder`.
 
-    Usable as asyncua's certificate validator (called at CreateSession).
+    A file may hold an application certificate, trusted as it is (pinned: compared by the
+    SHA-256 of the whole certificate), a CA certificate (``ca.der``: every certificate it
+    signed is trusted, chain checked by asyncua's `TrustStore`) or the CA's revocation list
+    (``crl.der``: its signature is verified against the CA here, asyncua does not; a CRL
+    that does not verify is ignored with an error in the log, and the revocations last
+    verified stay in force). The folder is looked at again on every check (its files'
+    stamps; parsed again only when one changed), so a certificate added, a CA replaced or
+    a CRL rewritten counts at once, without a restart.
+
+    Usable as asyncua's certificate validator of a server (called at CreateSession);
+    `server_validator` makes a client's.
     """
 
     def __init__(self, folder: Path) -> None:
         self.folder = Path(folder)
-        self._read: tuple[tuple, frozenset[str]] | None = None  # (the folder's stamps, ...)
+        self._read: tuple[tuple, _Trust] | None = None  # (the folder's stamps, what it says)
 
-    def fingerprints(self) -> frozenset[str]:
-        """SHA-256 of every trusted certificate, as the folder holds them now: a file added,
-        removed or rewritten counts at once; the certificates are parsed again only then
-        (a floor's folder holds one per asset: 20 ms for 200, on every session)."""
+    def _trust(self) -> _Trust:
         try:
             with os.scandir(self.folder) as entries:
                 found = sorted((e.name, e.inode(), e.stat().st_size, e.stat().st_mtime_ns)
@@ -296,31 +306,177 @@ class TrustList:
         stamps = tuple(found)
         if self._read is not None and self._read[0] == stamps:
             return self._read[1]
-        out = set()
-        for f in (self.folder / name for name, *_ in found):
-            try:
-                out.add(_fingerprint(read_certificate(f).public_bytes(Encoding.DER)))
-            except (ValueError, OSError):
-                log.warning("trust list: %s is not a certificate; ignored", f)
-        self._read = (stamps, frozenset(out))
-        return self._read[1]
+        before = self._read[1] if self._read is not None else None
+        trust = _Trust.read([self.folder / name for name, *_ in found], before)
+        self._read = (stamps, trust)
+        return trust
 
-    def is_trusted(self, der: bytes | None) -> bool:
-        """Whether a DER certificate is on the list (None: no certificate, not trusted)."""
-        return der is not None and _fingerprint(bytes(der)) in self.fingerprints()
+    def fingerprints(self) -> frozenset[str]:
+        """SHA-256 of every pinned (non-CA) certificate, as the folder holds them now."""
+        return self._trust().pinned
 
-    async def __call__(self, cert: x509.Certificate, app: ua.ApplicationDescription) -> None:
-        """Refuse an untrusted or expired client certificate (asyncua validator)."""
-        name = app.ApplicationUri if app is not None else "?"
-        if not self.is_trusted(cert.public_bytes(Encoding.DER)):
-            subject = cert.subject.rfc4514_string()
-            log.warning("refused untrusted client certificate %s (%s); trust it with "
-                        "'transfertwin cps trust'", subject, name)  # fmt: skip
-            raise ServiceError(ua.StatusCodes.BadCertificateUntrusted)
+    def revoked(self) -> frozenset[int]:
+        """The serials the folder's verified CRLs revoke, as they are now."""
+        return self._trust().revoked
+
+    def refusal(self, cert: x509.Certificate) -> int | None:
+        """Why `cert` is not trusted (an OPC UA status code), None if it is: outside its
+        validity (BadCertificateTimeInvalid), neither pinned nor signed by a CA here
+        (BadCertificateUntrusted), or revoked (BadCertificateRevoked)."""
         now = datetime.now(UTC)
         if not cert.not_valid_before_utc <= now <= cert.not_valid_after_utc:
-            log.warning("refused expired client certificate %s (%s)", cert.subject, name)
-            raise ServiceError(ua.StatusCodes.BadCertificateTimeInvalid)
+            return ua.StatusCodes.BadCertificateTimeInvalid
+        trust = self._trust()
+        if _fingerprint(cert.public_bytes(Encoding.DER)) in trust.pinned:
+            return None
+        if trust.store is None or not trust.signed(cert):
+            return ua.StatusCodes.BadCertificateUntrusted
+        if cert.serial_number in trust.revoked:
+            return ua.StatusCodes.BadCertificateRevoked
+        return None
+
+    def is_trusted(self, der: bytes | None) -> bool:
+        """Whether a DER certificate is trusted now (None: no certificate, not trusted)."""
+        if der is None:
+            return False
+        try:
+            cert = x509.load_der_x509_certificate(bytes(der))
+        except ValueError:
+            return False
+        return self.refusal(cert) is None
+
+    async def __call__(self, cert: x509.Certificate, app: ua.ApplicationDescription) -> None:
+        """Refuse an untrusted, revoked or expired client certificate (asyncua validator)."""
+        name = app.ApplicationUri if app is not None else "?"
+        status = self.refusal(cert)
+        if status is None:
+            return
+        subject = cert.subject.rfc4514_string()
+        if status == ua.StatusCodes.BadCertificateUntrusted:
+            log.warning("refused untrusted client certificate %s (%s); issue it from the "
+                        "floor's CA ('transfertwin cps ca issue') or trust it with "
+                        "'transfertwin cps trust'", subject, name)  # fmt: skip
+        elif status == ua.StatusCodes.BadCertificateRevoked:
+            log.warning("refused revoked client certificate %s (%s)", subject, name)
+        else:
+            log.warning("refused expired client certificate %s (%s)", subject, name)
+        raise ServiceError(status)
+
+    def server_validator(self, uri: str):
+        """A client's check of the server it reached (asyncua's ``certificate_validator``):
+        the certificate trusted here (`refusal`), its key usages those of a server
+        (asyncua's `CertificateValidator`), and both its SAN and the server's description
+        naming `uri`, the application the client meant to reach (else
+        BadCertificateUriInvalid)."""
+        usages = CertificateValidator(CertificateValidatorOptions.TIME_RANGE
+                                      | CertificateValidatorOptions.KEY_USAGE
+                                      | CertificateValidatorOptions.EXT_KEY_USAGE
+                                      | CertificateValidatorOptions.PEER_SERVER)  # fmt: skip
+
+        async def validate(cert: x509.Certificate, app: ua.ApplicationDescription) -> None:
+            await usages.validate(cert, app)
+            status = self.refusal(cert)
+            if status is not None:
+                log.warning("refused server %s: %s (%s)", uri,
+                            ua.StatusCode(status).name, cert.subject.rfc4514_string())  # fmt: skip
+                raise ServiceError(status)
+            if uri not in certificate_uris(cert) or app.ApplicationUri != uri:
+                log.warning("refused server: wanted %s, its certificate names %s", uri,
+                            ", ".join(certificate_uris(cert)) or "no URI")  # fmt: skip
+                raise ServiceError(ua.StatusCodes.BadCertificateUriInvalid)
+
+        return validate
+
+
+def certificate_uris(cert: x509.Certificate) -> list[str]:
+    """The URIs in a certificate's subjectAltName (an OPC UA application's URI)."""
+    try:
+        san = cert.extensions.get_extension_for_class(x509.SubjectAlternativeName).value
+    except x509.ExtensionNotFound:
+        return []
+    return list(san.get_values_for_type(x509.UniformResourceIdentifier))
+
+
+@dataclass(frozen=True)
+class _Trust:
+    """What a trust folder says at one moment: pinned fingerprints, CA anchors (as
+    asyncua's `TrustStore`) and the serials their verified CRLs revoke."""
+
+    pinned: frozenset[str]
+    store: TrustStore | None
+    revoked: frozenset[int]
+    crls: tuple[tuple[bytes, frozenset[int]], ...]  # (issuer DER, serials) verified
+
+    def signed(self, cert: x509.Certificate) -> bool:
+        """Whether `cert` chains to a CA here (asyncua's TrustStore, quietly: it logs a
+        traceback for every certificate it refuses)."""
+        quiet = logging.getLogger("asyncuagds.validate")
+        level, quiet.level = quiet.level, logging.CRITICAL
+        try:
+            return self.store.is_trusted(cert)
+        finally:
+            quiet.level = level
+
+    @classmethod
+    def read(cls, files: list[Path], before: _Trust | None) -> _Trust:
+        pinned, anchors, crls = set(), [], []
+        for f in files:
+            try:
+                data = f.read_bytes()
+            except OSError:
+                continue
+            crl = _load_crl(data)
+            if crl is not None:
+                crls.append((f, crl))
+                continue
+            try:
+                cert = _load_cert(data)
+            except ValueError:
+                log.warning("trust list: %s is not a certificate or CRL; ignored", f)
+                continue
+            if _is_ca(cert):
+                anchors.append(cert)
+            else:
+                pinned.add(_fingerprint(cert.public_bytes(Encoding.DER)))
+        verified = dict(before.crls) if before is not None else {}
+        for f, crl in crls:
+            issuer = next((a for a in anchors if a.subject == crl.issuer), None)
+            if issuer is None or not crl.is_signature_valid(issuer.public_key()):
+                log.error("trust list: %s is not signed by a CA trusted here; ignored (the "
+                          "revocations last verified stay in force)", f)  # fmt: skip
+                continue
+            verified[crl.issuer.public_bytes()] = frozenset(r.serial_number for r in crl)
+        store = None
+        if anchors:
+            store = TrustStore([], [])
+            store._trust_store = x509.verification.Store(anchors)  # what load_trust builds
+        revoked = frozenset().union(*verified.values()) if verified else frozenset()
+        return cls(frozenset(pinned), store, revoked, tuple(verified.items()))
+
+
+def _load_cert(data: bytes) -> x509.Certificate:
+    for load in (x509.load_der_x509_certificate, x509.load_pem_x509_certificate):
+        try:
+            return load(data)
+        except ValueError:
+            continue
+    raise ValueError("not a certificate")
+
+
+def _load_crl(data: bytes) -> x509.CertificateRevocationList | None:
+    for load in (x509.load_der_x509_crl, x509.load_pem_x509_crl):
+        try:
+            return load(data)
+        except ValueError:
+            continue
+    return None
+
+
+def _is_ca(cert: x509.Certificate) -> bool:
+    try:
+        return cert.extensions.get_extension_for_class(x509.BasicConstraints).value.ca
+    except x509.ExtensionNotFound:
+        return False
 
 
 async def ensure_certificate(

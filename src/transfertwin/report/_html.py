@@ -2,11 +2,12 @@
 
 One page, in this order:
 
-1. **Summary**: what was analysed, one row per object (its best and worst pre-transfer
-   state of Alg. 1–4, each with k/n and the 95 % Clopper–Pearson interval) and a
-   "what to do" list: how to put each object on the belt, what to avoid, and whether
-   the data can tell the two apart yet; a conveyor and angle are advised only where the
-   separation rule of `transfertwin.report._advice` singles them out.
+1. **Summary**: what was analysed, then a "what to do" list decided as an engineer
+   decides (`decide_placement`): the face first (k/n per face, Fisher's exact test),
+   then the conveyor on the kept face, then θ, each level "decided" with its counts or
+   "does not matter (as far as n shows)"; below it, the study's formal answer, one row
+   per object with its exact best and worst pre-transfer state of Alg. 1–4 (k/n and the
+   95 % Clopper–Pearson interval).
 2. **Figures**: Fig. 6.22/6.23 (best/worst state per object with intervals), then per
    object the full-state plot (Fig. 6.20/6.21) and the binary plot of single experiments
    (Fig. 6.6/6.7), each with a caption that says how to read it.
@@ -32,7 +33,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from transfertwin.report._advice import YMA as _YMA
-from transfertwin.report._advice import advice_item, no_difference, told_apart
+from transfertwin.report._advice import advice_item, formal_cell
 from transfertwin.report._advice import ci_text as _ci
 from transfertwin.report._advice import state_short as _state_short
 from transfertwin.report._binary_polar import binary_polar_data, plot_binary_polar
@@ -45,7 +46,7 @@ from transfertwin.study.fullstate import (
     AnalysisResult,
     ResultRecord,
     SelectedState,
-    Selection,
+    decide_placement,
     object_sort_key,
 )
 
@@ -204,12 +205,6 @@ def _rate(st: SelectedState) -> str:
     return f"{st.k}/{st.n} = {st.p_hat:.2f}"
 
 
-def _apart_cell(sel: Selection) -> str:
-    if no_difference(sel):
-        return "no difference"
-    return "yes" if told_apart(sel) else "<span class='warn'>not yet</span>"
-
-
 def _overview_rows(analysis: AnalysisResult) -> list[list[str]]:
     valid = Counter(r.object_id for r in analysis.records if r.status == "ok")
     wins = Counter(r.object_id for r in analysis.records if r.status == "ok" and r.success)
@@ -221,7 +216,7 @@ def _overview_rows(analysis: AnalysisResult) -> list[list[str]]:
             f"<b>{html.escape(obj)}</b>", str(valid[obj]), share,
             _state_short(sel.best), _rate(sel.best), _ci(sel.best),
             _state_short(sel.worst), _rate(sel.worst), _ci(sel.worst),
-            _apart_cell(sel),
+            formal_cell(sel),
         ])  # fmt: skip
     return rows
 
@@ -250,10 +245,9 @@ def _summary_section(analysis: AnalysisResult, params: Mapping[str, object]) -> 
     parts = [
         "<section id='summary'><h2>Summary</h2>",
         f"<p>{lead}</p>",
-        _table(_OVERVIEW_HEAD, _overview_rows(analysis), numeric=(1, 2, 4, 5, 7, 8)),
         "<h3>What to do</h3><ul class='todo'>",
         *(
-            advice_item(sel, [st for st in analysis.states if st.object_id == sel.object_id])
+            advice_item(decide_placement(analysis.states, sel.object_id))
             for sel in analysis.selections
         ),
         "</ul>",
@@ -262,19 +256,29 @@ def _summary_section(analysis: AnalysisResult, params: Mapping[str, object]) -> 
         skipped = ", ".join(html.escape(o) for o in analysis.skipped_objects)
         parts.append(f"<p class='warn'>No valid experiment, so no advice, for: {skipped}.</p>")
     parts.append(
-        "<p class='lead'>A state is (face, conveyor, yaw θ): the face the object lies on, "
-        "the belt it starts on (left and right as seen looking in the direction of travel "
-        "from the transport module TM to the transfer unit TU; <i>both</i> = centred across "
-        "the two belts) and θ, the angle of the object's x axis (for the built-in cores: "
-        "towards the pinion) from the direction of travel, counter-clockwise seen from "
-        "above. Best and worst states are chosen by Alg. 1–4 on the success rate smoothed "
-        f"over neighbouring angles ({_YMA}, window {analysis.window}°); k/n and the "
-        "Clopper–Pearson interval are those of the state itself. The advice names a "
-        "conveyor and angle only when the best state is separated on its face: some other "
-        "state of that face has a 95 % interval wholly below the best's. Otherwise the "
-        "choice on that face is a tie in these data, and the advice says any placement "
-        "on that face will do.</p></section>"
+        "<p class='lead'>How the advice is decided: first the face the object rests on, "
+        "with the valid experiments of each face pooled; then the conveyor, over the states "
+        "of the face kept; then the yaw θ, over the states of the face and conveyors kept. "
+        "At each level the option with the highest share is compared with every other by "
+        "Fisher's exact test (two-sided, Holm-adjusted over the level, 5 %): an option told "
+        "apart below it is avoided, the others are kept. A level where none is told apart "
+        "<i>does not matter (as far as n shows)</i>: more runs might still separate its "
+        "options. The conveyor is the belt the object starts on (left and right as seen "
+        "looking in the direction of travel from the transport module TM to the transfer "
+        "unit TU; <i>both</i> = centred across the two belts); θ is the angle of the "
+        "object's x axis (for the built-in cores: towards the pinion) from the direction "
+        "of travel, counter-clockwise seen from above.</p>"
     )
+    parts += [
+        "<h3>The study's formal answer: best and worst state (Alg. 1–4)</h3>",
+        "<p>The selection of the source study names one exact best and one exact worst "
+        f"state per object, chosen on the success rate smoothed over neighbouring angles "
+        f"({_YMA}, window {analysis.window}°); k/n and the Clopper–Pearson interval are "
+        "those of the state itself. Where the advice above says a level does not matter, "
+        "this exact state is one of several that did about as well.</p>",
+        _table(_OVERVIEW_HEAD, _overview_rows(analysis), numeric=(1, 2, 4, 5, 7, 8)),
+        "</section>",
+    ]
     return "\n".join(parts)
 
 

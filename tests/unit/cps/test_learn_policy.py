@@ -120,7 +120,8 @@ def test_a_state_with_one_ok_run_is_ranked_with_its_interval() -> None:
     assert ranked[0].ci_low == pytest.approx(0.025) and ranked[0].ci_high == 1.0
     assert ranked[0].as_dict() == {"face": "front", "conveyor": "left", "theta_deg": 0, "n": 1,
                                    "k": 1, "share": 1.0, "ci_low": ranked[0].ci_low,
-                                   "ci_high": 1.0, "source": "s"}  # fmt: skip
+                                   "ci_high": 1.0, "source": "s", "leg": "round-trip",
+                                   "k_pickup": None}  # fmt: skip
 
 
 def test_study_predictions_rank_the_objects_states_in_a_store(tmp_path) -> None:

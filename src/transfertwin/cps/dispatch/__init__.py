@@ -30,6 +30,7 @@ if TYPE_CHECKING:
         rerank,
         state_key,
         tries,
+        twin_priors,
         uninformed,
     )
     from transfertwin.cps.dispatch._orders import OrderBook, order_view
@@ -69,6 +70,7 @@ __all__ = [
     "state_key",
     "study_predictions",
     "tries",
+    "twin_priors",
     "uninformed",
     "virtual_predictions",
 ]

@@ -1,21 +1,25 @@
 """The floor's own transfers as evidence: the twin's per-state predictions updated with
 what the plant did (docs/architecture.md, "Operation").
 
-The study's twin is calibrated against a handful of real experiments (Sec. 6.5) and
-predicts the delivery leg (TM → TU) only; a floor runs many transfers of both legs, each a
-real experiment E^P in a known pre-transfer state. The predictive policy treats every
-finished transfer as one: per object, leg and state (face, conveyor, θ), the successes k
-of n tries, and ranks the states by the posterior probability that the whole operation
-succeeds,
+The twin is calibrated against a handful of real experiments (Sec. 6.5); a floor runs
+many transfers of both legs, each a real experiment E^P in a known pre-transfer state. The
+predictive policy treats every finished transfer as one: per object, leg and state (face,
+conveyor, θ), the successes k of n tries, and ranks the states by the posterior
+probability that the whole operation succeeds,
 
     p(s) = p_pick-up(s) · p_delivery(s),
 
-each leg a Beta–binomial posterior mean (w·m + k) / (w + n):
+each leg a Beta–binomial posterior mean (w·m + k) / (w + n), its prior from the twin's
+runs of that leg (`_predict`: an 'operation' prediction covers both):
 
-- delivery: prior mean m from the twin's k_V of n_V runs, (k_V + ½) / (n_V + 1), worth
-  w = min(n_V, `PRIOR_RUNS`) plant runs (the twin is not calibrated against this plant, so
-  it counts as a few runs, not as many as it simulated);
-- pick-up (TU → TM): the twin has no prediction, so a Laplace prior (m = ½, w = 2).
+- pick-up (TU → TM): prior mean from the twin's k_pickup of n_V runs,
+  (k_pickup + ½) / (n_V + 1), worth w = min(n_V, `PRIOR_RUNS`) plant runs (the twin is not
+  calibrated against this plant, so it counts as a few runs, not as many as it simulated);
+- delivery (TM → TU): from the twin's k_V successful operations of the k_pickup runs whose
+  pick-up succeeded, (k_V + ½) / (k_pickup + 1), worth min(k_pickup, `PRIOR_RUNS`); a
+  round-trip study (there and back from the module) gives k_V of n_V instead;
+- a leg the twin did not simulate (a round-trip study's pick-up; a state no run reached):
+  Laplace's prior (m = ½, w = 2).
 
 Learning alone (``[operation] twin = false``, the benchmark's baseline): no twin at all,
 both legs start from the Laplace prior and every state of the grid is ranked by the
@@ -36,7 +40,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 __all__ = ["FACE_POOL", "LEGS", "PRIOR_RUNS", "fallback", "posterior", "record", "rerank",
-           "state_key", "tries", "uninformed"]  # fmt: skip
+           "state_key", "tries", "twin_priors", "uninformed"]  # fmt: skip
 
 #: How many plant runs the twin's prediction of a state is worth at most.
 PRIOR_RUNS = 4.0
@@ -109,16 +113,36 @@ def uninformed(states: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
              "k": 0, "n": 0, "share": None, "source": "none"} for s in states]  # fmt: skip
 
 
+def _twin_prior(k: float, n: float) -> tuple[float, float]:
+    """(mean, weight) of a leg's prior from the twin's k successes of n runs."""
+    return ((k + 0.5) / (n + 1.0), min(n, PRIOR_RUNS)) if n > 0 else _LAPLACE
+
+
+def twin_priors(pred: Mapping[str, Any]) -> dict[str, tuple[float, float]]:
+    """Per leg, (mean, weight) of the prior the twin's prediction `pred` gives it (module
+    docstring; ``leg`` and ``k_pickup`` say which legs it simulated: a prediction without
+    them is a round trip's)."""
+    n_v, k_v = float(pred["n"]), float(pred["k"])
+    kind, picked = pred.get("leg", "round-trip"), pred.get("k_pickup")
+    if kind == "operation" and picked is not None:
+        return {"pick-up": _twin_prior(float(picked), n_v),
+                "delivery": _twin_prior(k_v, float(picked))}  # fmt: skip
+    if kind == "pick-up":
+        return {"pick-up": _twin_prior(k_v, n_v), "delivery": _LAPLACE}
+    return {"pick-up": _LAPLACE, "delivery": _twin_prior(k_v, n_v)}
+
+
 def posterior(pred: Mapping[str, Any], evidence: Mapping[str, Any]) -> dict[str, float]:
     """p_pickup, p_delivery and their product p for the state of `pred` (a ranked state of
-    `transfertwin.cps.dispatch._predict`: face, conveyor, theta_deg, k, n) given one object's
-    evidence (leg -> state key -> [k, n]). A state the twin did not simulate (n = 0:
-    learning alone, `uninformed`) has the Laplace prior on the delivery leg too."""
+    `transfertwin.cps.dispatch._predict`: face, conveyor, theta_deg, k, n, and for the legs
+    of an operation leg and k_pickup) given one object's evidence (leg -> state key ->
+    [k, n]). A state the twin did not simulate (n = 0: learning alone, `uninformed`) has
+    Laplace's prior on both legs."""
     key = state_key(pred)
-    n_v = float(pred["n"])
-    twin = ((float(pred["k"]) + 0.5) / (n_v + 1.0), min(n_v, PRIOR_RUNS)) if n_v else _LAPLACE
+    priors = twin_priors(pred)
     out: dict[str, float] = {}
-    for leg, (m, w) in (("pick-up", _LAPLACE), ("delivery", twin)):
+    for leg in LEGS:
+        m, w = priors[leg]
         k, n = _pooled(evidence.get(leg, {}), key)
         out[leg] = (w * m + k) / (w + n)
     return {"p_pickup": out["pick-up"], "p_delivery": out["delivery"],

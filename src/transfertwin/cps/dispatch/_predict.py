@@ -10,6 +10,12 @@ Two sources, in this order (docs/architecture.md, "Operation"):
    study's procedure for one object, every state of a coarse θ grid, a few runs each, with
    docking errors drawn from the fitted generator (Sec. 6.4).
 
+What a prediction covers follows from the leg its experiments ran (`StudyPlan.leg`): an
+``operation`` (the on-the-fly default) predicts both legs of a floor's transport operation
+from the same runs — the pick-up's k_pickup of n, the delivery's k of k_pickup (tried only
+after a pick-up succeeded) —; a ``round-trip`` store (the study's E^V, there and back from
+the module) predicts the delivery only; a ``pick-up`` store the pick-up only.
+
 The ranking is the success share, then the interval's lower bound (the better-supported
 of two equal shares), then the study's state order, so it is deterministic.
 """
@@ -50,6 +56,8 @@ class StatePrediction:
     ci_low: float
     ci_high: float
     source: str
+    leg: str = "round-trip"
+    k_pickup: int | None = None
 
     def as_dict(self) -> dict[str, object]:
         return asdict(self)
@@ -61,42 +69,63 @@ class StatePrediction:
 
 
 def rank_states(
-    rows: Iterable[Mapping[str, object]], obj: str, source: str
+    rows: Iterable[Mapping[str, object]], obj: str, source: str, leg: str = "round-trip"
 ) -> list[StatePrediction]:
-    """The states of `obj` in result rows (the store's columns), best first; states without
-    a single 'ok' run are left out."""
+    """The states of `obj` in result rows (the store's columns) of experiments that ran
+    `leg`, best first by the share of runs in which every transfer succeeded; states
+    without a single 'ok' run are left out. An 'operation' or 'pick-up' state also counts
+    its successful pick-ups (y1) in ``k_pickup``."""
     from transfertwin.study.fullstate import state_order, state_table
 
     mine = [r for r in rows if r.get("object_id") == obj]
     stats = [s for s in state_table(mine) if s.n > 0]
+    picked: dict[tuple[str, str, int], int] = {}
+    if leg != "round-trip":
+        for r in mine:
+            if r.get("status") == "ok" and r.get("y1") == 1:
+                key = (str(r["face"]), str(r["conveyor"]), int(r["theta_deg"]))
+                picked[key] = picked.get(key, 0) + 1
     out = [StatePrediction(s.face, s.conveyor, s.theta_deg, s.n, s.k, s.y_mean, s.ci_low,
-                           s.ci_high, source) for s in stats]  # fmt: skip
-    return sorted(out, key=lambda p: (-p.share, -p.ci_low,
-                                      state_order((obj, p.face, p.conveyor, p.theta_deg))))
+                           s.ci_high, source, leg,
+                           picked.get((s.face, s.conveyor, s.theta_deg), 0)
+                           if leg != "round-trip" else None)
+           for s in stats]  # fmt: skip
+    return sorted(
+        out,
+        key=lambda p: (-p.share, -p.ci_low, state_order((obj, p.face, p.conveyor, p.theta_deg))),
+    )
 
 
 def study_predictions(store: str | Path, obj: str) -> list[StatePrediction]:
-    """`obj`'s states in a study store, best first (empty: the store never simulated it)."""
+    """`obj`'s states in a study store, best first (empty: the store never simulated it);
+    the legs they predict are those of the store's plan."""
+    import json
+
     from transfertwin.store import SQLiteResultStore
 
     db = SQLiteResultStore(store, create=False)
     try:
-        return rank_states(db.rows(), obj, f"study {Path(store).name}")
+        plan = db.plan()
+        leg = json.loads(plan.plan_json).get("leg", "round-trip") if plan else "round-trip"
+        return rank_states(db.rows(), obj, f"study {Path(store).name}", leg)
     finally:
         db.close()
 
 
-def virtual_predictions(obj: str, runs: int, seed: int, scene=None,
-                        workers: int = 1) -> list[StatePrediction]:  # fmt: skip
+def virtual_predictions(obj: str, runs: int, seed: int, scene=None, workers: int = 1,
+                        leg: str = "operation",
+                        executor=None) -> list[StatePrediction]:  # fmt: skip
     """Run the study's procedure for `obj` now (every state of the `ON_THE_FLY_THETA_STEP`
-    grid, `runs` runs each, docking errors from the fitted generator; in this process, or
-    on `workers` worker processes); best first. Deterministic in `seed` (the same rows
-    whatever `workers`)."""
+    grid, `runs` runs each of `leg` — by default a floor's whole operation, so that both
+    legs are predicted —, docking errors from the fitted generator; in this process, on
+    `workers` worker processes, or on `executor`, e.g. a started `WarmPool`); best first.
+    Deterministic in `seed` (the same rows whatever runs them)."""
     from transfertwin.store import MemoryResultStore
     from transfertwin.study.experiment import StudyPlan, run_study
 
     kwargs = {} if scene is None else {"scene": scene}
-    plan = StudyPlan((obj,), ON_THE_FLY_THETA_STEP, runs, seed, docking_model(), **kwargs)
+    plan = StudyPlan((obj,), ON_THE_FLY_THETA_STEP, runs, seed, docking_model(), leg=leg,
+                     **kwargs)  # fmt: skip
     store = MemoryResultStore()
-    run_study(plan, store, workers=workers)
-    return rank_states(store.rows(), obj, f"virtual experiments ({runs} runs per state)")
+    run_study(plan, store, workers=workers, executor=executor)
+    return rank_states(store.rows(), obj, f"virtual experiments ({runs} runs per state)", leg)

@@ -50,6 +50,8 @@ class ExperimentRole(Role):
         self._task: asyncio.Task | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
         self._start_lock = asyncio.Lock()
+        self._pool = None  # the warm worker processes of `Predict` (`WarmPool`)
+        self._warming: asyncio.Task | None = None
 
     def initial(self) -> dict[str, Any]:
         return {"study": None}  # {"request": text, "store": path, "want": running|stopped}
@@ -85,15 +87,36 @@ class ExperimentRole(Role):
         await self.set("State", "predicting")
         try:
             # on worker processes: never beside another experiment in this process's threads
-            # (two threads on one object's compiled model crash MuJoCo)
+            # (two threads on one object's compiled model crash MuJoCo); kept warm between
+            # requests (started with the node), so a request pays for its experiments only
+            pool = await self._warm_pool()
             preds = await asyncio.to_thread(virtual_predictions, obj, runs, seed, load_scene(),
-                                            PREDICT_WORKERS)  # fmt: skip
+                                            executor=pool)  # fmt: skip
         finally:
             await self.set("State", "idle")
         return json.dumps([p.as_dict() for p in preds])
 
+    async def _warm_pool(self):
+        """The started `WarmPool` of the predictions (started once; a failed start is
+        tried again by the next request)."""
+        from transfertwin.study.experiment import WarmPool
+
+        if self._pool is None:
+            self._pool = WarmPool(PREDICT_WORKERS)
+        if self._warming is None or (self._warming.done() and self._warming.exception()):
+            self._warming = asyncio.get_running_loop().create_task(
+                asyncio.to_thread(self._pool.start)
+            )
+        await asyncio.shield(self._warming)
+        return self._pool
+
     async def start(self) -> None:
         self._loop = asyncio.get_running_loop()
+        self._warming = None
+        # the predictions' worker processes start now, beside the node, not on the
+        # first order's request
+        task = self._loop.create_task(self._warm_pool())
+        task.add_done_callback(lambda t: t.cancelled() or t.exception())
         study = self.state.data.get("study")
         if study and study.get("want") == "running":  # it was running when we went down
             log.info("EM: resuming the study into %s", study["store"])
@@ -108,6 +131,8 @@ class ExperimentRole(Role):
         if self.job is not None:  # (the node has cancelled the task that awaited it)
             self.job.stop()  # the persisted wish stays 'running': it resumes on restart
             await asyncio.to_thread(self.job.wait, 10.0)
+        if self._pool is not None:
+            await asyncio.to_thread(self._pool.close)
 
     async def live(self) -> dict[str, Any]:
         running = self._task is not None and not self._task.done()

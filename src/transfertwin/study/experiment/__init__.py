@@ -27,6 +27,7 @@ if TYPE_CHECKING:
         parse_objects,
         plan_parameters,
     )
+    from transfertwin.study.experiment._pool import WarmPool
     from transfertwin.study.experiment._profile import (
         load_profile,
         profile_toml,
@@ -62,6 +63,7 @@ __all__ = [
     "RayExecutor",
     "StudyOutcome",
     "StudyPlan",
+    "WarmPool",
     "WarpExecutor",
     "check_plan",
     "delivery_docking_seed",

@@ -17,7 +17,7 @@ import os
 import time
 from collections import Counter, defaultdict
 from collections.abc import Callable, Collection, Container, Iterable, Iterator
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import ProcessPoolExecutor
 from contextlib import closing
 from dataclasses import dataclass
 from typing import Protocol, TypeVar
@@ -27,6 +27,7 @@ from transfertwin.objects import load_object
 from transfertwin.store import ResultStore
 from transfertwin.study.experiment._experiment import ExperimentSpec
 from transfertwin.study.experiment._plan import StudyPlan
+from transfertwin.study.experiment._pool import stream
 from transfertwin.study.experiment._worker import exit_with_parent, run_row
 
 __all__ = [
@@ -164,21 +165,12 @@ def run_tagged(
         for tag, spec in items:
             yield tag, run_row(spec)
         return
-    todo = iter(items)
     ctx = mp.get_context("spawn")
     with ProcessPoolExecutor(
         workers, mp_context=ctx, initializer=exit_with_parent, initargs=(os.getpid(),)
     ) as pool:
-        pending = {pool.submit(run_row, s): tag for tag, s in itertools.islice(todo, 3 * workers)}
         try:
-            while pending:
-                done, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for future in done:
-                    tag = pending.pop(future)
-                    yield tag, future.result()
-                    nxt = next(todo, None)
-                    if nxt is not None:
-                        pending[pool.submit(run_row, nxt[1])] = nxt[0]
+            yield from stream(pool, items, 3 * workers)
         except BaseException:
             pool.shutdown(wait=False, cancel_futures=True)
             raise

@@ -14,7 +14,7 @@ import time
 
 from transfertwin.study.experiment._experiment import ExperimentSpec, run_experiment
 
-__all__ = ["exit_with_parent", "run_row"]
+__all__ = ["exit_with_parent", "run_row", "warm_up"]
 
 
 def exit_with_parent(parent_pid: int, period_s: float = 0.5) -> None:
@@ -32,3 +32,9 @@ def exit_with_parent(parent_pid: int, period_s: float = 0.5) -> None:
 def run_row(spec: ExperimentSpec) -> dict[str, object]:
     """Worker entry point: one experiment → one result row."""
     return run_experiment(spec).row()
+
+
+def warm_up() -> int:
+    """A first task for a new worker: its imports are done by the time it answers (the
+    engine is imported with this module); returns the worker's pid."""
+    return os.getpid()

@@ -22,6 +22,8 @@ from transfertwin.cps.aas._elements import (
     UNIT_QUALIFIER,
     asset_iri,
     capability,
+    capability_relations,
+    element_reference,
     operation,
     property_,
     semantic,
@@ -39,16 +41,19 @@ from transfertwin.cps.aas._representation import (
     wire_signature,
 )
 from transfertwin.cps.aas._spec import (
+    CAPABILITY_SPECS,
     CONTROL_INTERFACE,
     LOGICAL_CLASSES,
     OPERATIONAL_DATA,
     PHYSICAL_CLASSES,
     Arg,
+    CapabilitySpec,
     OperationSpec,
     PropertySpec,
 )
 
 __all__ = [
+    "CAPABILITY_SPECS",
     "CONTROL_INTERFACE",
     "DEMO_OBJECTS",
     "DEMO_PLACEMENT",
@@ -68,6 +73,7 @@ __all__ = [
     "AssetKind",
     "AssetRepresentation",
     "Capability",
+    "CapabilitySpec",
     "Layer",
     "OperationSpec",
     "PhysicalType",
@@ -76,7 +82,9 @@ __all__ = [
     "build_representation",
     "capability",
     "capability_id_short",
+    "capability_relations",
     "demo_descriptors",
+    "element_reference",
     "export_aas",
     "externally_synced",
     "operation",

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from basyx.aas import model
 
-from transfertwin.cps.aas._spec import Arg, OperationSpec, PropertySpec
+from transfertwin.cps.aas._spec import Arg, CapabilitySpec, OperationSpec, PropertySpec
 
 __all__ = [
     "ID_BASE",
@@ -17,6 +17,8 @@ __all__ = [
     "UNIT_QUALIFIER",
     "asset_iri",
     "capability",
+    "capability_relations",
+    "element_reference",
     "operation",
     "property_",
     "semantic",
@@ -116,3 +118,62 @@ def operation(spec: OperationSpec) -> model.Operation:
 def capability(name: str) -> model.Capability:
     """A Capability element with semantic id ``<ONTOLOGY><name>``."""
     return model.Capability(name, semantic_id=semantic(name))
+
+
+_KEY_TYPES = {
+    model.Capability: model.KeyTypes.CAPABILITY,
+    model.Operation: model.KeyTypes.OPERATION,
+    model.Property: model.KeyTypes.PROPERTY,
+}
+
+
+def element_reference(
+    asset_id: str, submodel: str, id_short: str, kind: type[model.SubmodelElement]
+) -> model.ModelReference:
+    """A ModelReference to the element `id_short` of one of the asset's submodels."""
+    keys = (
+        model.Key(model.KeyTypes.SUBMODEL, submodel_iri(asset_id, submodel)),
+        model.Key(_KEY_TYPES[kind], id_short),
+    )
+    return model.ModelReference(keys, kind)
+
+
+def capability_relations(
+    asset_id: str,
+    name: str,
+    spec: CapabilitySpec,
+    targets: dict[tuple[str, str], type[model.SubmodelElement]],
+) -> model.SubmodelElementCollection:
+    """``<name>Relations``: what realises capability `name` and what binds it (the IDTA
+    capability pattern): a ``RealizedBy<element>`` RelationshipElement from the Capability
+    to each realising element, and a ``Constraints`` collection of constant properties.
+
+    Args:
+        asset_id: The asset (the references name its submodels).
+        name: idShort of the Capability element (in the Capabilities submodel).
+        spec: Its row of `CAPABILITY_SPECS`.
+        targets: The elements the asset has, ``(submodel, idShort) -> element type``;
+            a realising element it lacks is left out.
+    """
+    capability_ref = element_reference(asset_id, "Capabilities", name, model.Capability)
+    elements: list[model.SubmodelElement] = [
+        model.RelationshipElement(
+            f"RealizedBy{element}",
+            capability_ref,
+            element_reference(asset_id, submodel, element, targets[(submodel, element)]),
+            semantic_id=semantic("realizedBy"),
+        )
+        for submodel, element in spec.realized_by
+        if (submodel, element) in targets
+    ]
+    if spec.constraints:
+        elements.append(
+            model.SubmodelElementCollection(
+                "Constraints",
+                [property_(c, None) for c in spec.constraints],
+                semantic_id=semantic("CapabilityConstraints"),
+            )
+        )
+    return model.SubmodelElementCollection(
+        f"{name}Relations", elements, semantic_id=semantic("CapabilityRelations")
+    )

@@ -3,7 +3,9 @@
 `build_representation` turns an `AssetDescriptor` into one AAS with up to four submodels:
 
 * ``Identification``: who the asset is and where it lives (Sec. 3.1, the AAS "header").
-* ``Capabilities``: one Capability element per `Capability` (semantic ids, Sec. 3.3).
+* ``Capabilities``: one Capability element per `Capability` (semantic ids, Sec. 3.3), and
+  beside it ``<name>Relations``: the operations (or properties) that realise it and its
+  constraints (the IDTA capability pattern; `CAPABILITY_SPECS`).
 * ``OperationalData``: the dynamic state, typed Properties with units (Table 3.1 sync).
 * ``ControlInterface``: Operations, only for types D, D/E, E and logical assets (Table 3.1).
 
@@ -24,6 +26,7 @@ from transfertwin.cps.aas._elements import (
     SYNC_QUALIFIER,
     asset_iri,
     capability,
+    capability_relations,
     operation,
     property_,
     semantic,
@@ -32,6 +35,7 @@ from transfertwin.cps.aas._elements import (
     text_property,
 )
 from transfertwin.cps.aas._spec import (
+    CAPABILITY_SPECS,
     CONTROL_INTERFACE,
     LOGICAL_CLASSES,
     OPERATIONAL_DATA,
@@ -129,22 +133,27 @@ def build_representation(
     """
     _check(desc)
     sync = desc.properties.sync if desc.properties else None
-    submodels = [
-        _submodel(desc.asset_id, "Identification", _identification(desc, endpoint, provenance)),
-        _submodel(
-            desc.asset_id,
-            "Capabilities",
-            [capability(capability_id_short(c)) for c in desc.capabilities],
-        ),
-        _submodel(desc.asset_id, "OperationalData", _operational_data(desc.asset_class, sync)),
-    ]
+    data = _submodel(desc.asset_id, "OperationalData", _operational_data(desc.asset_class, sync))
+    control = None
     if desc.kind is AssetKind.LOGICAL or (desc.properties and desc.properties.control_interface):
         ops = [
             operation(spec)
             for spec in CONTROL_INTERFACE[desc.asset_class]
             if not spec.external_sync or sync in ("external", "mixed")
         ]
-        submodels.append(_submodel(desc.asset_id, "ControlInterface", ops))
+        control = _submodel(desc.asset_id, "ControlInterface", ops)
+    targets = {
+        (sm.id_short, el.id_short): type(el)
+        for sm in (data, control)
+        if sm is not None
+        for el in sm.submodel_element
+    }
+    submodels = [
+        _submodel(desc.asset_id, "Identification", _identification(desc, endpoint, provenance)),
+        _submodel(desc.asset_id, "Capabilities", _capabilities(desc, targets)),
+        data,
+        *([control] if control is not None else []),
+    ]
     shell = model.AssetAdministrationShell(
         model.AssetInformation(model.AssetKind.INSTANCE, global_asset_id=asset_iri(desc.asset_id)),
         shell_iri(desc.asset_id),
@@ -152,6 +161,21 @@ def build_representation(
         submodel={model.ModelReference.from_referable(sm) for sm in submodels},
     )
     return AssetRepresentation(desc, shell, tuple(submodels))
+
+
+def _capabilities(
+    desc: AssetDescriptor, targets: dict[tuple[str, str], type[model.SubmodelElement]]
+) -> list[model.SubmodelElement]:
+    """Per capability its Capability element and, where its class says how it is realised
+    (`CAPABILITY_SPECS`), its ``<name>Relations`` collection."""
+    elements: list[model.SubmodelElement] = []
+    specs = CAPABILITY_SPECS.get(desc.asset_class, {})
+    for cap in desc.capabilities:
+        name = capability_id_short(cap)
+        elements.append(capability(name))
+        if cap.value in specs:
+            elements.append(capability_relations(desc.asset_id, name, specs[cap.value], targets))
+    return elements
 
 
 def _check(desc: AssetDescriptor) -> None:
@@ -265,4 +289,8 @@ def _element_signature(el: model.SubmodelElement) -> tuple:
             tuple(_element_signature(v) for v in el.output_variable),
             tuple(_element_signature(v) for v in el.in_output_variable),
         )
+    if isinstance(el, model.SubmodelElementCollection):
+        return (*head, tuple(sorted(map(_element_signature, el.value))))
+    if isinstance(el, model.RelationshipElement):
+        return (*head, el.first.key[-1].value, el.second.key[-1].value)
     return head

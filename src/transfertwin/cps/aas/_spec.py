@@ -16,11 +16,13 @@ from dataclasses import dataclass
 from types import MappingProxyType
 
 __all__ = [
+    "CAPABILITY_SPECS",
     "CONTROL_INTERFACE",
     "LOGICAL_CLASSES",
     "OPERATIONAL_DATA",
     "PHYSICAL_CLASSES",
     "Arg",
+    "CapabilitySpec",
     "OperationSpec",
     "PropertySpec",
 ]
@@ -261,18 +263,6 @@ CONTROL_INTERFACE: Mapping[str, tuple[OperationSpec, ...]] = MappingProxyType(
                 "An operator took the object off the belts: the module no longer carries it.",
             ),
             OperationSpec(
-                "QueueTransportTask",
-                _TRANSFER_ARGS,
-                (Arg("task_id", _S),),
-                "Queue moving an object from a source to a target unit.",
-            ),
-            OperationSpec(
-                "StartTransfer",
-                (Arg("direction", _S), Arg("face", _S), Arg("conveyor", _S)),
-                (Arg("outcome", _I),),
-                "Run one object transfer; the outcome is 1 on success.",
-            ),
-            OperationSpec(
                 "AssignOperation",
                 (Arg("operation_id", _S), *_TRANSFER_ARGS, Arg("plan_json", _S)),
                 _OK,
@@ -458,5 +448,131 @@ CONTROL_INTERFACE: Mapping[str, tuple[OperationSpec, ...]] = MappingProxyType(
                 "Every known asset with its address, process, liveness and state.",
             ),
         ),
+    }
+)
+
+
+@dataclass(frozen=True)
+class CapabilitySpec:
+    """How an asset class realises one capability (the IDTA capability pattern).
+
+    Attributes:
+        realized_by: The elements that realise it, as ``(submodel, idShort)``: the
+            ControlInterface operations that offer it, or the OperationalData properties
+            that show it (a sensing capability has no operation).
+        constraints: What it is bound to, as constant properties (value = the bound).
+    """
+
+    realized_by: tuple[tuple[str, str], ...]
+    constraints: tuple[PropertySpec, ...] = ()
+
+
+def _ops(*names: str) -> tuple[tuple[str, str], ...]:
+    return tuple(("ControlInterface", n) for n in names)
+
+
+def _shown_by(*names: str) -> tuple[tuple[str, str], ...]:
+    return tuple(("OperationalData", n) for n in names)
+
+
+# The objects and states the belts are made for: a belt's width (sim LayoutConfig), the
+# starter cores' mass range (objects: the cores' generator clamps it to 2.2-4.9 kg), and the
+# pre-transfer states (Eq. 5.5, 5.6, 6.4) an object may be loaded in.
+_BELT_WIDTH = PropertySpec("BeltWidth", _D, 0.195, "m", description="Width of one belt.")
+_MASS = (
+    PropertySpec("ObjectMassMin", _D, 2.2, "kg", description="Lightest object it carries."),
+    PropertySpec("ObjectMassMax", _D, 4.9, "kg", description="Heaviest object it carries."),
+)
+_STATES = (
+    PropertySpec(
+        "AcceptedFaces", _S, "front,back", description="Faces an object may rest on (Eq. 5.5)."
+    ),
+    PropertySpec(
+        "AcceptedConveyors",
+        _S,
+        "left,both,right",
+        description="Conveyors an object may lie on (Eq. 5.6).",
+    ),
+    PropertySpec("ThetaMin", _I, -179, "deg", description="Least yaw accepted (Eq. 6.4)."),
+    PropertySpec("ThetaMax", _I, 180, "deg", description="Greatest yaw accepted (Eq. 6.4)."),
+)
+_SENSE = CapabilitySpec(_shown_by("BarrierNearInterrupted", "BarrierFarInterrupted"))
+
+CAPABILITY_SPECS: Mapping[str, Mapping[str, CapabilitySpec]] = MappingProxyType(
+    {
+        "transfer_unit": MappingProxyType(
+            {
+                "transfer": CapabilitySpec(
+                    _ops("SetBeltSpeed"),
+                    (
+                        _BELT_WIDTH,
+                        PropertySpec(
+                            "BeltLength", _D, 0.5, "m", description="Length of the belts."
+                        ),
+                        *_MASS,
+                        *_STATES,
+                    ),
+                ),
+                "sense": _SENSE,
+            }
+        ),
+        "transport_module": MappingProxyType(
+            {
+                "transport": CapabilitySpec(_ops("AssignOperation", "Bid"), (*_MASS, *_STATES)),
+                "transfer": CapabilitySpec(
+                    _ops("Dock", "Undock", "SetBeltSpeed"),
+                    (
+                        _BELT_WIDTH,
+                        PropertySpec(
+                            "BeltLength", _D, 0.65, "m", description="Length of the belts."
+                        ),
+                        *_MASS,
+                        *_STATES,
+                    ),
+                ),
+                "sense": _SENSE,
+            }
+        ),
+        "transport_module_system": MappingProxyType(
+            {"allocate": CapabilitySpec(_ops("SubmitTransportOperation", "OrderTo"))}
+        ),
+        "experiment_manager": MappingProxyType(
+            {
+                "experiment": CapabilitySpec(
+                    _ops("RunExperiment", "Predict", "StartStudy"),
+                    (
+                        PropertySpec(
+                            "PredictRunsMax",
+                            _I,
+                            100,
+                            description="Most runs per state a prediction may ask for.",
+                        ),
+                    ),
+                )
+            }
+        ),
+        "props": MappingProxyType(
+            {
+                "fuse_poses": CapabilitySpec(
+                    _ops("ReportPose", "ReportRelativePose", "FusedPose", "DockingError")
+                )
+            }
+        ),
+        "knowledge_graph": MappingProxyType(
+            {
+                "knowledge": CapabilitySpec(
+                    _ops("Query"),
+                    (
+                        PropertySpec(
+                            "QueryLanguage",
+                            _S,
+                            "SPARQL 1.1 SELECT",
+                            description="The queries it answers (read only).",
+                        ),
+                    ),
+                )
+            }
+        ),
+        "object": MappingProxyType({}),
     }
 )

@@ -41,11 +41,12 @@ from transfertwin.report._navigation_plots import plot_docking_run
 from transfertwin.report._partial import StudyProgress, partial_banner_html, partial_line
 from transfertwin.report._pipeline import analyze_and_report
 from transfertwin.report._polar_full_state import (
+    PANEL_CONVEYORS,
     SMOOTH_GRID_DEG,
-    PolarCurve,
-    PolarFace,
+    SMOOTH_MIN_N,
     PolarFullState,
     PolarMarker,
+    PolarPanel,
     circular_smooth,
     plot_polar_full_state,
     polar_full_state_data,
@@ -82,11 +83,13 @@ from transfertwin.report._validation_plots import (
 
 __all__ = [
     "LABEL_MAX_STATES",
+    "PANEL_CONVEYORS",
     "REHEARSAL_FIGURE",
     "REHEARSAL_REPORT_NAME",
     "REPORT_NAME",
     "RING_RADIUS",
     "SMOOTH_GRID_DEG",
+    "SMOOTH_MIN_N",
     "BinaryPoint",
     "BinaryPolar",
     "BinaryState",
@@ -97,10 +100,9 @@ __all__ = [
     "FidelityPlot",
     "IntervalPlot",
     "MorrisBar",
-    "PolarCurve",
-    "PolarFace",
     "PolarFullState",
     "PolarMarker",
+    "PolarPanel",
     "RehearsalPlot",
     "ScoreDistribution",
     "SensitivityPanel",

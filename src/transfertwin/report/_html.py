@@ -8,9 +8,10 @@ One page, in this order:
    "does not matter (as far as n shows)"; below it, the study's formal answer, one row
    per object with its exact best and worst pre-transfer state of Alg. 1–4 (k/n and the
    95 % Clopper–Pearson interval).
-2. **Figures**: Fig. 6.22/6.23 (best/worst state per object with intervals), then per
-   object the full-state plot (Fig. 6.20/6.21) and the binary plot of single experiments
-   (Fig. 6.6/6.7), each with a caption that says how to read it.
+2. **Figures**: best/worst state per object with intervals, then per object the
+   full-state plot (one panel per face and conveyor, each state's k/n with its interval)
+   and the binary plot of single experiments, each with a caption in words and a
+   footnote naming the figure of the source study it follows (Fig. 6.6/6.7, 6.20–6.23).
 3. **Details**, folded away (``<details>``): the counts by status, the selection table
    and the parameters as tables grouped by section. Numbers use a general format
    (``1e-08``, ``0.01188``); a nested mapping such as the docking-error model is
@@ -41,7 +42,11 @@ from transfertwin.report._figure import figure_png, write_atomic
 from transfertwin.report._interval_plot import interval_plot_data, plot_intervals
 from transfertwin.report._mesh_convention import mesh_convention_html
 from transfertwin.report._partial import StudyProgress, partial_banner_html
-from transfertwin.report._polar_full_state import plot_polar_full_state, polar_full_state_data
+from transfertwin.report._polar_full_state import (
+    SMOOTH_MIN_N,
+    plot_polar_full_state,
+    polar_full_state_data,
+)
 from transfertwin.study.fullstate import (
     AnalysisResult,
     ResultRecord,
@@ -368,51 +373,89 @@ def _sigma_text(sigmas: list[float]) -> str:
     return f"{lo:.3g}°" if math.isclose(lo, hi) else f"{lo:.3g}–{hi:.3g}°"
 
 
-def _figures(analysis: AnalysisResult) -> list[tuple[str, str, bytes]]:
-    """(file stem, caption HTML, PNG) of every figure, in page order."""
+def _smooth_text(data) -> str:
+    sigmas = [p.bandwidth_deg for p in data.panels if p.smoothed]
+    if not sigmas:
+        return (
+            "No smoothed line: no panel has enough runs near any angle "
+            f"(at least {SMOOTH_MIN_N:g} under the kernel) for one to say more than its dots."
+        )
+    return (
+        "A dashed grey line, where drawn, smooths the shares over neighbouring angles "
+        f"(Gaussian kernel, σ = {_sigma_text(sigmas)}); it is drawn only where at least "
+        f"{SMOOTH_MIN_N:g} runs lie under the kernel, and is a guide, not data."
+    )
+
+
+#: (file stem, caption HTML, PNG, the source figure it follows)
+FigureItem = tuple[str, str, bytes, str]
+
+
+def _figures(analysis: AnalysisResult) -> list[FigureItem]:
+    """Every figure in page order, with the source figure its caption's footnote cites."""
     out = []
-    for which, fig_no in (("best", "6.22"), ("worst", "6.23")):
+    for which, fig_no in (("best", "Fig. 6.22"), ("worst", "Fig. 6.23")):
         fig = plot_intervals(interval_plot_data(analysis.selections, which))
         caption = (
-            f"The <b>{which}</b> state of each object: its success rate p̂ = k/n with the 95 % "
-            f"Clopper–Pearson interval (cf. Fig. {fig_no}). A long bar means few experiments."
+            f"The <b>{which}</b> state of each object: its success share k/n with the 95 % "
+            "Clopper–Pearson interval. A long bar means few experiments."
         )
-        out.append((f"intervals_{which}", caption, figure_png(fig)))
+        out.append((f"intervals_{which}", caption, figure_png(fig), fig_no))
     by_object: dict[str, list[ResultRecord]] = {}
     for rec in analysis.records:
         by_object.setdefault(rec.object_id, []).append(rec)
     selections = {sel.object_id: sel for sel in analysis.selections}
+    states = {}
+    for st in analysis.states:
+        states.setdefault(st.object_id, []).append(st)
     for obj in sorted(by_object, key=object_sort_key):
         name = html.escape(obj)
         if obj in selections:
-            data = polar_full_state_data(
-                analysis.series_of(obj), selections[obj], window=analysis.window
-            )
-            sigmas = [c.bandwidth_deg for f in data.faces for c in f.curves]
+            data = polar_full_state_data(states[obj], selections[obj], window=analysis.window)
             png = figure_png(plot_polar_full_state(data))
             caption = (
-                f"<b>{name}</b>: success rate over the yaw θ, one panel per face (rows) and "
-                "conveyor (columns; cf. Fig. 6.20). Radius: success rate, 0 at the centre, 1 "
-                "on the rim. Line: the states' success rates smoothed over θ (Gaussian kernel, "
-                f"σ = {_sigma_text(sigmas)}; gaps where no state was run nearby): solid blue "
-                "for the left conveyor (states with c = left or both), dashed orange for the "
-                "right conveyor (c = right or both); the two share the states with c = both, "
-                "so their curves are alike where those dominate. Dots: each state's own k/n. "
-                f"Star and cross: the best and worst state (Alg. 1–4), drawn at their {_YMA} "
-                "in the panel of the series they were chosen from; a dotted spoke marks their "
-                "angle θ, labelled at the rim."
+                f"<b>{name}</b>: how often each pre-transfer state succeeded, over the yaw θ. "
+                "One panel per face (rows: the face the object rests on) and conveyor "
+                "(columns: started on the left belt, centred across both, on the right "
+                "belt). Radius: success share, 0 at the centre, 1 on the rim. Each dot is "
+                "one state's own k/n, the bar through it its 95 % Clopper–Pearson interval: "
+                "a long bar means few runs. The panel title gives the runs it holds; an "
+                f"empty panel was not run. {_smooth_text(data)} Star and cross: the exact "
+                "best and worst state of the study's selection, at their own k/n; a dotted "
+                "spoke marks their angle θ, labelled at the rim."
             )
-            out.append((f"full_state_{_safe(obj)}", caption, png))
+            out.append((f"full_state_{_safe(obj)}", caption, png, "Fig. 6.20/6.21"))
         png = figure_png(plot_binary_polar(binary_polar_data(by_object[obj], obj)))
         caption = (
-            f"<b>{name}</b>: the valid experiments of each state at its yaw θ (cf. Fig. 6.7), "
+            f"<b>{name}</b>: the valid experiments of each state at its yaw θ, "
             "one marker per state coloured by its success share k/n: red = all failed, "
             "yellow = half, green = all succeeded (with few states, k/n is written beside "
             "it). The ring is the conveyor the object started on: outer ring left, middle "
             "ring both, inner ring right."
         )
-        out.append((f"binary_{_safe(obj)}", caption, png))
+        out.append((f"binary_{_safe(obj)}", caption, png, "Fig. 6.6/6.7"))
     return out
+
+
+def _figures_section(out: Path, analysis: AnalysisResult) -> str:
+    """The figures, each caption with a footnote naming the source figure it follows."""
+    parts = ["<section id='figures'><h2>Figures</h2>", _HOW_TO_READ]
+    notes: dict[str, int] = {}
+    for stem, caption, png, source in _figures(analysis):
+        write_atomic(out / "figures" / f"{stem}.png", png)
+        uri = "data:image/png;base64," + base64.b64encode(png).decode("ascii")
+        no = notes.setdefault(source, len(notes) + 1)
+        ref = f"<sup><a href='#note-{no}'>{no}</a></sup>"
+        parts.append(f'<figure><img src="{uri}" alt="{html.escape(stem)}">')
+        parts.append(f"<figcaption>{caption}{ref}</figcaption></figure>")
+    parts.append("<ol class='notes'>")
+    parts += [
+        f"<li id='note-{no}'>After {html.escape(src)} of the source study (see the "
+        "documentation's Background page for the work and its notation).</li>"
+        for src, no in notes.items()
+    ]
+    parts.append("</ol></section>")
+    return "\n".join(parts)
 
 
 def write_report(
@@ -447,15 +490,8 @@ def write_report(
         partial_banner_html(progress) if progress is not None else "",
         _summary_section(analysis, params),
         mesh_convention_html(params),
-        "<section id='figures'><h2>Figures</h2>",
-        _HOW_TO_READ,
+        _figures_section(out, analysis),
     ]
-    for stem, caption, png in _figures(analysis):
-        write_atomic(out / "figures" / f"{stem}.png", png)
-        uri = "data:image/png;base64," + base64.b64encode(png).decode("ascii")
-        parts.append(f'<figure><img src="{uri}" alt="{html.escape(stem)}">')
-        parts.append(f"<figcaption>{caption}</figcaption></figure>")
-    parts.append("</section>")
     parts.append(_details_section(analysis, params))
     parts.append("</body></html>\n")
     path = out / REPORT_NAME

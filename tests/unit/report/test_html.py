@@ -224,3 +224,14 @@ def test_a_poor_best_placement_is_flagged(tmp_path) -> None:
     rows += _face_rows("o5", "back", {-120: 1, -60: 1, 0: 2, 60: 1, 120: 2, 180: 1})
     text = write_report(tmp_path, analyze(rows), {}).read_text(encoding="utf-8")
     assert "this object needs another way of handling" in _advice_of(text, "o5")
+
+
+def test_captions_are_in_words_and_the_source_figures_in_footnotes(tmp_path) -> None:
+    text = write_report(tmp_path, analyze(rows()), {}).read_text(encoding="utf-8")
+    captions = re.findall(r"<figcaption>(.*?)</figcaption>", text, flags=re.S)
+    assert len(captions) == 6
+    for cap in captions:
+        assert "Fig." not in cap and "Alg." not in cap and "<sup>MA" not in cap
+        assert re.search(r"<sup><a href='#note-\d'>\d</a></sup>$", cap)
+    notes = re.findall(r"<li id='note-(\d)'>After (Fig\. [\d./]+) of the source study", text)
+    assert [src for _, src in notes] == ["Fig. 6.22", "Fig. 6.23", "Fig. 6.20/6.21", "Fig. 6.6/6.7"]

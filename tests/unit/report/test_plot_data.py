@@ -12,8 +12,8 @@ import pytest
 from transfertwin._errors import InputError
 from transfertwin.report import (
     RING_RADIUS,
+    SMOOTH_MIN_N,
     BinaryPoint,
-    BinaryState,
     binary_polar_data,
     circular_smooth,
     interval_plot_data,
@@ -23,7 +23,6 @@ from transfertwin.study.fullstate import (
     SelectedState,
     Selection,
     select,
-    series_table,
     state_table,
 )
 
@@ -44,26 +43,31 @@ def state(theta: int, p: float, low: float, high: float, n: int) -> SelectedStat
     return SelectedState("front", "both", theta, "front-left", p, p, n, round(p * n), low, high, 0)
 
 
-def test_fig_6_20_polar_full_state_data() -> None:
+def test_full_state_data_has_one_panel_per_face_and_conveyor() -> None:
     stats = state_table(scenario())
-    data = polar_full_state_data(series_table(stats, "o1"), select(stats, "o1"))
-    front, back = data.faces
-    assert (data.object_id, front.face, back.face) == ("o1", "front", "back")
-    assert [c.series for c in front.curves] == ["front-left", "front-right"]
-    assert [(c.series, c.side) for c in back.curves] == [("back-left", "left")]
-    curve = front.curves[0]
-    assert curve.theta_deg == tuple(range(100, 141))
-    # Eq. 6.27 by hand: θ=120 sees 21 successes; θ=119 sees 20 of 21; θ=100 sees 1 of 11.
-    y = dict(zip(curve.theta_deg, curve.y_ma, strict=True))
-    assert (y[120], y[119], y[100]) == (1.0, 20 / 21, 1 / 11)
-    assert [(m.kind, m.theta_deg, m.y_ma) for m in front.markers] == [("best", 120, 1.0)]
-    assert [(m.kind, m.theta_deg, m.y_ma) for m in back.markers] == [("worst", -10, 0.0)]
+    data = polar_full_state_data([s for s in stats if s.object_id == "o1"], select(stats, "o1"))
+    assert data.object_id == "o1"
+    assert [(p.face, p.conveyor) for p in data.panels] == [
+        ("front", "left"), ("front", "both"), ("front", "right"),
+        ("back", "left"), ("back", "both"), ("back", "right"),
+    ]  # fmt: skip
+    both = data.panel("front", "both")
+    assert both.theta_deg == tuple(range(100, 141)) and set(both.n) == {1}
+    assert both.y_mean == tuple(float(110 <= t <= 130) for t in range(100, 141))
+    # Clopper-Pearson 95 % of 1/1 is [0.025, 1] and of 0/1 [0, 0.975] (exact: 0.05/2).
+    i = both.theta_deg.index(120)
+    assert (both.ci_low[i], both.ci_high[i]) == pytest.approx((0.025, 1.0))
+    assert data.panel("front", "left").theta_deg == ()  # nothing run there
+    assert data.panel("back", "left").theta_deg == tuple(range(-10, 11))
+    # Markers sit at the state's own k/n in its conveyor's panel (Alg. 1-4: best θ 120).
+    assert [(m.kind, m.theta_deg, m.p_hat) for m in both.markers] == [("best", 120, 1.0)]
+    assert [(m.kind, m.theta_deg) for m in data.panel("back", "left").markers] == [("worst", -10)]
 
 
-def test_fig_6_20_rejects_series_of_another_object() -> None:
+def test_full_state_data_rejects_states_of_another_object() -> None:
     stats = state_table([*scenario(), row(obj="o2")])
     with pytest.raises(InputError, match="another object"):
-        polar_full_state_data(series_table(stats, "o2"), select(stats, "o1"))
+        polar_full_state_data(stats, select(stats, "o1"))
 
 
 def test_fig_6_7_binary_polar_data() -> None:
@@ -121,35 +125,33 @@ def test_circular_smooth_is_a_kernel_mean_on_the_circle() -> None:
         circular_smooth([0], [2], [1], 10.0)
 
 
-def test_full_state_line_of_sparse_real_data_is_smooth() -> None:
-    """The 191 real experiments (one per state): the drawn line has no 0-1 spikes."""
+def _real_o1():
     path = Path(__file__).parents[3] / "src" / "transfertwin" / "data"
     with (path / "calibration_experiments.csv").open(newline="") as fh:
-        real = list(csv.DictReader(fh))
-    stats = state_table(real)
-    data = polar_full_state_data(series_table(stats, "o1"), select(stats, "o1"))
-    raw_jumps = []
-    for curve in (c for face in data.faces for c in face.curves):
-        y = np.asarray(curve.y_smooth)
-        assert len(y) == 361 and np.nanmax(y) <= 1.0 and np.nanmin(y) >= 0.0
-        steps = np.abs(np.diff(y))  # 1° apart; NaN where the line has a gap
-        assert np.nanmax(steps) < 0.1
-        raw_jumps.append(np.max(np.abs(np.diff(curve.y_ma))))
-    # The ȳ^MA values of the same states, joined state to state, jump from 0 to 1.
-    assert max(raw_jumps) == 1.0
+        stats = state_table(list(csv.DictReader(fh)))
+    return polar_full_state_data([s for s in stats if s.object_id == "o1"], select(stats, "o1"))
 
 
-def test_fig_6_7_one_share_per_state_not_one_dot_per_experiment() -> None:
-    """Issue 30.1: o32 front θ = -60 with 6 of 8 successes is one state at share 0.75."""
-    rows = [row(obj="o32", theta=-60, success=int(r < 6)) for r in range(8)]
-    rows += [row(obj="o32", theta=-60, success=None, status="unstable")]
-    rows += [row(obj="o32", theta=0, conveyor="left", success=0) for _ in range(3)]
-    rows += [row(obj="o32", theta=0, conveyor="right", success=1)]
-    data = binary_polar_data(rows, "o32")
-    assert data.states == (
-        BinaryState("front", "left", 0, 3, 0, RING_RADIUS["left"]),
-        BinaryState("front", "both", -60, 8, 6, RING_RADIUS["both"]),
-        BinaryState("front", "right", 0, 1, 1, RING_RADIUS["right"]),
-    )
-    assert [s.share for s in data.face_states("front")] == [0.0, 0.75, 1.0]
-    assert data.face_states("back") == ()
+def test_no_smoothed_line_where_n_does_not_support_one() -> None:
+    """The 191 real experiments hold one run per state: no panel gets a line; its states
+    are drawn as they are."""
+    data = _real_o1()
+    assert sum(sum(p.n) for p in data.panels) == 54
+    assert not any(p.smoothed for p in data.panels)
+
+
+def test_a_smoothed_line_only_where_enough_runs_lie_under_the_kernel() -> None:
+    rows = [row(theta=t, success=int(r < 6)) for t in range(30, 151, 5) for r in range(8)]
+    rows += [row(face="back", theta=t, success=1) for t in range(30, 151, 30) for _ in range(4)]
+    stats = state_table(rows)
+    data = polar_full_state_data(stats, select(stats, "o1"))
+    dense, sparse = data.panel("front", "both"), data.panel("back", "both")
+    line = np.asarray(dense.y_smooth)
+    assert dense.smoothed and np.allclose(line[np.isfinite(line)], 0.75)
+    assert np.isfinite(line[180 + 90]) and np.isnan(line[180 - 90])  # only near the runs
+    assert not sparse.smoothed  # 4 runs a state, 30° apart: under 10 runs near any angle
+    assert SMOOTH_MIN_N == 10.0
+    y = circular_smooth([0, 30], [4, 4], [4, 4], 10.5, grid_deg=[0.0], min_n=10.0)
+    assert np.isnan(y[0])  # 4 + 4 * exp(-0.5 (30/10.5)^2) = 4.07 runs under the kernel
+    y = circular_smooth([0, 30], [4, 4], [4, 4], 10.5, grid_deg=[0.0], min_n=4.0)
+    assert y[0] == 1.0

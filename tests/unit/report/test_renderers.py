@@ -15,7 +15,7 @@ from transfertwin.report import (
     plot_polar_full_state,
     polar_full_state_data,
 )
-from transfertwin.study.fullstate import select, series_table, state_table
+from transfertwin.study.fullstate import select, state_table
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -32,11 +32,9 @@ def rows() -> list[dict]:
 
 def test_fig_6_20_plot_polar_full_state(tmp_path: Path) -> None:
     stats = state_table(rows())
-    fig = plot_polar_full_state(
-        polar_full_state_data(series_table(stats, "o1"), select(stats, "o1"))
-    )
+    fig = plot_polar_full_state(polar_full_state_data(stats, select(stats, "o1")))
     assert isinstance(fig, Figure)
-    assert [ax.name for ax in fig.axes] == ["polar"] * 4  # face x conveyor side
+    assert [ax.name for ax in fig.axes] == ["polar"] * 6  # face x conveyor
     fig.savefig(tmp_path / "polar.png")
     assert (tmp_path / "polar.png").read_bytes().startswith(PNG_MAGIC)
 
@@ -75,11 +73,9 @@ def test_binary_polar_labels_each_ring_with_its_conveyor() -> None:
 
 def test_full_state_plot_says_what_the_radius_is_and_keeps_labels_off_the_rim() -> None:
     stats = state_table(rows())
-    fig = plot_polar_full_state(
-        polar_full_state_data(series_table(stats, "o1"), select(stats, "o1"))
-    )
+    fig = plot_polar_full_state(polar_full_state_data(stats, select(stats, "o1")))
+    assert "radius = success share (centre 0, rim 1)" in fig.get_suptitle()
     for ax in fig.axes:
-        assert "radius = success rate (centre 0, rim 1)" in ax.get_title()
         # Radius tick labels sit off the 0° spoke, and none on the rim where curves run.
         assert ax.get_rlabel_position() != 0.0
         assert [t.get_text() for t in ax.get_yticklabels()][-1] == ""
@@ -116,42 +112,55 @@ def _step30_rows() -> list[dict]:
     return out
 
 
-def test_full_state_plot_shows_every_curve_in_its_own_panel() -> None:
-    """Issue 30.2: at θ-step 30 the left and right curves coincide, so each series gets its
-    own panel (face × conveyor side) instead of being drawn over the other."""
+def test_full_state_plot_has_one_panel_per_conveyor_value_with_its_own_states() -> None:
+    """One panel per face and conveyor value (left, both, right): a left panel holds the
+    left states only (never the 'both' ones as well), each state a dot with its interval
+    bar; 8 runs a state 30° apart support no smoothed line."""
+    import math
+
     stats = state_table(_step30_rows())
-    data = polar_full_state_data(series_table(stats, "o1"), select(stats, "o1"))
-    fig = plot_polar_full_state(data)
+    fig = plot_polar_full_state(polar_full_state_data(stats, select(stats, "o1")))
     polar = [ax for ax in fig.axes if ax.name == "polar"]
-    assert len(polar) == 4
-    titles = [ax.get_title().splitlines()[0] for ax in polar]
-    assert titles == [
-        "front face, left conveyor (c = left or both)",
-        "front face, right conveyor (c = right or both)",
-        "back face, left conveyor (c = left or both)",
-        "back face, right conveyor (c = right or both)",
+    titles = [ax.get_title().splitlines() for ax in polar]
+    assert [t[0] for t in titles] == [
+        "front face, on the left belt",
+        "front face, centred across both belts",
+        "front face, on the right belt",
+        "back face, on the left belt",
+        "back face, centred across both belts",
+        "back face, on the right belt",
     ]
-    for ax in polar:  # exactly one smoothed curve per panel
-        assert sum(len(line.get_xdata()) == 361 for line in ax.lines) == 1
+    assert titles[0][1].startswith("16 runs at 2 angles")  # θ = 0 and 180, 8 runs each
+    assert titles[1][1].startswith("80 runs at 10 angles")
+    left = polar[0]
+    dots = [c for c in left.collections if len(c.get_offsets())]
+    thetas = sorted(round(math.degrees(t)) % 360 for t in dots[0].get_offsets()[:, 0])
+    assert thetas == [0, 180]
+    bars = [ln for ln in left.lines if len(ln.get_xdata()) == 2
+            and ln.get_xdata()[0] == ln.get_xdata()[1] and max(ln.get_ydata()) < 1.05]  # fmt: skip
+    assert len(bars) == 2  # one interval bar per state
+    for ax in polar:
+        assert not any(len(line.get_xdata()) == 361 for line in ax.lines)
 
 
 def test_full_state_plot_marks_the_angle_of_a_worst_state_at_radius_0() -> None:
-    """Issue 30.2: the worst state (0 of 8, drawn at the centre) keeps its angle: a radial
-    line from the centre to the rim at its θ and a label with θ in degrees."""
+    """The worst state (0 of 8, drawn at the centre) keeps its angle: a radial line from
+    the centre to the rim at its θ and a label with θ in degrees."""
     import math
 
     import numpy as np
 
     stats = state_table(_step30_rows())
     sel = select(stats, "o1")
-    assert (sel.worst.theta_deg, sel.worst.y_ma) == (-150, 0.0)
-    fig = plot_polar_full_state(polar_full_state_data(series_table(stats, "o1"), sel))
-    panel = fig.axes[0]  # front, left: the series the worst state was chosen from
+    assert (sel.worst.theta_deg, sel.worst.conveyor, sel.worst.p_hat) == (-150, "both", 0.0)
+    fig = plot_polar_full_state(polar_full_state_data(stats, sel))
+    panel = fig.axes[1]  # front, both: the worst state's own conveyor
     spokes = [
         line for line in panel.lines
         if len(set(line.get_xdata())) == 1 and line.get_xdata()[0] == math.radians(-150)
+        and max(line.get_ydata()) >= 1.05
     ]  # fmt: skip
-    assert spokes and min(spokes[0].get_ydata()) == 0.0 and max(spokes[0].get_ydata()) >= 1.0
+    assert spokes and min(spokes[0].get_ydata()) == 0.0
     labels = dict(zip(np.degrees(panel.get_xticks()).round(6) % 360,
                       (t.get_text() for t in panel.get_xticklabels()), strict=True))  # fmt: skip
     assert labels[210.0] == "worst: θ = -150°"  # the tick label at its angle says so
@@ -168,9 +177,7 @@ def test_issue_30_4_polar_axes_label_theta_signed_every_30_degrees() -> None:
     assert yaw_tick_labels() == signed
     stats = state_table(_step30_rows())
     figs = (
-        plot_polar_full_state(
-            polar_full_state_data(series_table(stats, "o1"), select(stats, "o1"))
-        ),
+        plot_polar_full_state(polar_full_state_data(stats, select(stats, "o1"))),
         plot_binary_polar(binary_polar_data(_step30_rows(), "o1")),
     )
     for fig in figs:

@@ -117,7 +117,7 @@ def _trust_gateway(wd: Path, asset: str | None, cert) -> int:
     if asset is None:
         raise InputError("--gateway: a gateway is trusted by the asset it serves; name it "
                          "with --asset ID")  # fmt: skip
-    path = wd / "assets" / f"{asset}.toml"
+    path = wd / "assets" / asset / "asset.toml"
     if Path(asset).name != asset or not path.is_file():
         raise InputError(f"--asset {asset}: no such asset file {path}")
     cfg = load_asset_config(path)

@@ -151,7 +151,11 @@ def cmd_up_local(args: argparse.Namespace) -> int:
             signal.signal(sig, on_signal)
         async with local:
             print(f"CPS up: {len(local.nodes)} assets; {wd / 'cps.json'}", flush=True)
-            await stop.wait()
+            ended = asyncio.ensure_future(local.ended.wait())  # every asset shut down
+            signalled = asyncio.ensure_future(stop.wait())
+            await asyncio.wait({ended, signalled}, return_when=asyncio.FIRST_COMPLETED)
+            for waiter in (ended, signalled):
+                waiter.cancel()
         print("CPS down", flush=True)
 
     # Not asyncio.run: at its end it joins the default executor's threads, and a simulation
@@ -241,13 +245,19 @@ def _wait_online(wd: Path, expected: set[str], timeout_s: float, procs) -> set[s
 
 
 def cmd_asset(args: argparse.Namespace) -> int:
-    """Serve one asset until SIGINT/SIGTERM; announce the leave; exit 0. With several
-    ``--config``: fork one such process per asset from this one (`_fork_assets`)."""
-    if len(args.config) > 1 or args.log_dir is not None:
-        return _fork_assets(args.config, args.log_dir)
-    from transfertwin.cps import load_asset_config
+    """Serve one asset until SIGINT/SIGTERM or an operator's ``Shutdown``; announce the
+    leave; exit 0. The asset is a bundle folder (``assets/<id>/``, as `cps up` writes it,
+    copied to any host) or its file (``--config``). With several: fork one such process
+    per asset from this one (`_fork_assets`)."""
+    from transfertwin.cps import bundle_config, load_asset_config
 
-    _serve_asset(load_asset_config(args.config[0]))
+    paths = [str(bundle_config(Path(b))) for b in args.bundle] + list(args.config or [])
+    if not paths:
+        raise InputError("cps asset: give the asset's bundle folder (W/assets/<id>) or "
+                         "--config ASSET.toml")  # fmt: skip
+    if len(paths) > 1 or args.log_dir is not None:
+        return _fork_assets(paths, args.log_dir)
+    _serve_asset(load_asset_config(paths[0]))
 
 
 def _fork_assets(paths: list[str], log_dir: str | None) -> int:
@@ -299,16 +309,19 @@ def _serve_asset(cfg) -> None:
     logging.getLogger("asyncua.client.client").setLevel(logging.CRITICAL)
     pid_file = cfg.state_dir / "pid"
 
+    def bounded_stop() -> None:
+        # a leave that hangs (a peer that never answers) must not keep the process
+        timer = threading.Timer(15.0, lambda: (pid_file.unlink(missing_ok=True),
+                                               os._exit(0)))  # fmt: skip
+        timer.daemon = True
+        timer.start()
+
     async def serve() -> None:
         stop = asyncio.Event()
         loop = asyncio.get_running_loop()
 
         def on_signal(signum: int, frame: object) -> None:
-            # a leave that hangs (a peer that never answers) must not keep the process
-            timer = threading.Timer(15.0, lambda: (pid_file.unlink(missing_ok=True),
-                                                   os._exit(0)))  # fmt: skip
-            timer.daemon = True
-            timer.start()
+            bounded_stop()
             loop.call_soon_threadsafe(stop.set)
 
         for sig in (signal.SIGINT, signal.SIGTERM):
@@ -317,9 +330,16 @@ def _serve_asset(cfg) -> None:
         pid_file.write_text(f"{os.getpid()}\n")  # before it joins: 'cps down' finds it then
         try:
             async with asset_node(cfg) as node:
-                print(f"{cfg.asset_id} up at {node.server.endpoint} (pid {os.getpid()})",
-                      flush=True)  # fmt: skip
-                await stop.wait()
+                print(f"{cfg.asset_id} up at {node.server.endpoint} (pid {os.getpid()}, "
+                      f"instance {node.instance})", flush=True)  # fmt: skip
+                asked = asyncio.ensure_future(node.shutdown.wait())  # an operator's Shutdown
+                signalled = asyncio.ensure_future(stop.wait())
+                await asyncio.wait({asked, signalled}, return_when=asyncio.FIRST_COMPLETED)
+                for waiter in (asked, signalled):
+                    waiter.cancel()
+                if node.shutdown.is_set():
+                    bounded_stop()
+                    print(f"{cfg.asset_id}: shutdown asked over OPC UA", flush=True)
         finally:
             pid_file.unlink(missing_ok=True)
         print(f"{cfg.asset_id} left", flush=True)
@@ -451,9 +471,13 @@ def cmd_locate(args: argparse.Namespace) -> int:
 def register(csub: argparse._SubParsersAction) -> None:
     """Add `cps asset|down|locate` (`cps up --floor` is `cps up`'s option)."""
     p = csub.add_parser("asset", help="serve one asset of a floor (one process per asset)")
-    p.add_argument("--config", required=True, action="append",
-                   help="ASSET.toml (W/assets/<id>.toml); several: one process forked per "
-                        "asset (with --log-dir), this one exits")  # fmt: skip
+    p.add_argument("bundle", nargs="*", metavar="BUNDLE",
+                   help="the asset's bundle folder (W/assets/<id>, as cps up writes it; "
+                        "copied to its own host, it runs there as it is)")  # fmt: skip
+    p.add_argument("--config", action="append",
+                   help="ASSET.toml (W/assets/<id>/asset.toml); several (or several "
+                        "bundles): one process forked per asset (with --log-dir), this one "
+                        "exits")  # fmt: skip
     p.add_argument("--log-dir", help="where forked assets write <id>.log")
     p.set_defaults(func=cmd_asset)
     p = csub.add_parser("down", help="stop every asset process of a floor")

@@ -17,6 +17,7 @@ if TYPE_CHECKING:
     from transfertwin.cps._compose import asset_node, prepare_forking
     from transfertwin.cps._launcher import (
         asset_pids,
+        bundle_config,
         check_workdir,
         launch,
         prepare_floor,
@@ -108,6 +109,7 @@ __all__ = [
     "asset_node",
     "asset_pids",
     "build_representation",
+    "bundle_config",
     "check_plant_seed",
     "check_workdir",
     "connect",

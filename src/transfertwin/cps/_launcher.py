@@ -1,12 +1,14 @@
 """Lay out a floor's asset processes and start them (docs/architecture.md, "Deployment").
 
-`prepare_floor` writes everything one asset process needs into the work folder: the floor
-file, ``assets/<id>.toml`` (its own address on a loopback address of its own, its seeds,
-its certificate and trust folders, its state folder), one application certificate per
-process, and the trust lists (every asset trusts every asset's client certificate and the
-command-line clients'). `launch` starts one detached process per asset: the floor does not
-depend on the launcher staying alive, and any asset can be restarted by hand with
-``transfertwin cps asset --config W/assets/<id>.toml``.
+`prepare_floor` writes the work folder: the floor file, the command-line clients'
+certificates, and one **bundle** per asset, ``assets/<id>/``: everything its process needs
+and nothing else, with paths relative to the bundle (`asset.toml`; a copy of the floor file,
+of the credentials, of the plant seed for an asset on the plant, of the study store for
+the Experiment Manager; its certificates, trust list and state). A bundle copied to another
+host runs there with ``transfertwin cps asset BUNDLE``. An asset listens on a loopback
+address of its own, or on the address the floor file's ``[bind]`` gives it (then with
+security only). `launch` starts one detached process per asset of this host: the floor does
+not depend on the launcher staying alive, and any asset can be restarted by hand.
 """
 
 from __future__ import annotations
@@ -16,10 +18,13 @@ import contextlib
 import ipaddress
 import json
 import os
+import shutil
 import signal
+import socket
 import subprocess
 import sys
 from collections.abc import Iterable
+from dataclasses import replace
 from pathlib import Path
 
 from transfertwin._atomic import write_atomic
@@ -45,10 +50,33 @@ from transfertwin.cps.opcua import (
 )
 from transfertwin.cps.roles import PLANT_LOG
 
-__all__ = ["asset_pids", "floor_configs", "launch", "prepare_floor", "stop_floor"]
+__all__ = ["BUNDLE_CONFIG", "asset_pids", "bundle_config", "floor_configs", "launch",
+           "local_address", "prepare_floor", "stop_floor"]  # fmt: skip
 
 #: Seeds every asset joins through: the knowledge graph and the TMS.
 SEED_ASSETS = ("KG", "TMS")
+
+#: The asset's own file in its bundle (``assets/<id>/asset.toml``).
+BUNDLE_CONFIG = "asset.toml"
+
+#: The port of an asset bound beyond loopback (``[bind]`` without a port): OPC UA's own;
+#: a second asset on the same address gets the next one.
+BIND_PORT = 4840
+
+
+def bundle_config(path: Path) -> Path:
+    """The asset file of `path`: a bundle folder's ``asset.toml``, or `path` itself."""
+    return path / BUNDLE_CONFIG if path.is_dir() else path
+
+
+def local_address(host: str) -> bool:
+    """Whether this host has address `host` (an asset bound to it can start here)."""
+    if ipaddress.ip_address(host).is_loopback:
+        return True
+    with contextlib.suppress(OSError), socket.socket() as s:
+        s.bind((host, 0))
+        return True
+    return False
 
 
 def _address(i: int, base: str) -> str:
@@ -68,24 +96,32 @@ def prepare_floor(
     base_host: str = "127.0.0.2",
     plant_seed: int | None = None,
 ) -> dict[str, AssetConfig]:
-    """Write the floor's work folder; returns asset id -> its configuration.
+    """Write the floor's work folder and every asset's bundle; returns asset id -> its
+    configuration (absolute paths; the bundle's file holds them relative to the bundle).
 
     A work folder used before keeps its credentials, certificates and every asset's state
     (the ledger, operation ids, possessions): a floor started again goes on where it was.
     A floor with assets on the emulated plant (``hal = "plant"``) needs `plant_seed`; it is
-    written to ``W/plant.secret`` (owner-only), which their asset files name, and nowhere
-    else. Without `lease_s` the floor gets the default lease for its size (`default_lease`).
+    written to ``W/plant.secret`` (owner-only) and copied into those assets' bundles only.
+    The floor's study store is copied into the Experiment Manager's bundle, which answers
+    the TMS's questions from it. Without `lease_s` the floor gets the default lease for its
+    size (`default_lease`).
     """
     if floor.uses_plant() and plant_seed is None:
         raise InputError(f"floor {floor.name} runs assets on the emulated plant (hal = "
                          "\"plant\"): give the plant seed (cps up --plant-seed N)")  # fmt: skip
+    if insecure and floor.bind:
+        raise InputError(f"floor {floor.name} binds assets beyond loopback ([bind]): they are "
+                         "served only with security (drop --insecure)")  # fmt: skip
     workdir.mkdir(parents=True, exist_ok=True)
     seed_file = None
     if floor.uses_plant():
         seed_file = write_plant_seed(workdir / PLANT_SEED_FILE, plant_seed).resolve()
         _rotate(workdir / PLANT_LOG)  # this start's E^P rows in a table of their own
-    floor_file = workdir / "floor.toml"
-    write_atomic(floor_file, floor_toml(floor))
+    write_atomic(workdir / "floor.toml", floor_toml(floor))
+    study = floor.operation.study
+    # an asset's copy of the floor names no file of another host (the study is the EM's)
+    bundled = floor_toml(replace(floor, operation=replace(floor.operation, study=None)))
     creds_file = workdir / "credentials.json"
     if not insecure and not creds_file.is_file():
         write_credentials(creds_file, new_credentials())
@@ -93,28 +129,73 @@ def prepare_floor(
     if lease_s is None:
         lease_s = default_lease(len(descs))
     order = sorted(descs, key=lambda d: (d.asset_id not in SEED_ASSETS, d.asset_id))
-    hosts = {d.asset_id: _address(i, base_host) for i, d in enumerate(order)}
-    ports = {aid: free_port(h) for aid, h in hosts.items()}
+    hosts, ports = _addresses(floor, [d.asset_id for d in order], base_host)
     seeds = tuple(f"opc.tcp://{hosts[a]}:{ports[a]}/transfertwin/{a}" for a in SEED_ASSETS)
     configs = {}
     for d in descs:
         aid = d.asset_id
-        home = workdir / "assets" / aid
+        home = (workdir / "assets" / aid).resolve()
+        home.mkdir(parents=True, exist_ok=True)
+        floor_file = write_atomic(home / "floor.toml", bundled)
         kind, gateway = floor.hal_of(aid)
-        hal = HalConfig(kind, plant_seed_file=seed_file if kind == "plant" else None,
-                        endpoint=gateway, insecure=insecure)  # fmt: skip
+        own_seed = _copy_private(seed_file, home / PLANT_SEED_FILE) if kind == "plant" else None
+        hal = HalConfig(kind, plant_seed_file=own_seed, endpoint=gateway,
+                        insecure=insecure)  # fmt: skip
+        own_study = None
+        if study is not None and d.asset_class == "experiment_manager":
+            own_study = _copy_private(Path(study), home / "study.sqlite")
         configs[aid] = AssetConfig(
-            asset_id=aid, floor_file=floor_file.resolve(), host=hosts[aid], port=ports[aid],
-            seeds=seeds, cert_dir=(home / "certs").resolve(),
-            trust_dir=(home / "trusted").resolve(),
-            credentials_file=None if insecure else creds_file.resolve(),
-            state_dir=(home / "state").resolve(), insecure=insecure, lease_s=lease_s,
-            seed=seed, time_scale=time_scale, docking=docking, hal=hal,
+            asset_id=aid, floor_file=floor_file, host=hosts[aid], port=ports[aid],
+            seeds=seeds, cert_dir=home / "certs", trust_dir=home / "trusted",
+            credentials_file=None if insecure else _copy_private(creds_file,
+                                                                 home / "credentials.json"),
+            state_dir=home / "state", insecure=insecure,
+            allow_remote=not ipaddress.ip_address(hosts[aid]).is_loopback, lease_s=lease_s,
+            seed=seed, time_scale=time_scale, docking=docking, hal=hal, study_file=own_study,
         )  # fmt: skip
-        write_asset_config(workdir / "assets" / f"{aid}.toml", configs[aid])
+        write_asset_config(home / BUNDLE_CONFIG, configs[aid], relative=True)
     if not insecure:
         asyncio.run(_certificates(workdir, configs.values()))
     return configs
+
+
+def _addresses(floor: FloorSpec, order: list[str],
+               base_host: str) -> tuple[dict[str, str], dict[str, int]]:  # fmt: skip
+    """Each asset's address and port: the floor file's ``[bind]`` (port `BIND_PORT` and up
+    where it gives none), else consecutive loopback addresses from `base_host` and a free
+    port there."""
+    hosts, ports = {}, {}
+    used = {tuple(v.split(":")) for _, v in floor.bind if ":" in v}
+    i = 0
+    for aid in order:
+        bound = floor.bind_address(aid)
+        if bound is None:
+            hosts[aid] = _address(i, base_host)
+            ports[aid] = free_port(hosts[aid])
+            i += 1
+            continue
+        hosts[aid], port = bound
+        if port is None:
+            port = BIND_PORT
+            while (hosts[aid], str(port)) in used:
+                port += 1
+            used.add((hosts[aid], str(port)))
+        ports[aid] = port
+    return hosts, ports
+
+
+def _copy_private(source: Path, target: Path) -> Path:
+    """Copy `source` to `target` (owner-only, as the secrets and credentials are), unless
+    `target` holds it already; returns `target`."""
+    if not source.is_file():
+        raise InputError(f"{source}: no such file")
+    if not (target.is_file() and target.stat().st_size == source.stat().st_size
+            and target.read_bytes() == source.read_bytes()):  # fmt: skip
+        tmp = target.with_name(f".{target.name}.tmp")
+        shutil.copyfile(source, tmp)
+        os.chmod(tmp, 0o600)
+        os.replace(tmp, target)
+    return target
 
 
 async def _certificates(workdir: Path, configs: Iterable[AssetConfig]) -> None:
@@ -139,8 +220,9 @@ def _rotate(path: Path) -> None:
 
 
 def floor_configs(workdir: Path) -> dict[str, AssetConfig]:
-    """The asset configurations of a prepared work folder."""
-    return {p.stem: load_asset_config(p) for p in sorted((workdir / "assets").glob("*.toml"))}
+    """The asset configurations of a prepared work folder (its bundles)."""
+    return {p.parent.name: load_asset_config(p)
+            for p in sorted((workdir / "assets").glob(f"*/{BUNDLE_CONFIG}"))}  # fmt: skip
 
 
 def launch(configs: dict[str, AssetConfig], workdir: Path, skip: Iterable[str] = (), *,
@@ -156,7 +238,7 @@ def launch(configs: dict[str, AssetConfig], workdir: Path, skip: Iterable[str] =
     logs.mkdir(parents=True, exist_ok=True)
     skip = set(skip)
     order = [a for a in sorted(configs, key=lambda a: (a not in SEED_ASSETS, a)) if a not in skip]
-    files = {aid: workdir / "assets" / f"{aid}.toml" for aid in order}
+    files = {aid: workdir / "assets" / aid / BUNDLE_CONFIG for aid in order}
     if not fork:
         return {aid: start_asset(files[aid], logs / f"{aid}.log") for aid in order}
     # the seeds first, and the rest once they answer: an asset joins through them
@@ -192,7 +274,6 @@ def _fork(order: list[str], files: dict[str, Path], logs: Path) -> dict[str, For
 def _wait_listening(configs: dict[str, AssetConfig], procs, timeout_s: float = 60.0) -> None:
     """Wait until every asset in `configs` accepts connections on its port (or has ended:
     the caller's wait for the floor reports that)."""
-    import socket
     import time
 
     deadline = time.monotonic() + timeout_s
@@ -265,15 +346,16 @@ def write_floor_info(workdir: Path, configs: dict[str, AssetConfig], floor: Floo
     standby = floor.standby()
     first = next(iter(configs.values()))
     info = {
-        "floor": str(first.floor_file),
+        "floor": str((workdir / "floor.toml").resolve()),
         "assets": [{"id": aid, "kind": by_id[aid].kind.value, "class": by_id[aid].asset_class,
                     "type": by_id[aid].physical_type.value if by_id[aid].physical_type else None,
                     "endpoint": cfg.endpoint,
                     "security_policy": "None" if cfg.insecure else "Basic256Sha256_SignAndEncrypt",
-                    "config": str((workdir / "assets" / f"{aid}.toml").resolve()),
+                    "config": str((workdir / "assets" / aid / BUNDLE_CONFIG).resolve()),
                     "standby": aid in standby}
                    for aid, cfg in sorted(configs.items())],
-        "credentials_file": None if first.insecure else str(first.credentials_file),
+        "credentials_file": None if first.insecure else str((workdir / "credentials.json")
+                                                                .resolve()),
         "cert_dir": str((workdir / "certs").resolve()),
         "trust_dir": str((workdir / "certs" / "trusted").resolve()),
         "insecure": first.insecure,

@@ -4,10 +4,12 @@ floor of processes, in one event loop (`LocalFloor`).
 The work folder is prepared as for a floor of processes (`prepare_floor`: the floor file,
 each asset's file, certificates, trust lists, state folders), and ``W/cps.json`` says
 where each asset answers, so every client (`cps status`, `cps order`, the web console)
-talks to it as to any floor. Each asset's pid file names this process: `cps down` stops it
-(once per asset, the first signal is enough), and a floor started again in the same
-folder goes on where it was. Once every node has stopped, cps.json goes: the floor is gone
-with the process (an asset of a floor of processes can be restarted by hand; here none).
+talks to it as to any floor. An operator's ``Shutdown`` of an asset stops that node; once
+every node has stopped so, `ended` is set. Each asset's pid file names this process, the
+one-host fallback of `cps down` (once per asset, the first signal is enough), and a floor
+started again in the same folder goes on where it was. Once every node has stopped,
+cps.json goes: the floor is gone with the process (an asset of a floor of processes can
+be restarted by hand; here none).
 """
 
 from __future__ import annotations
@@ -57,6 +59,9 @@ class LocalFloor:
         self._online_timeout_s = online_timeout_s
         self.configs: dict[str, AssetConfig] = {}
         self.nodes: dict[str, AssetNode] = {}
+        #: Set once every node has stopped on an operator's ``Shutdown``.
+        self.ended = asyncio.Event()
+        self._watches: set[asyncio.Task] = set()
 
     # -- life cycle -----------------------------------------------------------------------
     async def __aenter__(self) -> LocalFloor:
@@ -78,6 +83,8 @@ class LocalFloor:
         return self
 
     async def __aexit__(self, *exc: object) -> None:
+        for task in self._watches:
+            task.cancel()
         rest = [a for a in self.nodes if a not in SEED_ASSETS]
         await asyncio.gather(*(self.stop(a) for a in rest), return_exceptions=True)
         for aid in [a for a in SEED_ASSETS if a in self.nodes][::-1]:
@@ -103,7 +110,18 @@ class LocalFloor:
             (cfg.state_dir / "pid").unlink(missing_ok=True)
             raise
         self.nodes[aid] = node
+        watch = asyncio.ensure_future(self._on_shutdown(aid, node))
+        self._watches.add(watch)
+        watch.add_done_callback(self._watches.discard)
         return node
+
+    async def _on_shutdown(self, aid: str, node: AssetNode) -> None:
+        """Stop `aid` when an operator asks it to (``Shutdown``); the last one ends the floor."""
+        await node.shutdown.wait()
+        if self.nodes.get(aid) is node:
+            await self.stop(aid)
+        if not self.nodes:
+            self.ended.set()
 
     async def stop(self, aid: str) -> None:
         """Take asset `aid` off the floor: it announces its leave and stops serving (within

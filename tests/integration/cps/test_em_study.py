@@ -261,9 +261,8 @@ def test_a_study_stops_resumes_and_survives_an_em_killed_with_minus_9(floor, tmp
     os.kill(pid, signal.SIGKILL)
     log = (wd / "logs" / "EM.restart.log").open("ab")
     started.append(subprocess.Popen(
-        [sys.executable, "-m", "transfertwin", "cps", "asset", "--config",
-         str(wd / "assets" / "EM.toml")], stdout=log, stderr=subprocess.STDOUT,
-        start_new_session=True))  # fmt: skip
+        [sys.executable, "-m", "transfertwin", "cps", "asset", str(wd / "assets" / "EM")],
+        stdout=log, stderr=subprocess.STDOUT, start_new_session=True))
     final = wait_done(planned, timeout_s=240.0, ended=True)
     assert (final["state"], final["done"], final["planned"]) == ("finished", planned,
                                                                  planned), final  # fmt: skip

@@ -64,9 +64,8 @@ STARTED: list[subprocess.Popen] = []  # by the tests: stopped at the end whateve
 def start(wd: Path, aid: str) -> subprocess.Popen:
     log = (wd / "logs" / f"{aid}.log").open("ab")
     proc = subprocess.Popen(
-        [sys.executable, "-m", "transfertwin", "cps", "asset", "--config",
-         str(wd / "assets" / f"{aid}.toml")], stdout=log, stderr=subprocess.STDOUT,
-        start_new_session=True)  # fmt: skip
+        [sys.executable, "-m", "transfertwin", "cps", "asset", str(wd / "assets" / aid)],
+        stdout=log, stderr=subprocess.STDOUT, start_new_session=True)  # its bundle
     STARTED.append(proc)
     return proc
 
@@ -158,14 +157,14 @@ def test_every_asset_is_its_own_process_on_its_own_address(floor):
     assert len(hosts) == 8 and all(h.startswith("127.") for h in hosts)
     assert all(a["address"].startswith("opc.tcp://") for a in online.values())
     assert doc["objects"]["o1"] == {"location": "TU_A", "unknown": False, "moving": None}
-    # each asset's own configuration is there to restart it by hand, with its own certificate
+    # each asset's own bundle is there to restart it by hand, with its own certificate
     for aid in online:
-        cfg = (floor / "assets" / f"{aid}.toml").read_text()
+        cfg = (floor / "assets" / aid / "asset.toml").read_text()
         assert f'id = "{aid}"' in cfg and "insecure = false" in cfg
         assert (floor / "assets" / aid / "certs" / "client-operator.der").is_file()
     info = json.loads((floor / "cps.json").read_text())
     assert {a["id"]: a["config"] for a in info["assets"] if a["id"] in online} == {
-        aid: str((floor / "assets" / f"{aid}.toml").resolve()) for aid in online}
+        aid: str((floor / "assets" / aid / "asset.toml").resolve()) for aid in online}
 
 
 def test_a_unit_killed_with_minus_9_lapses_one_stopped_leaves_and_both_rejoin(floor, capfd):
@@ -302,13 +301,18 @@ def test_no_file_status_or_log_of_a_plant_floor_holds_a_hidden_value(floor):
     assert secret.read_text().strip() == str(FLOOR_PLANT_SEED)
     assert stat.S_IMODE(secret.stat().st_mode) == 0o600
     for aid in ("TM_1", "TU_A"):  # their asset files name the seed file, not the seed
-        cfg = (floor / "assets" / f"{aid}.toml").read_text()
-        assert 'kind = "plant"' in cfg and f'plant_seed_file = "{secret}"' in cfg, cfg
+        cfg = (floor / "assets" / aid / "asset.toml").read_text()
+        assert 'kind = "plant"' in cfg and 'plant_seed_file = "plant.secret"' in cfg, cfg
+        own = floor / "assets" / aid / "plant.secret"  # a copy in the bundle, owner-only
+        assert own.read_text() == secret.read_text()
+        assert stat.S_IMODE(own.stat().st_mode) == 0o600
+    assert not (floor / "assets" / "o1" / "plant.secret").exists()  # not on the plant
     texts = {"status": json.dumps(status(floor))}
     for path in floor.rglob("*"):
-        if path.is_file() and path != secret and path.suffix in ("", ".toml", ".json", ".log"):
+        if path.is_file() and path.name != secret.name and path.suffix in ("", ".toml",
+                                                                           ".json", ".log"):
             texts[str(path.relative_to(floor))] = path.read_text(errors="replace")
-    assert {"cps.json", "logs/TM_1.log", "assets/TM_1.toml", "floor.toml"} <= set(texts)
+    assert {"cps.json", "logs/TM_1.log", "assets/TM_1/asset.toml", "floor.toml"} <= set(texts)
     assert "TM_1 up at" in texts["logs/TM_1.log"]
     for where, text in texts.items():
         hit = pattern.search(text)

@@ -161,7 +161,7 @@ def test_a_gateway_without_security_needs_insecure_explicitly(tmp_path, pki):
 
 
 def _workdir(tmp_path: Path, pki, endpoint: str) -> tuple[Path, AssetConfig]:
-    """A floor's workdir as `cps up` leaves it (``certs/``, ``assets/<id>.toml``): TU_A on
+    """A floor's workdir as `cps up` leaves it (``certs/``, ``assets/<id>/asset.toml``): TU_A on
     real hardware behind `endpoint` with the default gateway trust list (its own copy of
     the run's certificates), TU_B virtual."""
     wd = tmp_path / "w"
@@ -169,8 +169,8 @@ def _workdir(tmp_path: Path, pki, endpoint: str) -> tuple[Path, AssetConfig]:
     certs = shutil.copytree(pki.cert_dir, wd / "assets" / "TU_A" / "certs")
     cfg = dataclasses.replace(_cfg(tmp_path, pki, endpoint), cert_dir=certs,
                               trust_dir=wd / "assets" / "TU_A" / "trusted")  # fmt: skip
-    write_asset_config(wd / "assets" / "TU_A.toml", cfg)
-    write_asset_config(wd / "assets" / "TU_B.toml",
+    write_asset_config(wd / "assets" / "TU_A" / "asset.toml", cfg)
+    write_asset_config(wd / "assets" / "TU_B" / "asset.toml",
                        dataclasses.replace(cfg, asset_id="TU_B", hal=HalConfig()))
     return wd, cfg
 

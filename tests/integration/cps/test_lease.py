@@ -87,3 +87,40 @@ def test_idle_assets_renew_and_a_restarted_graph_gets_their_descriptions(tmp_pat
 
     beats = asyncio.run(asyncio.wait_for(main(), 120))
     assert beats["renewals"] >= 1, beats  # renewing again after the descriptions
+
+
+def test_a_lease_is_held_by_one_start_of_the_process_not_by_its_pid(tmp_path):
+    """Two processes of one asset on two hosts may have the same pid: the graph keys the lease
+    on the start's random instance id, so the other process's renewal is refused (it must
+    send its description) even with the pid of the one holding the lease."""
+    import json
+    import os
+
+    from transfertwin.cps import asset_node, load_floor, prepare_floor
+    from transfertwin.cps.node import heartbeat_payload
+    from transfertwin.cps.opcua import OperationRefused, connect
+
+    (tmp_path / "floor.toml").write_text(two_module_floor("instances", {"o1": "TU_A"}))
+    spec = load_floor(tmp_path / "floor.toml")
+    configs = prepare_floor(spec, tmp_path / "w", insecure=True, lease_s=30.0)
+    kg_cfg = dataclasses.replace(configs["KG"], seeds=())
+    desc = {d.asset_id: d for d in spec.descriptors()}["TU_A"]
+    full = heartbeat_payload(desc, configs["TU_A"].endpoint, "None", {"state": "idle"}, "a1")
+
+    def renewal(instance: str) -> str:
+        return json.dumps({"id": "TU_A", "instance": instance, "pid": os.getpid(),
+                           "renew": True, "directory": ""})  # fmt: skip
+
+    async def main() -> str:
+        async with asset_node(kg_cfg) as kg, connect(kg_cfg.endpoint, "KG", credentials=None,
+                                                     insecure=True) as c:  # fmt: skip
+            await c.call("Heartbeat", full)
+            await c.call("Heartbeat", renewal("a1"))  # the holder renews
+            assert kg.role.info["TU_A"]["instance"] == "a1"
+            try:
+                await c.call("Heartbeat", renewal("b2"))  # same asset, same pid, other start
+            except OperationRefused as exc:
+                return exc.status
+            return "accepted"
+
+    assert asyncio.run(asyncio.wait_for(main(), 60)) == "BadNotFound"

@@ -49,7 +49,7 @@ def test_a_floor_of_remote_machines_runs_an_order_after_cps_up_and_cps_trust(tmp
                 "--detach", "--lease", "2", timeout=240)  # fmt: skip
         assert up.returncode == 0, up.stderr
         for aid in (*UNITS, "TM_1"):
-            files = (wd / "assets" / f"{aid}.toml").read_text()
+            files = (wd / "assets" / aid / "asset.toml").read_text()
             assert 'kind = "remote"' in files and plant.url in files
             # each machine's asset trusts this gateway, and the gateway trusts each asset
             trusted = run_main(capfd, "cps", "trust", str(cert), "--workdir", str(wd),

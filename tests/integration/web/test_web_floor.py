@@ -45,12 +45,11 @@ def floor(tmp_path_factory):
 
 
 def restart(wd: Path, aid: str) -> subprocess.Popen:
-    """`transfertwin cps asset --config W/assets/<id>.toml`, as a user restarts one asset."""
+    """`transfertwin cps asset W/assets/<id>` (its bundle), as a user restarts one asset."""
     log = (wd / "logs" / f"{aid}.log").open("ab")
     return subprocess.Popen(
-        [sys.executable, "-m", "transfertwin", "cps", "asset", "--config",
-         str(wd / "assets" / f"{aid}.toml")], stdout=log, stderr=subprocess.STDOUT,
-        start_new_session=True)  # fmt: skip
+        [sys.executable, "-m", "transfertwin", "cps", "asset", str(wd / "assets" / aid)],
+        stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
 
 
 async def _tms(wd: Path, op: str, *args):

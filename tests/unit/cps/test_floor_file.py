@@ -209,3 +209,82 @@ def test_a_plant_floor_needs_its_seed_and_keeps_it_out_of_the_asset_files(tmp_pa
     assert configs["o1"].hal.kind == "virtual" and configs["KG"].hal.plant_seed_file is None
     for f in (tmp_path / "w").rglob("*.toml"):
         assert "918273" not in f.read_text(), f
+
+
+_BOUND = """
+name = "bound"
+logical = ["KG", "TMS"]
+
+[[module]]
+id = "TM_1"
+x_m = 6.0
+y_m = 5.2
+
+[bind]
+"""
+
+
+@pytest.mark.parametrize(("bind", "message"), [
+    ('TU_X = "198.18.0.2"', "no such asset"),
+    ('KG = "kg.local"', "not an IPv4 address"),
+    ('KG = "198.18.0.2:0"', "port must be 1..65535"),
+    ('KG = "198.18.0.2:4840"\nTMS = "198.18.0.2:4840"', "another asset's too"),
+    ("KG = 4840", r"must map an asset id to \"ADDRESS\[:PORT\]\""),
+])  # fmt: skip
+def test_a_bad_bind_table_is_one_clear_error(tmp_path, bind, message):
+    path = tmp_path / "bound.toml"
+    path.write_text(_BOUND + bind + "\n")
+    with pytest.raises(InputError, match=message):
+        load_floor(path)
+
+
+def test_bound_assets_listen_where_the_floor_says_with_security_only(tmp_path):
+    from transfertwin.cps import prepare_floor
+
+    path = tmp_path / "bound.toml"
+    path.write_text(_BOUND + 'KG = "198.18.0.2"\nTMS = "198.18.0.2"\nTM_1 = "198.18.0.3:4900"\n')
+    floor = load_floor(path)
+    assert load_floor(_written(tmp_path, floor)) == floor  # [bind] round-trips
+    with pytest.raises(InputError, match="only with security"):
+        prepare_floor(floor, tmp_path / "insecure", insecure=True)
+    cfgs = prepare_floor(floor, tmp_path / "w")
+    where = {a: (c.host, c.port, c.allow_remote) for a, c in cfgs.items()}
+    assert where == {"KG": ("198.18.0.2", 4840, True), "TMS": ("198.18.0.2", 4841, True),
+                     "TM_1": ("198.18.0.3", 4900, True)}  # fmt: skip
+    assert cfgs["TM_1"].seeds == ("opc.tcp://198.18.0.2:4840/transfertwin/KG",
+                                  "opc.tcp://198.18.0.2:4841/transfertwin/TMS")  # fmt: skip
+
+
+def _written(tmp_path: Path, floor) -> Path:
+    out = tmp_path / "again.toml"
+    out.write_text(floor_toml(floor))
+    return out
+
+
+def test_each_asset_runs_from_its_bundle_alone_anywhere(tmp_path):
+    """`cps up` writes a folder per asset with every path relative to it: copied elsewhere
+    (the work folder gone), it names nothing outside itself; the study store is in the
+    Experiment Manager's bundle only, and no asset's floor copy names it."""
+    import shutil
+    from dataclasses import replace
+
+    from transfertwin.cps import bundle_config, load_asset_config, prepare_floor
+
+    store = tmp_path / "quick.sqlite"
+    store.write_bytes(b"a study store")
+    floor = default_floor_spec()
+    floor = replace(floor, operation=replace(floor.operation, study=str(store)))
+    prepare_floor(floor, tmp_path / "w", insecure=True)
+    for aid in ("EM", "TMS", "TU_A"):
+        shutil.copytree(tmp_path / "w" / "assets" / aid, tmp_path / "host" / aid)
+    shutil.rmtree(tmp_path / "w")
+    for aid in ("EM", "TMS", "TU_A"):
+        bundle = tmp_path / "host" / aid
+        cfg = load_asset_config(bundle_config(bundle))
+        paths = [cfg.floor_file, cfg.cert_dir, cfg.trust_dir, cfg.state_dir]
+        assert all(p.is_relative_to(bundle) for p in paths), (aid, paths)
+        assert load_floor(cfg.floor_file).operation.study is None
+        assert (cfg.study_file is not None) == (aid == "EM")
+    em = load_asset_config(bundle_config(tmp_path / "host" / "EM"))
+    assert em.study_file == tmp_path / "host" / "EM" / "study.sqlite"
+    assert em.study_file.read_bytes() == b"a study store"

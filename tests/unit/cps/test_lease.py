@@ -15,6 +15,7 @@ from transfertwin.cps.node._lease import (
     Renewal,
     directory_reply,
     heartbeat_period,
+    instance_id,
 )
 from transfertwin.cps.opcua._discovery import Discovery, Peer
 
@@ -29,8 +30,9 @@ def test_the_default_lease_keeps_the_graphs_heartbeat_rate_within_its_budget(ass
 
 
 def test_a_renewal_goes_out_once_the_full_heartbeat_was_acknowledged():
-    lease = Renewal("o7", 4242)
-    payload = json.dumps({"id": "o7", "pid": 4242, "state": "idle", "location": "TU_A"})
+    lease = Renewal("o7", "5e1f")
+    payload = json.dumps({"id": "o7", "instance": "5e1f", "pid": 4242, "state": "idle",
+                          "location": "TU_A"})  # fmt: skip
     first = json.loads(lease.request(payload))
     assert first["location"] == "TU_A" and first["directory"] == ""  # full, no directory held
     # not acknowledged (e.g. the call timed out): full again
@@ -38,7 +40,7 @@ def test_a_renewal_goes_out_once_the_full_heartbeat_was_acknowledged():
     endpoints = lease.answered(directory_reply("b.3", {"KG": "opc.tcp://kg", "o7": "x"}, ""))
     assert endpoints == {"KG": "opc.tcp://kg", "o7": "x"} and lease.directory == "b.3"
     renew = json.loads(lease.request(payload))
-    assert renew == {"id": "o7", "pid": 4242, "renew": True, "directory": "b.3"}
+    assert renew == {"id": "o7", "instance": "5e1f", "renew": True, "directory": "b.3"}
     assert lease.answered(directory_reply("b.3", {"KG": "opc.tcp://kg"}, "b.3")) is None
     assert lease.directory == "b.3"
     # the live state changed: the full heartbeat again, then renewals
@@ -61,11 +63,16 @@ def test_the_directory_is_sent_only_to_a_sender_holding_another_version():
 
 
 def test_heartbeats_are_jittered_within_the_period_and_the_same_for_the_same_asset():
-    a, b, again = Renewal("TU_A", 1), Renewal("TU_B", 1), Renewal("TU_A", 2)
+    a, b, again = Renewal("TU_A", "1"), Renewal("TU_B", "1"), Renewal("TU_A", "2")
     pauses = [a.pause(3.0) for _ in range(200)]
     assert all(2.4 <= p <= 3.0 for p in pauses) and max(pauses) - min(pauses) > 0.4
     assert [again.pause(3.0) for _ in range(200)] == pauses  # seeded by the asset's id
     assert [b.pause(3.0) for _ in range(200)] != pauses
+
+
+def test_each_start_of_a_process_has_an_instance_id_of_its_own():
+    ids = {instance_id() for _ in range(100)}  # pids repeat across hosts; these do not
+    assert len(ids) == 100 and all(len(i) == 16 and int(i, 16) >= 0 for i in ids)
 
 
 def test_the_gossip_period_stretches_with_the_number_of_peers():

@@ -1,13 +1,14 @@
-"""One asset process's configuration file, ``assets/<id>.toml`` (docs/architecture.md,
+"""One asset process's configuration file, ``assets/<id>/asset.toml`` (docs/architecture.md,
 "Deployment").
 
 ```toml
 [asset]
 id = "TU_A"                  # an asset of the floor file below
-floor = "/plant/floor.toml"  # the floor it belongs to (stations, placement, peers' kinds)
+floor = "floor.toml"         # the floor it belongs to (stations, placement, peers' kinds)
 
 [network]
 host = "127.0.0.2"           # address to bind; beyond loopback needs allow_remote = true
+allow_remote = false         # (and security: never with insecure)
 port = 48401
 seeds = ["opc.tcp://127.0.0.5:48405/transfertwin/KG"]  # peers to join through
 lease_s = 5.0                # a peer silent this long is offline
@@ -16,10 +17,11 @@ lease_s = 5.0                # a peer silent this long is offline
 insecure = false             # NoSecurity: explicit opt-in, loopback only
 cert_dir = "certs"           # this process's own application certificates
 trust_dir = "trusted"        # client certificates this asset accepts
-credentials = "../../credentials.json"
+credentials = "credentials.json"
 
 [runtime]
 state_dir = "state"          # what survives a crash, written atomically
+study = "study.sqlite"       # the Experiment Manager: the study store it answers from
 seed = 0
 time_scale = 1.0
 docking = "sampled"
@@ -28,7 +30,7 @@ docking = "sampled"
 kind = "virtual"             # virtual | plant | remote
 # plant: the emulated plant's hidden physics (a transport module simulates its docked pair
 # with it); the seed is in a file of its own, never in this one
-plant_seed_file = "../../plant.secret"
+plant_seed_file = "plant.secret"
 # remote: real hardware behind a HAL gateway (OPC UA): belt speeds written, barriers read
 endpoint = "opc.tcp://192.168.10.21:4840"
 insecure = false             # NoSecurity at the gateway: explicit, loopback only
@@ -42,7 +44,9 @@ barrier_far = "ns=2;s=TU_A.BarrierFar"
 # (ns=2;s=<id>.PoseX, .PoseY, .PoseTheta, .Command, .CommandState, .ObjectState)
 ```
 
-Relative paths are resolved against the file's folder.
+Relative paths are resolved against the file's folder. `cps up` writes this file into the
+asset's bundle (``assets/<id>/asset.toml``) with every path inside the bundle, so the folder
+runs as it is on another host (``transfertwin cps asset BUNDLE``).
 """
 
 from __future__ import annotations
@@ -155,6 +159,7 @@ class AssetConfig:
     time_scale: float = 1.0
     docking: str = "sampled"
     hal: HalConfig = HalConfig()
+    study_file: Path | None = None
 
     def __post_init__(self) -> None:
         where = f"asset {self.asset_id}"
@@ -210,6 +215,7 @@ def load_asset_config(path: Path | str) -> AssetConfig:
         raise InputError(f"{path}: [network] seeds must be a list of opc.tcp:// URLs")
     insecure = bool(sec.get("insecure", False))
     creds = sec.get("credentials")
+    study = run.get("study")
     try:
         return AssetConfig(
             asset_id=str(aid), floor_file=rel(floor, "[asset] floor"), host=str(host),
@@ -222,6 +228,7 @@ def load_asset_config(path: Path | str) -> AssetConfig:
             lease_s=float(net.get("lease_s", 5.0)), seed=int(run.get("seed", 0)),
             time_scale=float(run.get("time_scale", 1.0)),
             docking=str(run.get("docking", "sampled")), hal=_hal(hal, rel, path),
+            study_file=None if study is None else rel(study, "[runtime] study"),
         )  # fmt: skip
     except (TypeError, ValueError) as exc:
         raise InputError(f"{path}: {exc}") from None
@@ -246,29 +253,41 @@ def _hal(table: dict, rel, path: Path) -> HalConfig:
     )  # fmt: skip
 
 
-def write_asset_config(path: Path, cfg: AssetConfig) -> Path:
-    """Write `cfg` as ``ASSET.toml`` (atomically; absolute paths)."""
+def write_asset_config(path: Path, cfg: AssetConfig, *, relative: bool = False) -> Path:
+    """Write `cfg` as ``ASSET.toml`` (atomically). Paths are absolute, or with `relative`
+    relative to the file's folder where they lie inside it (an asset's bundle)."""
+    base = path.parent.resolve()
+
+    def out(p: Path) -> str:
+        if relative and p.resolve().is_relative_to(base):
+            return p.resolve().relative_to(base).as_posix() or "."
+        return str(p)
+
     tables = {
-        "asset": {"id": cfg.asset_id, "floor": str(cfg.floor_file)},
+        "asset": {"id": cfg.asset_id, "floor": out(cfg.floor_file)},
         "network": {"host": cfg.host, "port": cfg.port, "seeds": list(cfg.seeds),
                     "lease_s": cfg.lease_s, "allow_remote": cfg.allow_remote},
-        "security": {"insecure": cfg.insecure, "cert_dir": str(cfg.cert_dir),
-                     "trust_dir": str(cfg.trust_dir)},
-        "runtime": {"state_dir": str(cfg.state_dir), "seed": cfg.seed,
+        "security": {"insecure": cfg.insecure, "cert_dir": out(cfg.cert_dir),
+                     "trust_dir": out(cfg.trust_dir)},
+        "runtime": {"state_dir": out(cfg.state_dir), "seed": cfg.seed,
                     "time_scale": cfg.time_scale, "docking": cfg.docking},
     }
     if cfg.credentials_file is not None:
-        tables["security"]["credentials"] = str(cfg.credentials_file)
+        tables["security"]["credentials"] = out(cfg.credentials_file)
+    if cfg.study_file is not None:
+        tables["runtime"]["study"] = out(cfg.study_file)
     hal = cfg.hal
     tables["hal"] = {"kind": hal.kind}
     if hal.plant_seed_file is not None:
-        tables["hal"]["plant_seed_file"] = str(hal.plant_seed_file)
+        tables["hal"]["plant_seed_file"] = out(hal.plant_seed_file)
     if hal.kind == "remote":
         tables["hal"] |= {"endpoint": hal.endpoint, "insecure": hal.insecure,
                           "poll_s": hal.poll_s, **dict(hal.nodes)}  # fmt: skip
         if hal.trust_dir is not None:
-            tables["hal"]["trust_dir"] = str(hal.trust_dir)
-    lines = [f"# transfertwin asset process: transfertwin cps asset --config {path.name}"]
+            tables["hal"]["trust_dir"] = out(hal.trust_dir)
+    lines = [f"# transfertwin asset process: transfertwin cps asset {path.parent.name}"
+             if relative else
+             f"# transfertwin asset process: transfertwin cps asset --config {path.name}"]
     for name, rows in tables.items():
         lines += ["", f"[{name}]", *(f"{k} = {toml_value(v)}" for k, v in rows.items())]
     path.parent.mkdir(parents=True, exist_ok=True)

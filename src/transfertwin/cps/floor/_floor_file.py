@@ -2,7 +2,7 @@
 
 A floor file (TOML) names every asset of one floor and where it stands, so that a launcher
 can start one process per asset and any asset can be restarted by hand from its own
-``assets/<id>.toml``. ``examples/floor-demo.toml`` is the demonstration floor of Sec. 5.3;
+bundle ``assets/<id>/``. ``examples/floor-demo.toml`` is the demonstration floor of Sec. 5.3;
 ``examples/floor-large.toml`` has 3 modules, 8 units and 20 objects.
 
 ```toml
@@ -50,6 +50,11 @@ twin = true                               # predictive: rank with the twin's sha
 
 [operation.groups]                        # destinations with a choice of unit
 inspection = ["TU_C", "TU_D"]
+
+[bind]                                    # optional: an asset on a host of its own
+KG = "198.18.0.2"                         # listens on its host's address (port 4840; the
+TU_A = "198.18.0.3:4841"                  # next free one for a second asset there), with
+                                          # security always; the rest on loopback
 ```
 
 Parsing happens here, at the edge; the rest of the runtime sees the frozen `FloorSpec`.
@@ -57,6 +62,7 @@ Parsing happens here, at the edge; the rest of the runtime sees the frozen `Floo
 
 from __future__ import annotations
 
+import ipaddress
 import math
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
@@ -166,9 +172,20 @@ class FloorSpec:
     objects: tuple[tuple[str, str], ...]
     logical: tuple[str, ...] = tuple(LOGICAL_ASSETS)
     operation: OperationSpec = OperationSpec()
+    #: (asset id, ``"ADDRESS"`` or ``"ADDRESS:PORT"``): where an asset listens when it runs
+    #: on a host of its own (the floor file's ``[bind]``); the others get loopback addresses.
+    bind: tuple[tuple[str, str], ...] = ()
 
     def __post_init__(self) -> None:
         _check(self)
+
+    def bind_address(self, asset_id: str) -> tuple[str, int | None] | None:
+        """(address, port or None) the floor file binds `asset_id` to; None: loopback."""
+        value = dict(self.bind).get(asset_id)
+        if value is None:
+            return None
+        host, _, port = value.partition(":")
+        return host, int(port) if port else None
 
     @property
     def units(self) -> tuple[str, ...]:
@@ -328,12 +345,37 @@ def _check(floor: FloorSpec) -> None:
     if op.sensor not in SENSORS:
         raise InputError(f"{where}: operation.sensor must be one of {', '.join(SENSORS)}, "
                          f"got {op.sensor!r}")  # fmt: skip
+    _check_bind(floor, where)
     for group, units in op.groups:
         if group in floor.units or group in seen:
             raise InputError(f"{where}: destination group {group!r} is also an asset id")
         if not units or any(u not in floor.units for u in units):
             raise InputError(f"{where}: destination group {group!r} must list transfer units "
                              f"of the floor, got {list(units)}")  # fmt: skip
+
+
+def _check_bind(floor: FloorSpec, where: str) -> None:
+    """Each ``[bind]`` entry names an asset of the floor and an IP address (an optional
+    port 1..65535); no two assets share an address and port."""
+    ids = {d.asset_id for d in floor.descriptors()}
+    taken: set[tuple[str, int]] = set()
+    for aid, value in floor.bind:
+        if aid not in ids:
+            raise InputError(f"{where}: [bind] {aid}: no such asset on the floor")
+        if not isinstance(value, str) or value.count(":") > 1:
+            raise InputError(f"{where}: [bind] {aid} must be \"ADDRESS\" or \"ADDRESS:PORT\" "
+                             f"(IPv4), got {value!r}")  # fmt: skip
+        host, _, port = value.partition(":")
+        try:
+            ipaddress.IPv4Address(host)
+        except ValueError:
+            raise InputError(f"{where}: [bind] {aid}: {host!r} is not an IPv4 address") from None
+        if port and not (port.isdigit() and 0 < int(port) < 65536):
+            raise InputError(f"{where}: [bind] {aid}: port must be 1..65535, got {port!r}")
+        if port and (host, int(port)) in taken:
+            raise InputError(f"{where}: [bind] {aid}: {value} is another asset's too")
+        if port:
+            taken.add((host, int(port)))
 
 
 def default_floor_spec() -> FloorSpec:

@@ -23,7 +23,8 @@ __all__ = ["floor_toml", "load_floor", "parse_floor"]
 
 def parse_floor(doc: dict, name: str) -> FloorSpec:
     """A `FloorSpec` from a parsed floor document (see the module docstring)."""
-    known = {"name", "size_m", "station", "module", "object", "logical", "operation", "hal"}
+    known = {"name", "size_m", "station", "module", "object", "logical", "operation", "hal",
+             "bind"}
     if unknown := sorted(set(doc) - known):
         raise InputError(f"floor {name}: unknown key {unknown[0]!r}; known: "
                          f"{', '.join(sorted(known))}")  # fmt: skip
@@ -60,8 +61,12 @@ def parse_floor(doc: dict, name: str) -> FloorSpec:
     logical = doc.get("logical", list(LOGICAL_ASSETS))
     if not isinstance(logical, list) or not all(isinstance(a, str) for a in logical):
         raise InputError(f"floor {name}: logical must be a list of asset ids")
+    bind = doc.get("bind", {})
+    if not isinstance(bind, dict) or not all(isinstance(v, str) for v in bind.values()):
+        raise InputError(f"floor {name}: [bind] must map an asset id to \"ADDRESS[:PORT]\"")
     return FloorSpec(name, size_m, tuple(stations), tuple(modules), tuple(objects),
-                     tuple(logical), _operation(doc.get("operation", {}), name))  # fmt: skip
+                     tuple(logical), _operation(doc.get("operation", {}), name),
+                     tuple(bind.items()))  # fmt: skip
 
 
 def _operation(table: object, name: str) -> OperationSpec:
@@ -152,4 +157,6 @@ def floor_toml(floor: FloorSpec) -> str:
         lines += ["", "[operation.groups]"]
         lines += [f"{json.dumps(g)} = [{', '.join(json.dumps(u) for u in units)}]"
                   for g, units in op.groups]  # fmt: skip
+    if floor.bind:
+        lines += ["", "[bind]", *(f"{json.dumps(a)} = {json.dumps(v)}" for a, v in floor.bind)]
     return "\n".join(lines) + "\n"

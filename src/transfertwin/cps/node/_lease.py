@@ -8,9 +8,11 @@ What a heartbeat carries scales with what changed, not with the floor:
 - the *full* heartbeat (the asset's description and live state, `heartbeat_payload`) goes
   out when that payload differs from the last one the graph acknowledged, and whenever the
   graph asks for it;
-- otherwise a *renewal* goes out: the asset's id and process id only. A graph that holds no
-  lease for that process (restarted, or the lease lapsed) refuses it (``BadNotFound``) and
-  the asset sends its full heartbeat at once;
+- otherwise a *renewal* goes out: the asset's id and the id of this start of its process
+  only (`instance_id`: random per start, so two processes of one asset on two hosts never
+  share it, as two pids may). A graph that holds no lease for that instance (restarted, or
+  the lease lapsed) refuses it (``BadNotFound``) and the asset sends its full heartbeat at
+  once;
 - the graph answers with its directory (the endpoints of the online assets) only when it
   changed since the version the asset holds: an idle floor's heartbeats carry no list.
 
@@ -24,6 +26,7 @@ from __future__ import annotations
 
 import json
 import random
+import secrets
 import zlib
 from typing import Any
 
@@ -35,6 +38,7 @@ __all__ = [
     "default_lease",
     "directory_reply",
     "heartbeat_period",
+    "instance_id",
 ]
 
 #: The lease of a small floor: an asset that dies is offline within 5 s.
@@ -56,6 +60,12 @@ def default_lease(assets: int) -> float:
     return max(DEFAULT_LEASE_S, float(-(-need // 1)))
 
 
+def instance_id() -> str:
+    """A new id for one start of an asset's process: 16 random hex digits (a pid is unique
+    on one host only; a floor spans hosts)."""
+    return secrets.token_hex(8)
+
+
 def heartbeat_period(lease_s: float) -> float:
     """Seconds between heartbeats: a third of the lease (two may be lost before it lapses)."""
     return lease_s / 3.0
@@ -67,12 +77,13 @@ class Renewal:
 
     Args:
         asset_id: The asset.
-        pid: Its process (a renewal names it: a restarted process holds no lease yet).
+        instance: This start of its process (`instance_id`; a renewal names it: a restarted
+            process holds no lease yet).
     """
 
-    def __init__(self, asset_id: str, pid: int) -> None:
+    def __init__(self, asset_id: str, instance: str) -> None:
         self.asset_id = asset_id
-        self.pid = pid
+        self.instance = instance
         self.delivered: str | None = None  # the last full payload the graph acknowledged
         self.directory = ""  # version of the graph's directory this asset holds
         self.full_sent = 0
@@ -85,7 +96,7 @@ class Renewal:
         if payload == self.delivered:
             self._sent = None
             self.renewals_sent += 1
-            return json.dumps({"id": self.asset_id, "pid": self.pid, "renew": True,
+            return json.dumps({"id": self.asset_id, "instance": self.instance, "renew": True,
                                "directory": self.directory})  # fmt: skip
         self._sent = payload
         self.full_sent += 1
@@ -105,7 +116,7 @@ class Renewal:
         return endpoints
 
     def refused(self) -> None:
-        """The graph holds no lease for this process: the next heartbeat is the full one."""
+        """The graph holds no lease for this instance: the next heartbeat is the full one."""
         self.delivered = None
 
     def pause(self, period_s: float) -> float:

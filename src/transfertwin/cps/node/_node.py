@@ -25,14 +25,20 @@ from collections.abc import Awaitable, Callable
 from typing import Any
 
 from transfertwin._errors import InputError
+from basyx.aas import model
+
 from transfertwin.cps.aas import (
+    Arg,
     AssetDescriptor,
+    OperationSpec,
     build_representation,
     externally_synced,
     operation,
+    semantic,
+    submodel_iri,
 )
 from transfertwin.cps.floor import PROVENANCE, AssetConfig, FloorSpec, load_floor
-from transfertwin.cps.node._lease import NO_LEASE, Renewal, heartbeat_period
+from transfertwin.cps.node._lease import NO_LEASE, Renewal, heartbeat_period, instance_id
 from transfertwin.cps.node._peers import Peers
 from transfertwin.cps.node._role import Role
 from transfertwin.cps.opcua import (
@@ -44,24 +50,40 @@ from transfertwin.cps.opcua import (
     load_credentials,
 )
 
-__all__ = ["AssetNode", "RoleFactory", "heartbeat_payload"]
+__all__ = ["LIFECYCLE", "SHUTDOWN", "AssetNode", "RoleFactory", "heartbeat_payload"]
 
 log = logging.getLogger("transfertwin.cps")
+
+#: The operation every asset offers the operator role: stop serving (announce the leave and
+#: end the process), so a floor is stopped over OPC UA from any host (`cps down`). It is
+#: served in a submodel of its own, ``Lifecycle`` (the process, not the asset: an object
+#: of Table 3.1 has no ControlInterface, and its process still stops).
+SHUTDOWN = OperationSpec(
+    "Shutdown", (), (Arg("ok", "xs:boolean"),),
+    "Stop this asset: it answers, announces its leave and ends its process (operator role).",
+)
+
+#: The submodel of the process's own operations (`SHUTDOWN`).
+LIFECYCLE = "Lifecycle"
+
+#: Seconds between a Shutdown's answer and the stop (the answer must get out first).
+SHUTDOWN_DELAY_S = 0.2
 
 #: Makes the role of a node's asset (`transfertwin.cps.roles.role_for`).
 RoleFactory = Callable[["AssetNode"], Role]
 
 
 def heartbeat_payload(desc: AssetDescriptor, endpoint: str, policy: str,
-                      live: dict[str, Any]) -> str:  # fmt: skip
+                      live: dict[str, Any], instance: str = "") -> str:  # fmt: skip
     """The JSON a node sends the knowledge graph with every heartbeat: who it is, where it
-    answers, its process, and its live state (state, docked, possesses, location, pose)."""
+    answers, this start of its process (`instance`; the pid is shown, never a key: pids
+    repeat across hosts), and its live state (state, docked, possesses, location, pose)."""
     return json.dumps({
         "id": desc.asset_id, "kind": desc.kind.value, "class": desc.asset_class,
         "type": desc.physical_type.value if desc.physical_type else None,
         "capabilities": [c.value for c in desc.capabilities], "station": desc.station,
         "models": desc.models, "endpoint": endpoint, "security_policy": policy,
-        "pid": os.getpid(), **live,
+        "instance": instance, "pid": os.getpid(), **live,
     })  # fmt: skip
 
 
@@ -92,8 +114,12 @@ class AssetNode:
         self._beating: asyncio.Task | None = None
         self._known: dict[str, str] = {}  # asset id -> endpoint, from seeds and the graph
         self.role = roles(self)
-        self.lease = Renewal(cfg.asset_id, os.getpid())
+        self.instance = instance_id()  # this start of the asset's process, on any host
+        self.lease = Renewal(cfg.asset_id, self.instance)
         self.started = time.monotonic()
+        #: Set when an operator asked this asset to stop (`SHUTDOWN`); whoever runs the node
+        #: (its process, or a `LocalFloor`) waits on it and stops the node.
+        self.shutdown = asyncio.Event()
 
     # -- life cycle -----------------------------------------------------------------------
     async def __aenter__(self) -> AssetNode:
@@ -102,13 +128,17 @@ class AssetNode:
                                    provenance=PROVENANCE[cfg.hal.kind])  # fmt: skip
         for spec in self.role.operations():
             rep.submodel("ControlInterface").submodel_element.add(operation(spec))
+        lifecycle = model.Submodel(submodel_iri(self.desc.asset_id, LIFECYCLE),
+                                   id_short=LIFECYCLE, semantic_id=semantic(LIFECYCLE),
+                                   submodel_element=[operation(SHUTDOWN)])  # fmt: skip
         writable = {("OperationalData", p) for p in externally_synced(rep)}
         writable |= {("OperationalData", p) for p in self.role.writable()}
         scfg = ServerConfig(host=cfg.host, port=cfg.port, insecure=cfg.insecure,
                             cert_dir=cfg.cert_dir, trust_dir=cfg.trust_dir,
                             credentials=self.credentials)  # fmt: skip
-        self.server = AssetServer(self.desc.asset_id, rep.submodels, scfg,
-                                  self.role.handlers(), frozenset(writable))  # fmt: skip
+        self.server = AssetServer(self.desc.asset_id, (*rep.submodels, lifecycle), scfg,
+                                  {**self.role.handlers(), "Shutdown": self._shutdown},
+                                  frozenset(writable))  # fmt: skip
         await self.server.__aenter__()
         await self.role.start()
         for url in cfg.seeds:
@@ -140,6 +170,12 @@ class AssetNode:
         if self.server is not None:
             await self.server.__aexit__(None, None, None)
         log.info("%s down", self.desc.asset_id)
+
+    async def _shutdown(self) -> bool:
+        """`SHUTDOWN`: answer, then set `shutdown` (the runner stops the node)."""
+        log.info("%s: shutdown asked over OPC UA", self.desc.asset_id)
+        asyncio.get_running_loop().call_later(SHUTDOWN_DELAY_S, self.shutdown.set)
+        return True
 
     def spawn(self, coro: Awaitable[object]) -> asyncio.Task:
         """Run `coro` as a task of this node (cancelled when the node stops)."""
@@ -230,7 +266,8 @@ class AssetNode:
         holds no lease for this process (then sent at once)."""
         live = {"hal": self.cfg.hal.kind, **await self.role.live()}
         payload = heartbeat_payload(self.desc, self.server.endpoint,
-                                    self.server.security_policy, live)  # fmt: skip
+                                    self.server.security_policy, live,
+                                    self.instance)  # fmt: skip
         # opening the session (a secure handshake) has its own, longer limit: a graph busy
         # with many joining assets must not see each handshake cancelled by the heartbeat's
         # limit and started again (no one would ever get through)

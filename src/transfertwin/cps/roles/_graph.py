@@ -66,7 +66,8 @@ class GraphRole(Role):
         """The graph's own lease (it is an asset like any other)."""
         srv = self.node.server
         self.info[self.aid] = {"id": self.aid, "kind": "logical", "class": "knowledge_graph",
-                               "endpoint": srv.endpoint, "pid": os.getpid(), "state": "idle",
+                               "endpoint": srv.endpoint, "pid": os.getpid(),
+                               "instance": self.node.instance, "state": "idle",
                                "seen": time.time()}  # fmt: skip
         await self._counts()
 
@@ -95,11 +96,14 @@ class GraphRole(Role):
         d = json.loads(payload)
         aid = d["id"]
         held = d.pop("directory", None)
-        fresh = aid not in self.leases or self.info.get(aid, {}).get("pid") != d.get("pid")
+        # a lease is held by one start of the asset's process (its random instance id: pids
+        # repeat across hosts, and a process of the asset restarted elsewhere is a new one)
+        instance = d.get("instance")
+        fresh = aid not in self.leases or self.info.get(aid, {}).get("instance") != instance
         if d.get("renew"):
             if fresh:
                 self.beats["refused"] += 1
-                raise OperationRefused(f"no lease of {aid} (pid {d.get('pid')}) held here: "
+                raise OperationRefused(f"no lease of {aid} (instance {instance}) held here: "
                                        "send the full heartbeat", status=NO_LEASE)  # fmt: skip
             self.beats["renewals"] += 1
             self.leases[aid] = time.monotonic() + self.node.cfg.lease_s
@@ -122,7 +126,8 @@ class GraphRole(Role):
             )  # fmt: skip
             self.kg.join(desc, endpoint=d["endpoint"], security_policy=d["security_policy"],
                          state=_state_word(d.get("state")))  # fmt: skip
-            log.info("KG: %s joined (pid %s, %s)", aid, d.get("pid"), d["endpoint"])
+            log.info("KG: %s joined (instance %s, pid %s, %s)", aid, instance, d.get("pid"),
+                     d["endpoint"])  # fmt: skip
         self._apply(aid, d)
         self._changed = True
         return self._reply(held)
@@ -189,7 +194,8 @@ class GraphRole(Role):
         for aid, d in sorted(self.info.items()):
             online = aid in self.leases or aid == self.aid
             rows.append({"id": aid, "kind": d.get("kind"), "class": d.get("class"),
-                         "address": d.get("endpoint"), "pid": d.get("pid"), "online": online,
+                         "address": d.get("endpoint"), "pid": d.get("pid"),
+                         "instance": d.get("instance"), "online": online,
                          "state": d.get("state") if online else "offline",
                          "docked": d.get("docked"), "location": d.get("location"),
                          "pose": d.get("pose"), "possesses": d.get("possesses"),

@@ -36,7 +36,6 @@ from transfertwin.cps.dispatch import (
     fallback,
     order_view,
     rerank,
-    study_predictions,
     uninformed,
 )
 from transfertwin.cps.node import Role
@@ -110,7 +109,9 @@ class TmsRole(Role):
         return json.dumps([order_view(op) for op in self.ops.values()])
 
     async def _kpis(self) -> str:
-        return json.dumps(self.book.kpi_doc(self.policy))
+        doc = self.book.kpi_doc(self.policy)
+        doc["predictions_unanswered"] = self.state.data.get("predictions_unanswered", 0)
+        return json.dumps(doc)
 
     async def _status(self, op_id: str) -> str:
         return json.dumps(self.book.status(op_id))
@@ -250,31 +251,27 @@ class TmsRole(Role):
                 "fallback": after}  # fmt: skip
 
     async def _predictions(self, obj: str, op_id: str) -> list[dict[str, Any]]:
-        """The twin's ranked states for `obj`: cached; else the study store; else the
-        Experiment Manager's on-the-fly experiments (not cached when it cannot answer)."""
+        """The twin's ranked states for `obj`: cached; else the Experiment Manager's (from
+        the floor's study store, which its bundle holds, or its on-the-fly experiments;
+        each prediction names its ``source``). When it does not answer, the operation's
+        history and the log say so, and ``Kpis`` counts it (``predictions_unanswered``)."""
 
         cache = self.state.data.setdefault("predictions", {})
         if obj in cache:
             return cache[obj]
-        spec = self.node.floor.operation
-        preds = []
-        if spec.study is not None:
-            try:
-                found = await asyncio.to_thread(study_predictions, spec.study, obj)
-                preds = [p.as_dict() for p in found]
-            except Exception as exc:
-                log.warning("TMS: study store %s not readable: %s", spec.study, exc)
-        if not preds:
+        self.ops[op_id]["history"].append(
+            [time.time(), f"asking the Experiment Manager to predict {obj}"])
+        try:
+            preds = await asyncio.wait_for(self._ask_em(obj), PREDICT_TIMEOUT_S)
+        except Exception as exc:
+            log.warning("TMS: no prediction for %s (the Experiment Manager: %r): default state",
+                        obj, exc)  # fmt: skip
+            self.state.data["predictions_unanswered"] = \
+                self.state.data.get("predictions_unanswered", 0) + 1
             self.ops[op_id]["history"].append(
-                [time.time(), f"asking the Experiment Manager to predict {obj}"])
-            try:
-                preds = await asyncio.wait_for(self._ask_em(obj), PREDICT_TIMEOUT_S)
-            except Exception as exc:
-                log.info("TMS: no prediction for %s from the EM: %r", obj, exc)
-                self.ops[op_id]["history"].append(
-                    [time.time(), f"no prediction ({type(exc).__name__}: {exc}): default "
-                                  "state"])  # fmt: skip
-                return []
+                [time.time(), f"no prediction ({type(exc).__name__}: {exc}): default "
+                              "state"])  # fmt: skip
+            return []
         cache[obj] = preds
         self.book.save()
         return preds

@@ -68,3 +68,13 @@ def test_a_study_store_predicts_the_legs_of_its_plan(tmp_path) -> None:
         store.put(_rows("front", 0, [(1, 1), (1, 0)]))
     (pred,) = study_predictions(db, "o1")
     assert (pred.leg, pred.k_pickup, pred.k, pred.n) == ("operation", 2, 1, 2)
+
+
+def test_the_plan_says_per_leg_what_the_twin_predicted() -> None:
+    from transfertwin.cps.dispatch import twin_words
+
+    op = {**_op("front", 0, k_pickup=3, k=2), "source": "virtual experiments"}
+    assert twin_words(op) == ("twin: picked up in 3 of 4 runs, delivered in 2 of 3 "
+                              "(virtual experiments)")  # fmt: skip
+    rt = {"k": 3, "n": 4, "source": "study s.sqlite"}
+    assert twin_words(rt) == "twin: there and back in 3 of 4 runs (study s.sqlite)"

@@ -40,6 +40,7 @@ if TYPE_CHECKING:
         StatePrediction,
         rank_states,
         study_predictions,
+        twin_words,
         virtual_predictions,
     )
 
@@ -71,6 +72,7 @@ __all__ = [
     "study_predictions",
     "tries",
     "twin_priors",
+    "twin_words",
     "uninformed",
     "virtual_predictions",
 ]

@@ -34,6 +34,7 @@ __all__ = [
     "StatePrediction",
     "rank_states",
     "study_predictions",
+    "twin_words",
     "virtual_predictions",
 ]
 
@@ -129,3 +130,16 @@ def virtual_predictions(obj: str, runs: int, seed: int, scene=None, workers: int
     store = MemoryResultStore()
     run_study(plan, store, workers=workers, executor=executor)
     return rank_states(store.rows(), obj, f"virtual experiments ({runs} runs per state)", leg)
+
+
+def twin_words(pred: Mapping[str, object]) -> str:
+    """What the twin predicted for a state, in words: per leg it simulated, k of n runs
+    (a ranked state as `StatePrediction.as_dict` gives it)."""
+    k, n, leg, picked = pred["k"], pred["n"], pred.get("leg", "round-trip"), pred.get("k_pickup")
+    if leg == "operation" and picked is not None:
+        said = f"picked up in {picked} of {n} runs, delivered in {k} of {picked}"
+    elif leg == "pick-up":
+        said = f"picked up in {k} of {n} runs"
+    else:
+        said = f"there and back in {k} of {n} runs"
+    return f"twin: {said} ({pred['source']})"

@@ -36,6 +36,7 @@ from transfertwin.cps.dispatch import (
     fallback,
     order_view,
     rerank,
+    twin_words,
     uninformed,
 )
 from transfertwin.cps.node import Role
@@ -298,8 +299,8 @@ class TmsRole(Role):
                 if op["plan"].get("state"):
                     st, pr = op["plan"]["state"], op["plan"]["prediction"]
                     op["history"].append([time.time(), (
-                        f"load {st['face']}/{st['conveyor']}/{st['theta_deg']} deg: twin "
-                        f"{pr['k']}/{pr['n']} ({pr['source']})"
+                        f"load {st['face']}/{st['conveyor']}/{st['theta_deg']} deg: "
+                        + (twin_words(pr) if pr.get("n") else "no twin")
                         + (f"; with the floor's transfers p = {pr['p']:.2f} (pick-up "
                            f"{pr['p_pickup']:.2f}, delivery {pr['p_delivery']:.2f})"
                            if "p" in pr else ""))])  # fmt: skip

@@ -9,7 +9,14 @@ import math
 from pathlib import Path
 
 from transfertwin._errors import InputError
-from transfertwin.cli._cps_client import endpoint_of, load_info, run_client, workdir_of
+from transfertwin.cli._cps_client import (
+    add_access,
+    endpoint_of,
+    floor_access,
+    load_info,
+    run_client,
+    workdir_of,
+)
 from transfertwin.cli._cps_floor import (
     cmd_up_floor,
     cmd_up_local,
@@ -35,8 +42,7 @@ def cmd_up(args: argparse.Namespace) -> int:
 def cmd_status(args: argparse.Namespace) -> int:
     """List the assets as the knowledge graph knows them, with where each object is and
     where each transport module stands on the shop floor (and the unit it is docked at)."""
-    wd = workdir_of(args.workdir, must_exist=True)
-    doc = floor_status(wd)
+    doc = floor_status(*floor_access(args))
     if args.json:
         print(json.dumps(doc, indent=2))
     else:
@@ -53,9 +59,7 @@ def cmd_order(args: argparse.Namespace) -> int:
     """
     if not 0 < args.timeout < float("inf"):
         raise InputError(f"--timeout must be a positive number of seconds, got {args.timeout}")
-    wd = workdir_of(args.workdir, must_exist=True)
-    info, creds = load_info(wd)
-    return floor_order(wd, info, creds, args)
+    return floor_order(*floor_access(args), args)
 
 
 def cmd_trust(args: argparse.Namespace) -> int:
@@ -259,13 +263,13 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="seconds to wait for every asset to join (default 120)")
     p.set_defaults(func=cmd_up)
     p = csub.add_parser("status", help="list the assets and where the objects are")
-    p.add_argument("--workdir", required=True)
+    add_access(p)
     p.add_argument("--json", action="store_true",
                    help="one JSON document: assets (id, kind, address, pid, online, state) and "
                         "every object's location")  # fmt: skip
     p.set_defaults(func=cmd_status)
     p = csub.add_parser("order", help="run a transport operation end to end over OPC UA")
-    p.add_argument("--workdir", required=True)
+    add_access(p)
     p.add_argument("--from", dest="source",
                    help="the unit (or the transport module) the object lies on; the TMS "
                         "finds it when left out")  # fmt: skip

@@ -1,5 +1,7 @@
-"""What every `transfertwin cps` client command shares: the work folder and its cps.json,
-the client credentials, one call on an asset's server, and plain-text tables.
+"""What every `transfertwin cps` client command shares: where the floor is (its work folder
+and cps.json on a one-host floor, or from any host the knowledge graph's endpoint, the
+floor's CA and an operator credential: `floor_access`), the client credentials, one call on
+an asset's server, and plain-text tables.
 
 The `cps` command modules (`_cps`, `_cps_floor`, `_cps_ops`, `_cps_study`) import these
 helpers from here and not from each other, so the commands form no circle.
@@ -7,8 +9,12 @@ helpers from here and not from each other, so the commands form no circle.
 
 from __future__ import annotations
 
+import argparse
 import asyncio
+import atexit
 import json
+import shutil
+import tempfile
 from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import TypeVar
@@ -16,7 +22,12 @@ from typing import TypeVar
 from transfertwin._errors import InputError
 from transfertwin.cli._paths import out_dir
 
-__all__ = ["call_asset", "endpoint_of", "load_info", "run_client", "text_table", "workdir_of"]
+__all__ = ["add_access", "call_asset", "endpoint_of", "floor_access", "load_info", "run_client",
+           "text_table", "workdir_of"]  # fmt: skip
+
+#: What an operator credential folder holds (`--credential`): the client's application
+#: certificate and key, and the operator's user name and password.
+CREDENTIAL_FILES = ("client-operator.der", "client-operator.pem", "credentials.json")
 
 T = TypeVar("T")
 
@@ -53,14 +64,108 @@ def endpoint_of(info: dict, asset_id: str) -> str:
     raise InputError(f"no asset {asset_id!r} in the CPS")
 
 
-async def call_asset(info: dict, creds, aid: str, op: str, *args, timeout_s: float = 10.0):
+async def call_asset(info: dict, creds, aid: str, op: str, *args, timeout_s: float = 10.0,
+                     submodel: str = "ControlInterface"):  # fmt: skip
     """Call method `op` of asset `aid` as an operator; its answer."""
     from transfertwin.cps.opcua import connect
 
+    # a floor reached from elsewhere: its servers checked against the CA given (--ca)
+    trust = {"trust_dir": Path(info["server_trust_dir"])} if info.get("server_trust_dir") else {}
     async with connect(endpoint_of(info, aid), aid, credentials=creds, role="operator",
                        cert_dir=Path(info["cert_dir"]), insecure=info["insecure"],
-                       timeout_s=timeout_s) as s:  # fmt: skip
-        return await s.call(op, *args)
+                       timeout_s=timeout_s, **trust) as s:  # fmt: skip
+        return await s.call(op, *args, submodel=submodel)
+
+
+def add_access(p: argparse.ArgumentParser) -> None:
+    """The options that say where a floor is: ``--workdir`` (a one-host floor's folder), or
+    ``--graph`` with ``--ca`` and ``--credential`` (from any host)."""
+    p.add_argument("--workdir", help="the floor's work folder (a floor on this host)")
+    p.add_argument("--graph", metavar="URL",
+                   help="the knowledge graph's endpoint, opc.tcp://HOST:PORT/transfertwin/KG: "
+                        "operate a floor from any host (with --ca and --credential; no work "
+                        "folder)")  # fmt: skip
+    p.add_argument("--ca", metavar="CA",
+                   help="with --graph: the floor's CA certificate (DER or PEM), or a folder "
+                        "with it and its CRL (ca.der, crl.der): every server is checked "
+                        "against it")  # fmt: skip
+    p.add_argument("--credential", metavar="DIR",
+                   help="with --graph: an operator credential, a folder with the client "
+                        "certificate and key (client-operator.der, client-operator.pem) and "
+                        "the user name and password (credentials.json)")  # fmt: skip
+
+
+def floor_access(args: argparse.Namespace) -> tuple[str, dict, object]:
+    """(where, the floor's description as cps.json has it, the client credentials) from
+    ``--workdir``, or from ``--graph``/``--ca``/``--credential`` (the assets and their
+    endpoints then come from the graph's ``Status``); InputError for a bad combination."""
+    graph = getattr(args, "graph", None)
+    if (args.workdir is None) == (graph is None):
+        raise InputError("give the floor's --workdir (this host), or --graph URL with --ca "
+                         "and --credential (any host)")  # fmt: skip
+    if graph is None:
+        if args.ca is not None or args.credential is not None:
+            raise InputError("--ca and --credential go with --graph (a floor on this host "
+                             "uses its --workdir's)")  # fmt: skip
+        wd = workdir_of(args.workdir, must_exist=True)
+        return str(wd), *load_info(wd)
+    return graph, *_remote_info(graph, args.ca, args.credential)
+
+
+def _remote_info(graph: str, ca: str | None, credential: str | None) -> tuple[dict, object]:
+    """The floor as its graph lists it, reached with the CA `ca` and the operator
+    credential folder `credential`."""
+    from transfertwin.cps.opcua import load_credentials
+
+    if not graph.startswith("opc.tcp://") or not graph.rstrip("/").endswith("/KG"):
+        raise InputError(f"--graph {graph}: not the knowledge graph's endpoint "
+                         "(opc.tcp://HOST:PORT/transfertwin/KG)")  # fmt: skip
+    if ca is None or credential is None:
+        raise InputError("--graph needs --ca (the floor's CA certificate) and --credential "
+                         "(an operator credential folder)")  # fmt: skip
+    folder = Path(credential)
+    missing = [f for f in CREDENTIAL_FILES if not (folder / f).is_file()]
+    if missing:
+        raise InputError(f"--credential {credential}: not an operator credential (no "
+                         f"{', '.join(missing)}; it holds {', '.join(CREDENTIAL_FILES)})")
+    try:
+        creds = load_credentials(folder / "credentials.json")
+        creds.for_role("operator")
+    except (ValueError, KeyError, OSError) as exc:
+        raise InputError(f"--credential {credential}: credentials.json holds no operator "
+                         f"user ({type(exc).__name__})") from None
+    info = {"assets": [{"id": "KG", "kind": "logical", "class": "knowledge_graph",
+                        "endpoint": graph.rstrip("/"), "standby": False}],
+            "cert_dir": str(folder.resolve()), "insecure": False, "graph": graph,
+            "server_trust_dir": str(_trust_folder(Path(ca))), "groups": None}  # fmt: skip
+    try:
+        status = json.loads(asyncio.run(call_asset(info, creds, "KG", "Status", timeout_s=10)))
+    except (OSError, TimeoutError, ConnectionError) as exc:
+        raise InputError(f"--graph {graph}: the knowledge graph is not answering "
+                         f"({type(exc).__name__})") from None
+    info["assets"] += [{"id": a["id"], "kind": a["kind"], "class": a["class"],
+                        "endpoint": a["address"], "standby": False}
+                       for a in status["assets"] if a["id"] != "KG" and a.get("address")]
+    return info, creds
+
+
+def _trust_folder(ca: Path) -> Path:
+    """A trust folder with the CA: `ca` itself when it is one, else a private folder of
+    this process holding the certificate file `ca` (as DER), removed at exit."""
+    from cryptography.hazmat.primitives.serialization import Encoding
+
+    from transfertwin.cps.opcua import read_certificate
+
+    if ca.is_dir():
+        return ca.resolve()
+    try:
+        cert = read_certificate(ca)
+    except (ValueError, OSError) as exc:
+        raise InputError(f"--ca {ca}: not a certificate ({exc})") from None
+    folder = Path(tempfile.mkdtemp(prefix="transfertwin-ca-"))
+    atexit.register(shutil.rmtree, folder, True)
+    (folder / "ca.der").write_bytes(cert.public_bytes(Encoding.DER))
+    return folder
 
 
 def run_client(wd: Path, coro_fn: Callable[[], Awaitable[T]]) -> T:

@@ -17,7 +17,13 @@ import time
 from pathlib import Path
 
 from transfertwin._errors import InputError
-from transfertwin.cli._cps_client import call_asset, load_info, text_table
+from transfertwin.cli._cps_client import (
+    add_access,
+    call_asset,
+    floor_access,
+    load_info,
+    text_table,
+)
 from transfertwin.cli._cps_ops import register as register_ops
 from transfertwin.cli._paths import out_dir
 
@@ -231,7 +237,7 @@ def _wait_online(wd: Path, expected: set[str], timeout_s: float, procs) -> set[s
                 raise InputError(f"asset {aid} exited with code {p.returncode} while the floor "
                                  f"started: {last} ({log})")
         try:
-            doc = floor_status(wd, with_objects=False)
+            doc = floor_status(str(wd), *load_info(wd), with_objects=False)
             online = {a["id"] for a in doc["assets"] if a["online"]}
         except (InputError, OSError, TimeoutError, ConnectionError):
             pass
@@ -363,32 +369,78 @@ def _serve_asset(cfg) -> None:
 
 
 def cmd_down(args: argparse.Namespace) -> int:
-    """Stop every asset process of a floor (SIGTERM: each announces its leave)."""
+    """Stop every asset of a floor: ``Shutdown`` over OPC UA to each asset the graph lists
+    online, the graph last (each announces its leave and ends its process), from any host.
+    On a floor of this host (``--workdir``) what did not stop is sent SIGTERM by its pid
+    file (the one-host fallback: an asset that does not answer), then killed after
+    ``--timeout``."""
     from transfertwin.cps import asset_pids, stop_floor
 
-    wd = Path(args.workdir)
-    pids = stop_floor(wd)
+    wd = Path(args.workdir) if args.workdir is not None else None
+    asked, refused = [], []
+    if wd is None or (wd / "cps.json").is_file():
+        _, info, creds = floor_access(args)
+        asked, refused = asyncio.run(_shutdown_floor(info, creds, args.timeout))
+    if wd is None:
+        print(f"stopped {len(asked)} assets over OPC UA"
+              + (f"; not answering: {', '.join(refused)}" if refused else ""))  # fmt: skip
+        return 0 if not refused else 1
     deadline = time.monotonic() + args.timeout
     while asset_pids(wd) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    pids = stop_floor(wd)  # the one-host fallback: by pid, what is still running
+    while asset_pids(wd) and time.monotonic() < deadline + args.timeout:
         time.sleep(0.2)
     left = asset_pids(wd)
     if left:  # what did not stop in time is killed (its state is on disk already)
         stop_floor(wd, signal.SIGKILL)
-    print(f"stopped {len(pids) - len(left)} asset processes"
+    print(f"stopped {len(asked) + len(pids) - len(left)} asset processes ({len(asked)} over "
+          f"OPC UA, {len(pids) - len(left)} by signal)"
           f"{f'; killed {sorted(left)} (no exit within {args.timeout:g} s)' if left else ''}")
     return 0
 
 
-def floor_status(wd: Path, *, with_objects: bool = True) -> dict:
+async def _shutdown_floor(info: dict, creds, timeout_s: float) -> tuple[list[str], list[str]]:
+    """``Shutdown`` every asset the graph lists online, then the graph once they have left
+    (or `timeout_s` passed); returns (the assets asked, those that did not answer)."""
+    from transfertwin.cps.node import LIFECYCLE
+
+    async def shut(aid: str) -> bool:
+        try:
+            await call_asset(info, creds, aid, "Shutdown", submodel=LIFECYCLE, timeout_s=5)
+        except Exception:
+            return False
+        return True
+
+    async def online() -> set[str]:
+        try:
+            doc = json.loads(await call_asset(info, creds, "KG", "Status", timeout_s=5))
+        except (OSError, TimeoutError, ConnectionError):
+            return set()
+        return {a["id"] for a in doc["assets"] if a["online"] and a["id"] != "KG"}
+
+    running = sorted(await online())
+    answers = await asyncio.gather(*(shut(a) for a in running))
+    asked = [a for a, ok in zip(running, answers, strict=True) if ok]
+    refused = [a for a, ok in zip(running, answers, strict=True) if not ok]
+    deadline = time.monotonic() + timeout_s
+    while set(asked) & await online() and time.monotonic() < deadline:
+        await asyncio.sleep(0.3)  # each announces its leave at the graph
+    if await shut("KG"):
+        asked.append("KG")
+    return asked, refused
+
+
+def floor_status(where: str, info: dict, creds, *, with_objects: bool = True) -> dict:
     """The floor as one document: assets (id, kind, class, address, pid, online, state)
-    from the knowledge graph, objects' locations from the TMS's ledger."""
-    info, creds = load_info(wd)
+    from the knowledge graph, objects' locations from the TMS's ledger (`where`, `info`,
+    `creds`: as `floor_access` gives them)."""
 
     async def ask() -> dict:
         try:
             doc = json.loads(await call_asset(info, creds, "KG", "Status", timeout_s=5))
         except (OSError, TimeoutError, ConnectionError) as exc:
-            raise InputError(f"{wd}: the floor is not running or not answering (its knowledge "
+            raise InputError(f"{where}: the floor is not running or not answering (its knowledge "
                              f"graph: {type(exc).__name__}); start it with 'transfertwin cps "
                              "up'") from None  # fmt: skip
         heard = {a["id"] for a in doc["assets"]}
@@ -456,14 +508,13 @@ def cmd_locate(args: argparse.Namespace) -> int:
     """Tell the TMS where an object whose place is unknown lies."""
     from transfertwin.cps.opcua import OperationRefused
 
-    wd = Path(args.workdir)
-    info, creds = load_info(wd)
+    where, info, creds = floor_access(args)
     try:
         asyncio.run(call_asset(info, creds, "TMS", "Locate", args.object, args.at))
     except OperationRefused as exc:
         raise InputError(f"the TMS refused: {exc.reason}") from None
     except (OSError, TimeoutError, ConnectionError) as exc:
-        raise InputError(f"{wd}: the TMS is not answering ({type(exc).__name__})") from None
+        raise InputError(f"{where}: the TMS is not answering ({type(exc).__name__})") from None
     print(f"{args.object} is at {args.at}")
     return 0
 
@@ -480,14 +531,14 @@ def register(csub: argparse._SubParsersAction) -> None:
                         "exits")  # fmt: skip
     p.add_argument("--log-dir", help="where forked assets write <id>.log")
     p.set_defaults(func=cmd_asset)
-    p = csub.add_parser("down", help="stop every asset process of a floor")
-    p.add_argument("--workdir", required=True)
+    p = csub.add_parser("down", help="stop every asset of a floor (Shutdown over OPC UA)")
+    add_access(p)
     p.add_argument("--timeout", type=float, default=20.0,
                    help="seconds to wait for each to leave before killing it (default 20)")
     p.set_defaults(func=cmd_down)
     p = csub.add_parser("locate", help="say where an object lies (its place unknown, or a module "
                         "still carries it by its own record)")
-    p.add_argument("--workdir", required=True)
+    add_access(p)
     p.add_argument("--object", required=True)
     p.add_argument("--at", required=True, help="transfer unit or transport module")
     p.set_defaults(func=cmd_locate)
@@ -499,7 +550,7 @@ def register(csub: argparse._SubParsersAction) -> None:
 ORDER_FAILED = 3
 
 
-def floor_order(wd: Path, info: dict, creds, args: argparse.Namespace) -> int:
+def floor_order(where: str, info: dict, creds, args: argparse.Namespace) -> int:
     """`cps order` on a process floor: submit to the TMS (the source found in its ledger
     when --from is left out), then follow the operation's history to its end, across a
     restart of the TMS. Exit 0 when delivered, `ORDER_FAILED` when it failed."""
@@ -510,8 +561,9 @@ def floor_order(wd: Path, info: dict, creds, args: argparse.Namespace) -> int:
         objects = sorted(a for a, c in by_id.items() if c == "object")
         raise InputError(f"--object {args.object}: not an object of this floor; objects: "
                          f"{', '.join(objects)}")  # fmt: skip
-    groups = [g for g, _ in info.get("groups", [])]
-    if by_id.get(args.target) != "transfer_unit" and args.target not in groups:
+    groups = [g for g, _ in info.get("groups") or []]
+    known = info.get("groups") is not None  # from elsewhere: the TMS checks the groups
+    if by_id.get(args.target) != "transfer_unit" and args.target not in groups and known:
         units = sorted(a for a, c in by_id.items() if c == "transfer_unit")
         raise InputError(f"--to {args.target}: no such transfer unit; units: {', '.join(units)}"
                          + (f"; destination groups: {', '.join(groups)}" if groups else ""))
@@ -534,7 +586,7 @@ def floor_order(wd: Path, info: dict, creds, args: argparse.Namespace) -> int:
     try:
         op, source = asyncio.run(submit())
     except (OSError, TimeoutError, ConnectionError) as exc:
-        raise InputError(f"{wd}: the TMS is not answering ({type(exc).__name__})") from None
+        raise InputError(f"{where}: the TMS is not answering ({type(exc).__name__})") from None
     print(f"submitted {op}: {args.object} {source} -> {args.target}", flush=True)
     deadline = time.monotonic() + args.timeout
     shown = 0

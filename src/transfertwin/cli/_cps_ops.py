@@ -7,25 +7,24 @@ import argparse
 import asyncio
 import json
 import time
-from pathlib import Path
 
 from transfertwin._errors import InputError
-from transfertwin.cli._cps_client import call_asset, load_info, text_table
+from transfertwin.cli._cps_client import add_access, call_asset, floor_access, text_table
 
 __all__ = ["cmd_kpis", "cmd_orders", "register"]
 
 
-def _ask(wd: Path, op: str) -> object:
-    info, creds = load_info(wd)
+def _ask(args: argparse.Namespace, op: str) -> object:
+    where, info, creds = floor_access(args)
     try:
         return json.loads(asyncio.run(call_asset(info, creds, "TMS", op, timeout_s=10)))
     except (OSError, TimeoutError, ConnectionError) as exc:
-        raise InputError(f"{wd}: the TMS is not answering ({type(exc).__name__})") from None
+        raise InputError(f"{where}: the TMS is not answering ({type(exc).__name__})") from None
 
 
 def cmd_orders(args: argparse.Namespace) -> int:
     """List the order queue: every order with its state and, when it failed, the reason."""
-    orders = _ask(Path(args.workdir), "Orders")
+    orders = _ask(args, "Orders")
     if args.json:
         print(json.dumps(orders, indent=2))
         return 0
@@ -44,7 +43,7 @@ def cmd_orders(args: argparse.Namespace) -> int:
 def cmd_kpis(args: argparse.Namespace) -> int:
     """Print the floor's KPIs (operations per hour, success share and its interval, lead
     time, utilisation, failures by reason)."""
-    k = _ask(Path(args.workdir), "Kpis")
+    k = _ask(args, "Kpis")
     if args.json:
         print(json.dumps(k, indent=2))
         return 0
@@ -62,6 +61,9 @@ def cmd_kpis(args: argparse.Namespace) -> int:
         print(f"utilisation of the {kind}: {util}")
     reasons = ", ".join(f"{r}: {n}" for r, n in k["failed_by_reason"].items()) or "none"
     print(f"failed by reason: {reasons}")
+    if k.get("predictions_unanswered"):
+        print(f"orders planned without a prediction (the Experiment Manager did not answer): "
+              f"{k['predictions_unanswered']}")
     return 0
 
 
@@ -71,6 +73,6 @@ def register(csub: argparse._SubParsersAction) -> None:
                              ("kpis", cmd_kpis, "operations per hour, success share, lead "
                                                 "time, utilisation, failures by reason")):
         p = csub.add_parser(name, help=text)
-        p.add_argument("--workdir", required=True)
+        add_access(p)
         p.add_argument("--json", action="store_true", help="one JSON document")
         p.set_defaults(func=func)

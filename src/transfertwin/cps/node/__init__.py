@@ -18,8 +18,15 @@ if TYPE_CHECKING:
         default_lease,
         directory_reply,
         heartbeat_period,
+        instance_id,
     )
-    from transfertwin.cps.node._node import AssetNode, RoleFactory, heartbeat_payload
+    from transfertwin.cps.node._node import (
+        LIFECYCLE,
+        SHUTDOWN,
+        AssetNode,
+        RoleFactory,
+        heartbeat_payload,
+    )
     from transfertwin.cps.node._peers import Peers
     from transfertwin.cps.node._role import Role
     from transfertwin.cps.node._state import NodeState
@@ -27,7 +34,9 @@ if TYPE_CHECKING:
 __all__ = [
     "DEFAULT_LEASE_S",
     "HEARTBEATS_PER_S",
+    "LIFECYCLE",
     "NO_LEASE",
+    "SHUTDOWN",
     "AssetNode",
     "ModuleHost",
     "NodeState",
@@ -39,6 +48,7 @@ __all__ = [
     "directory_reply",
     "heartbeat_payload",
     "heartbeat_period",
+    "instance_id",
 ]
 
 __getattr__, __dir__ = lazy_exports(__name__, __file__)

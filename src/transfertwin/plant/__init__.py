@@ -4,12 +4,14 @@
 simulation whose parameters the twin never sees and returns rows like the real calibration
 table (`PLANT_COLUMNS`). The package sits above `transfertwin.study` in the layering, so no
 calibration, study or validation code can import it; `transfertwin.rehearsal` drives both.
+`reveal_truth` hands the hidden values to what scores a rehearsal afterwards (its report).
 """
 
 from transfertwin.plant._mismatch import MISMATCH_PARTS, PLANT_KINDS
 from transfertwin.plant._physics import PlantPhysics
 from transfertwin.plant._plant import PLANT_COLUMNS, EmulatedPlant, MassReading, PlantRequest
 from transfertwin.plant._recording import CAMERA_RESOLUTION, PlantRecording
+from transfertwin.plant._reveal import HiddenObject, HiddenScene, PlantTruth, reveal_truth
 from transfertwin.plant._secret import PLANT_SEED_FILE, read_plant_seed, write_plant_seed
 
 __all__ = [
@@ -19,10 +21,14 @@ __all__ = [
     "PLANT_KINDS",
     "PLANT_SEED_FILE",
     "EmulatedPlant",
+    "HiddenObject",
+    "HiddenScene",
     "MassReading",
     "PlantPhysics",
     "PlantRecording",
     "PlantRequest",
+    "PlantTruth",
     "read_plant_seed",
+    "reveal_truth",
     "write_plant_seed",
 ]

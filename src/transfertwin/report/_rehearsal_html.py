@@ -1,9 +1,11 @@
-"""Self-contained HTML pages of a rehearsal (`transfertwin rehearse`, issues 12 and 30).
+"""Self-contained HTML pages of a rehearsal (`transfertwin rehearse`).
 
-One rehearsal's page reads like the study's report: what was done, what it found in words
-(held-out F0.5 with intervals and, with few rows, that a change is not significant), the
-figure (`plot_rehearsal`), the tables, and the configuration folded away. Several K get a
-curve page (`write_rehearsal_curve_report`).
+One rehearsal's page reads like the study's report: what was done, what the two scores
+mean, what it found in words (held-out F0.5 and Brier score with intervals; with few rows,
+that a change is not significant; a plain verdict when calibration made the twin worse),
+the figure (`plot_rehearsal`), the tables (the thresholded decisions of ``rehearsal.json``
+among them), the plant's hidden truth beside the fitted proxy (`_rehearsal_truth`), and
+the configuration folded away. Several K get a curve page (`write_rehearsal_curve_report`).
 """
 
 from __future__ import annotations
@@ -14,6 +16,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from transfertwin._atomic import write_atomic
+from transfertwin._errors import InputError
+from transfertwin.plant import PLANT_SEED_FILE, PlantTruth, read_plant_seed, reveal_truth
 from transfertwin.report._figure import figure_png, new_figure
 from transfertwin.report._rehearsal_plots import (
     SMALL_HELD_OUT,
@@ -21,6 +25,13 @@ from transfertwin.report._rehearsal_plots import (
     f05_change_text,
     plot_rehearsal,
     rehearsal_plot_data,
+)
+from transfertwin.report._rehearsal_truth import (
+    COUNTER_MEASURE_TEXT,
+    metrics_html,
+    thresholded_html,
+    truth_html,
+    verdict_html,
 )
 
 __all__ = [
@@ -56,8 +67,15 @@ def _table(head: tuple[str, ...], rows: list[list[object]]) -> str:
 
 def _ablation_section(doc: Mapping[str, object]) -> str:
     ablations: Mapping[str, Mapping[str, object]] = doc.get("ablations") or {}  # type: ignore[assignment]
-    measures = ", ".join(doc.get("counter_measures", [])) or "none"  # type: ignore[arg-type]
-    out = f"<h2>Counter-measures</h2><p>The twin runs with: {html.escape(measures)}.</p>"
+    names: list[str] = list(doc.get("counter_measures", []))  # type: ignore[call-overload]
+    items = "".join(
+        f"<li><b>{html.escape(m)}</b>: {COUNTER_MEASURE_TEXT.get(m, '')}</li>" for m in names
+    )
+    out = (
+        "<h2>Counter-measures</h2><p>Steps the twin takes against the known causes of "
+        "its gap to the plant; this twin runs with "
+        + (f"these:</p><ul>{items}</ul>" if names else "none.</p>")
+    )
     if not ablations:
         return out
     rows: list[list[object]] = [
@@ -189,7 +207,7 @@ _PAGE_STYLE = (
     "color:#222;line-height:1.45}h1{margin-bottom:0.1em}.lead{color:#555;margin-top:0.2em}"
     "table{border-collapse:collapse;margin:0.6em 0 1.2em}"
     "td,th{border:1px solid #ccc;padding:4px 8px;text-align:left;vertical-align:top}"
-    "th{background:#f0f0f0}.warn{color:#8a4b00}"
+    "th{background:#f0f0f0}.warn{color:#8a4b00}.ok{color:#1d6b1d}"
     "details{margin:0.8em 0;border:1px solid #ddd;border-radius:4px;padding:0.4em 0.8em}"
     "summary{cursor:pointer;font-weight:600}"
     "figure{margin:1.2em 0 2em}figcaption{color:#444;font-size:0.93em;max-width:60em}"
@@ -246,15 +264,18 @@ def _findings(doc: Mapping[str, object], data: RehearsalPlot) -> str:
     best = ", ".join(doc.get("significant_best_objects") or []) or "none"  # type: ignore[arg-type]
     worst = ", ".join(doc.get("significant_worst_objects") or []) or "none"  # type: ignore[arg-type]
     small = data.held_out < SMALL_HELD_OUT
+    brier = [doc.get(f"scores_{w}", {}).get("brier") for w in ("before", "after")]  # type: ignore[union-attr]
+    brier_text = ""
+    if None not in brier:
+        brier_text = (f" Brier score: before {float(brier[0]):.3f}, after "
+                      f"{float(brier[1]):.3f} (lower is better).")  # fmt: skip
     items = [
         f"Held-out F0.5: before calibration {before.f05:.3f} {_ci_text(before.ci)}, after "
-        f"{after.f05:.3f} {_ci_text(after.ci)}; {f05_change_text(data)}."
+        f"{after.f05:.3f} {_ci_text(after.ci)}; {f05_change_text(data)}.{brier_text}"
         + (" <span class='warn'>Score on more rows (<code>--test-experiments H</code>) "
            "before reading a change into these numbers.</span>" if small else ""),
-        f"F0.5 counts precision twice as much as recall: a predicted success that fails "
-        f"costs more than a missed one. 1 is perfect; always predicting success scores "
-        f"{base.f05:.3f} {_ci_text(base.ci)} on these rows, so the twin is useful only above "
-        "that.",
+        f"Always predicting success scores F0.5 {base.f05:.3f} {_ci_text(base.ci)} on these "
+        "rows, so the twin is useful only above that.",
         f"Validation of the best/worst states: twin and plant differ significantly for the "
         f"best state of {doc['significant_best']}/{n} objects ({html.escape(best)}) and the "
         f"worst of {doc['significant_worst']}/{n} ({html.escape(worst)}).",
@@ -262,7 +283,13 @@ def _findings(doc: Mapping[str, object], data: RehearsalPlot) -> str:
     note = _power_note(data)
     if note:
         items.append(f"<span class='warn'>{html.escape(note)}</span>")
-    return "<h2>What it found</h2><ul>" + "".join(f"<li>{t}</li>" for t in items) + "</ul>"
+    return (
+        "<h2>What it found</h2>"
+        + verdict_html(doc)
+        + "<ul>"
+        + "".join(f"<li>{t}</li>" for t in items)
+        + "</ul>"
+    )
 
 
 def _power_note(data: RehearsalPlot) -> str:
@@ -319,10 +346,38 @@ def _config_details(doc: Mapping[str, object]) -> str:
     )
 
 
-def write_rehearsal_report(doc: Mapping[str, object], out_dir: str | Path) -> Path:
+def _truth_beside(doc: Mapping[str, object], out_dir: Path) -> PlantTruth | None:
+    """The hidden truth of the plant whose seed lies in ``out_dir/plant.secret`` (None
+    without that file or when it cannot be read)."""
+    secret = out_dir / PLANT_SEED_FILE
+    if not secret.is_file():
+        return None
+    cfg: Mapping[str, object] = doc.get("config") or {}  # type: ignore[assignment]
+    try:
+        return reveal_truth(
+            read_plant_seed(secret), list(doc.get("objects") or ()),  # type: ignore[call-overload]
+            kind=str(cfg.get("plant_kind", "in-class")),
+            mismatch_off=tuple(cfg.get("mismatch_off", ()) or ()),  # type: ignore[call-overload]
+        )  # fmt: skip
+    except InputError:
+        return None
+
+
+def write_rehearsal_report(
+    doc: Mapping[str, object], out_dir: str | Path, *, truth: PlantTruth | None = None
+) -> Path:
     """Write ``report.html`` (and ``rehearsal.png``) for a ``rehearsal.json`` document:
-    what was done, what it found in words (with the small-n caveats), the figure, the
-    tables, and the configuration folded away."""
+    what was done, the two scores explained, what it found in words (with the small-n
+    caveats and a verdict when calibration made things worse), the figure, the tables,
+    the hidden truth beside the fitted proxy, and the configuration folded away.
+
+    Args:
+        doc: The ``rehearsal.json`` document.
+        out_dir: Where the page goes (the rehearsal's folder).
+        truth: The plant's hidden truth; by default revealed from the seed in
+            ``out_dir/plant.secret`` when that file is there.
+    """
+    truth = truth if truth is not None else _truth_beside(doc, Path(out_dir))
     data = rehearsal_plot_data(doc)
     png = figure_png(plot_rehearsal(data))
     scores = [
@@ -340,6 +395,7 @@ def write_rehearsal_report(doc: Mapping[str, object], out_dir: str | Path) -> Pa
         "<p class='lead'>The study's procedure — calibrate, predict, validate — tried "
         "against a plant whose truth is known.</p>"
         + _what_was_done(doc)
+        + metrics_html()
         + _findings(doc, data)
         + "<figure><img alt='held-out F0.5 before/after calibration; best/worst states, "
         f"twin vs plant' src='data:image/png;base64,{base64.b64encode(png).decode()}'>"
@@ -350,8 +406,10 @@ def write_rehearsal_report(doc: Mapping[str, object], out_dir: str | Path) -> Pa
         "0.</figcaption></figure>"
         "<h2>Held-out plant experiments</h2>"
         + _table(("predictor", "F0.5 [95 %]", "precision", "recall", "Brier"), scores)
+        + thresholded_html(doc)
         + "<h2>Object calibration (proxies, not scans)</h2>"
         + _table(_CALIBRATION_HEAD, _calibration_rows(objects))
+        + truth_html(doc, truth)
         + "<h2>Validation: best/worst states</h2>"
         + _table(_STATES_HEAD, _state_rows(data))
         + _ablation_section(doc)

@@ -118,3 +118,84 @@ def test_the_cli_line_says_the_small_n_caveat_and_names_the_report(tmp_path: Pat
     assert "on 12 held-out rows before 0.897, after 0.806" in line
     assert "not significant (the interval holds 0)" in line
     assert line.splitlines()[-1].strip().startswith(f"report: {tmp_path / 'report.html'}")
+
+
+def test_both_scores_are_explained_and_brier_stands_beside_f05(tmp_path: Path) -> None:
+    page = write_rehearsal_report(DOC, tmp_path).read_text(encoding="utf-8")
+    assert "<b>F0.5</b> scores the twin's yes/no predictions" in page
+    assert "<b>Brier score</b> scores the twin's probabilities" in page
+    found = page[page.index("What it found") :]
+    assert "after 0.806 [0.58, 0.95]" in found
+    assert "Brier score: before 0.042, after 0.167 (lower is better)" in found
+
+
+def test_a_calibration_that_made_things_worse_gets_a_plain_verdict(tmp_path: Path) -> None:
+    page = write_rehearsal_report(DOC, tmp_path).read_text(encoding="utf-8")
+    assert (
+        "Calibration made the twin worse on these rows</b>: F0.5 fell from 0.897 to 0.806 "
+        "and the Brier score rose from 0.042 to 0.167"
+    ) in page
+    # 28 training rows over 2 objects x 2 faces: about 7 outcomes per face's depth.
+    assert "With 28 calibration experiments for 2 objects" in page
+    assert "about 7 yes/no outcomes" in page
+    better = {**DOC, "f05_after": 0.95, "scores_after": {**DOC["scores_after"], "brier": 0.03}}
+    page = write_rehearsal_report(better, tmp_path / "b").read_text(encoding="utf-8")
+    assert "made the twin worse" not in page
+
+
+def test_the_thresholded_block_is_shown(tmp_path: Path) -> None:
+    block = {
+        "threshold_before": 0.5, "threshold_after": 0.75,
+        "threshold_source": "chosen on the 28 training rows (best F0.5 there)",
+        "f05_before": 0.9, "f05_before_ci": [0.7, 1.0], "brier_before": 0.0417,
+        "brier_before_ci": [0.0, 0.125], "f05_after": 0.8, "f05_after_ci": [0.55, 0.95],
+        "brier_after": 0.1667, "brier_after_ci": [0.04, 0.33], "f05_delta": -0.1,
+        "f05_delta_ci": [-0.3, 0.05], "brier_delta": 0.125, "brier_delta_ci": [0.0, 0.29],
+    }  # fmt: skip
+    page = write_rehearsal_report({**DOC, "thresholded": block}, tmp_path).read_text("utf-8")
+    assert "<h2>Decisions at a threshold</h2>" in page
+    assert "chosen on the 28 training rows (best F0.5 there)" in page
+    assert "<td>twin after calibration</td><td>0.75</td><td>0.800 [0.55, 0.95]</td>" in page
+    assert "<td>0.167 [0.04, 0.33]</td>" in page
+    assert "<td>after − before</td><td></td><td>-0.100 [-0.30, 0.05]</td>" in page
+    assert "+0.125 [0.00, 0.29]" in page
+
+
+def test_the_counter_measures_are_explained(tmp_path: Path) -> None:
+    page = write_rehearsal_report(DOC, tmp_path).read_text(encoding="utf-8")
+    assert "<b>mass</b>: each core is weighed and balanced" in page
+    assert "<b>stability</b>: a run with an implausible event" in page
+    assert "<b>compliance</b>: the proxy's features yield" in page
+
+
+def test_the_hidden_truth_stands_beside_the_fitted_proxy(tmp_path: Path) -> None:
+    """Plant seed 1 (plant.secret beside the record) hides o3 front 17.0 mm, back 12.6 mm,
+    o7 front plain, back 10.1 mm, μ 0.4385, gap 15.86 mm; calibration fitted o3 front 8,
+    back 16, o7 front 0, back 24 mm from the candidates 0, 8, 16, 24, 32."""
+    from transfertwin.plant import PLANT_SEED_FILE, write_plant_seed
+
+    write_plant_seed(tmp_path / PLANT_SEED_FILE, 1)
+    page = write_rehearsal_report(DOC, tmp_path).read_text(encoding="utf-8")
+    truth = page[page.index("<h2>Hidden truth and fitted proxy</h2>") :]
+    rows = dict(
+        ((m[0], m[1]), m[2:])
+        for m in re.findall(
+            r"<tr><td>(o\d)</td><td>(front|back)</td><td>([\d.]+) mm[^<]*</td>"
+            r"<td>([\d.]+) mm</td><td>(.*?)</td></tr>",
+            truth,
+        )
+    )
+    assert rows[("o3", "front")][:2] == ("17.0", "8")
+    assert "missed by 9 mm" in rows[("o3", "front")][2]
+    assert "the candidate 16 mm was closer" in rows[("o3", "front")][2]
+    assert "recovered" in rows[("o3", "back")][2]  # 16 against 12.6: within 4 mm
+    assert "recovered" in rows[("o7", "front")][2] and rows[("o7", "front")][0] == "0.0"
+    assert "missed by 14 mm" in rows[("o7", "back")][2]
+    assert "<td>friction μ</td><td>0.439</td><td>not tuned" in truth
+    assert "<td>gap</td><td>15.9 mm</td><td>not tuned (the default scene has 11.9 mm)" in truth
+    assert "<td>3.012 kg</td><td>3.022 kg</td>" in truth  # o3: true mass beside the scale's
+
+
+def test_without_the_plant_seed_the_page_says_the_truth_is_unknown(tmp_path: Path) -> None:
+    page = write_rehearsal_report(DOC, tmp_path).read_text(encoding="utf-8")
+    assert "is not beside this record, so its hidden truth cannot be shown" in page

@@ -61,7 +61,8 @@ EXPECTED_ELEMENTS = {
             "AssetId", "AssetClass", "AssetKind", "PhysicalType", "Provenance", "ModelOf",
         ],
         "Capabilities": [],
-        "OperationalData": ["PossessedBy", "Face", "Conveyor", "Theta"],
+        "OperationalData": ["PossessedBy", "Face", "Conveyor", "Theta", "LastTransfer",
+                            "TransferHistoryJson"],
     },
     "TMS": {
         "Identification": ["AssetId", "AssetClass", "AssetKind", "Provenance"],
@@ -259,7 +260,8 @@ def test_control_interface_follows_table_3_1(ptype: PhysicalType, operations: li
 def test_externally_synced_properties_follow_table_3_1() -> None:
     reps = {a: build_representation(DEMO[a]) for a in ("TU_A", "TM_1", "o1", "PropS")}
     assert externally_synced(reps["TU_A"]) == {"PossessedObjects", "DockedTransportModule"}
-    assert externally_synced(reps["o1"]) == {"PossessedBy", "Face", "Conveyor", "Theta"}
+    assert externally_synced(reps["o1"]) == {"PossessedBy", "Face", "Conveyor", "Theta",
+                                             "LastTransfer", "TransferHistoryJson"}
     assert externally_synced(reps["TM_1"]) == frozenset()
     assert externally_synced(reps["PropS"]) == frozenset()
 

@@ -32,6 +32,7 @@ from transfertwin.cps.aas._elements import (
     text_property,
 )
 from transfertwin.cps.aas._export import EXPORT_SUFFIXES, export_aas, read_export, validate_export
+from transfertwin.cps.aas._objects import HISTORY_LIMIT, object_properties
 from transfertwin.cps.aas._representation import (
     PROVENANCE_ELEMENTS,
     AssetRepresentation,
@@ -59,6 +60,7 @@ __all__ = [
     "DEMO_PLACEMENT",
     "DEMO_STATIONS",
     "EXPORT_SUFFIXES",
+    "HISTORY_LIMIT",
     "ID_BASE",
     "LOGICAL_CLASSES",
     "ONTOLOGY",
@@ -87,6 +89,7 @@ __all__ = [
     "element_reference",
     "export_aas",
     "externally_synced",
+    "object_properties",
     "operation",
     "physical_twin",
     "property_",

@@ -137,9 +137,29 @@ OPERATIONAL_DATA: Mapping[str, tuple[PropertySpec, ...]] = MappingProxyType(
         ),
         "object": (
             PropertySpec("PossessedBy", _S, "", description="Id of the possessing asset."),
-            PropertySpec("Face", _S, "", description="Face resting on the belts."),
-            PropertySpec("Conveyor", _S, "", description="Conveyor (belt) it lies on."),
-            PropertySpec("Theta", _D, 0.0, "rad", description="Yaw on the belts."),
+            PropertySpec(
+                "Face", _S, "", description="Face it rested on in its latest transfer (Eq. 5.5)."
+            ),
+            PropertySpec(
+                "Conveyor", _S, "", description="Conveyor of its latest transfer (Eq. 5.6)."
+            ),
+            PropertySpec(
+                "Theta", _D, 0.0, "rad", description="Yaw of its latest transfer (Eq. 5.4)."
+            ),
+            PropertySpec(
+                "LastTransfer",
+                _S,
+                "",
+                description="Outcome of its last finished transfer (delivered, failed at "
+                "pick-up, ...), '' before any.",
+            ),
+            PropertySpec(
+                "TransferHistoryJson",
+                _S,
+                "[]",
+                description="Its finished transfers, oldest first, as JSON (operation, "
+                "source, target, module, outcome, face, conveyor, theta_deg, times).",
+            ),
         ),
         "transport_module_system": (
             _state(),

@@ -27,6 +27,7 @@ import logging
 import time
 from typing import TYPE_CHECKING, Any
 
+from transfertwin.cps.aas import object_properties
 from transfertwin.cps.dispatch import (
     DEFAULT_STATE,
     ON_THE_FLY_THETA_STEP,
@@ -377,6 +378,7 @@ class TmsRole(Role):
         module = self.ops[op_id].get("module")
         if module:
             self._claimed.pop(module, None)
+        self.book.pending.add(self.ops[op_id]["object"])  # its AAS shows the outcome
         self._done.setdefault(op_id, asyncio.Event()).set()
         self.node.spawn(self._counters())
 
@@ -400,8 +402,9 @@ class TmsRole(Role):
         await self.set("KpisJson", json.dumps(k))
 
     async def _publisher(self) -> None:
-        """Bring the units' possessions and the objects' PossessedBy in line with the
-        ledger, retrying whatever could not be written (an asset that is away)."""
+        """Bring the units' possessions and the objects' PossessedBy (and what their AAS
+        shows of their transfers, `object_properties`) in line with the ledger, retrying
+        whatever could not be written (an asset that is away)."""
         units = set(self.node.floor.units)
         while True:
             for aid in sorted(self.book.pending):
@@ -415,6 +418,8 @@ class TmsRole(Role):
                         lost = aid in self.book.data["unknown"]
                         where = "" if lost else self.ledger.location(aid)
                         await asyncio.wait_for(self.node.peers.write(aid, "PossessedBy", where), 5)
+                        for prop, value in object_properties(aid, self.ops.values()).items():
+                            await asyncio.wait_for(self.node.peers.write(aid, prop, value), 5)
                     self.book.pending.discard(aid)
                 except Exception as exc:
                     log.debug("TMS: %s not updated yet: %s", aid, exc)

@@ -168,12 +168,16 @@ class ObjectRole(Role):
 
     async def start(self) -> None:
         await self.set("PossessedBy", self.state.data["possessed_by"])
+        for prop, value in self.state.data.get("shown", {}).items():  # face, history, ...
+            await self.set(prop, value)
         self.node.server.on_client_write(self._written)
 
     def _written(self, submodel: str, prop: str, value: object) -> None:
         if prop == "PossessedBy":
             self.state.data["possessed_by"] = str(value)
-            self.state.save()
+        else:
+            self.state.data.setdefault("shown", {})[prop] = value
+        self.state.save()
 
     async def live(self) -> dict[str, Any]:
         return {"state": "idle", "location": self.state.data["possessed_by"] or None}

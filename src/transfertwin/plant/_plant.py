@@ -8,8 +8,9 @@ perturbed location and scale; and a small probability that a recorded outcome is
 
 Its experiments E^P are simulations in its own hidden scene. The twin sees only what a real
 plant's log shows: one row per experiment with the columns of the real calibration table
-(`PLANT_COLUMNS`). The hidden parameters live in name-mangled slots; nothing public returns
-them (`fingerprint` is a hash, for reproducibility checks). Same seed and same requests →
+(`PLANT_COLUMNS`). The hidden parameters live in name-mangled slots; no method returns
+them (`fingerprint` is a hash, for reproducibility checks); what scores a rehearsal
+afterwards draws them again from the seed (`reveal_truth`). Same seed and same requests →
 same rows, bit for bit, with any number of workers.
 """
 

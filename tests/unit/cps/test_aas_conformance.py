@@ -31,37 +31,12 @@ from basyx.aas import model
 from basyx.aas.adapter import json as aas_json
 from basyx.aas.adapter import xml as aas_xml
 
+from tests.unit.cps._served import FLOORS, served
 from transfertwin.cli import main
-from transfertwin.cps.aas import AssetRepresentation, build_representation, operation
-from transfertwin.cps.floor import PROVENANCE, default_floor_spec, load_floor
-from transfertwin.cps.roles import RUN_TRANSFER
+from transfertwin.cps.aas import AssetRepresentation
 
-ROOT = Path(__file__).resolve().parents[3]
 XMLNS_31 = b"https://admin-shell.io/aas/3/1"
 XMLNS_30 = b"https://admin-shell.io/aas/3/0"
-
-
-def served(floor) -> list[AssetRepresentation]:
-    """Each asset's AAS as its node serves it: endpoint and provenance in Identification, a
-    plant unit's `RunTransfer` in its ControlInterface."""
-    reps = []
-    for port, desc in enumerate(floor.descriptors(), start=4840):
-        hal, _ = floor.hal_of(desc.asset_id)
-        rep = build_representation(
-            desc,
-            endpoint=f"opc.tcp://127.0.0.1:{port}/transfertwin/{desc.asset_id}",
-            provenance=PROVENANCE[hal],
-        )
-        if desc.asset_id.endswith("_P"):
-            rep.submodel("ControlInterface").submodel_element.add(operation(RUN_TRANSFER))
-        reps.append(rep)
-    return reps
-
-
-FLOORS = {
-    "demo-plant": lambda: default_floor_spec().with_hal("plant"),
-    "large": lambda: load_floor(ROOT / "examples" / "floor-large.toml", check_cores=False),
-}
 
 
 def store_of(reps: list[AssetRepresentation]) -> model.DictIdentifiableStore:

@@ -89,14 +89,17 @@ def property_(spec: PropertySpec, synced_by: str | None) -> model.Property:
     )
 
 
-def text_property(id_short: str, value: str, description: str = "") -> model.Property:
-    """An xs:string Property (Identification submodel)."""
+def text_property(
+    id_short: str, value: str, description: str = "", concept: str | None = None
+) -> model.Property:
+    """An xs:string Property (Identification submodel); its semantic id names `concept`
+    (default: `id_short`)."""
     return model.Property(
         id_short,
         model.datatypes.String,
         value,
         description=_text(description),
-        semantic_id=semantic(id_short),
+        semantic_id=semantic(concept or id_short),
     )
 
 

@@ -216,7 +216,8 @@ def _identification(
     if desc.physical_type is not None:
         props.append(text_property("PhysicalType", desc.physical_type.value, "Table 3.1 type."))
     if desc.station is not None:
-        props.append(text_property("Station", desc.station))
+        # tt:Station is the class of stations; the property names the asset's station
+        props.append(text_property("Station", desc.station, concept="StationId"))
     if provenance is not None and not provenance.strip():
         raise InputError(f"{desc.asset_id}: provenance, when given, must not be blank")
     props.append(text_property("Provenance", _PROVENANCE[desc.kind], provenance or ""))

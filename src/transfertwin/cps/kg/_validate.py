@@ -9,7 +9,10 @@ Shape rules (``data/ontology/shapes.ttl``; messages carry the id):
 * KG-5 a transfer unit is at exactly one ``tt:Station``;
 * KG-6 a transport module is docked at no more than one ``tt:TransferUnit``;
 * KG-7 an interface has exactly one ``tt:endpointUrl`` matching ``^opc\\.tcp://``;
-* KG-8 an object is located at (``tt:locatedAt``) no more than one asset.
+* KG-8 an object is located at (``tt:locatedAt``) no more than one asset;
+* KG-9 every concept an AAS names (``tt:AasConcept``) has a label and a ``skos:definition``
+  (a rule of the ontology itself: `tests/unit/cps/test_ontology.py` checks it);
+* KG-10 an asset's ``tt:hasCapability`` values are ``tt:Capability`` individuals.
 
 Beyond the shapes, a description must be about one asset whose IRI matches its id, be
 online, and state nothing about nodes other than the asset, its own interfaces (IRIs under
@@ -38,7 +41,7 @@ def _shapes() -> Graph:
 
 
 def first_violation(data: Graph, focus: set[URIRef] | None = None) -> str | None:
-    """Validate ``data`` against the shapes KG-1 … KG-8.
+    """Validate ``data`` against the shapes KG-1 … KG-10.
 
     Args:
         data: The data graph.

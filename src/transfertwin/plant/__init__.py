@@ -8,7 +8,7 @@ calibration, study or validation code can import it; `transfertwin.rehearsal` dr
 """
 
 from transfertwin.plant._mismatch import MISMATCH_PARTS, PLANT_KINDS
-from transfertwin.plant._physics import PlantPhysics
+from transfertwin.plant._physics import FLOOR_PLANT_KINDS, PlantPhysics
 from transfertwin.plant._plant import PLANT_COLUMNS, EmulatedPlant, MassReading, PlantRequest
 from transfertwin.plant._recording import CAMERA_RESOLUTION, PlantRecording
 from transfertwin.plant._reveal import HiddenObject, HiddenScene, PlantTruth, reveal_truth
@@ -16,6 +16,7 @@ from transfertwin.plant._secret import PLANT_SEED_FILE, read_plant_seed, write_p
 
 __all__ = [
     "CAMERA_RESOLUTION",
+    "FLOOR_PLANT_KINDS",
     "MISMATCH_PARTS",
     "PLANT_COLUMNS",
     "PLANT_KINDS",

@@ -14,11 +14,18 @@ Only the unit's process holds it, behind its HAL; nothing that process publishes
 from __future__ import annotations
 
 from transfertwin._errors import InputError
-from transfertwin.plant._plant import _system
+from transfertwin.plant._mismatch import draw_mismatch_scene, without_parts
+from transfertwin.plant._plant import _mismatch_object, _system
 from transfertwin.plant._truth import draw_object, draw_scene
 from transfertwin.sim import VirtualTransferSystem
 
-__all__ = ["PlantPhysics"]
+__all__ = ["FLOOR_PLANT_KINDS", "PlantPhysics"]
+
+#: The plant kinds a floor's modules can simulate: the in-class plant, and the mismatch plant
+#: (MuJoCo models with the structural differences of `transfertwin.plant._mismatch`). The
+#: 'bullet' plant is another engine, which the modules' MuJoCo environment (and its depth
+#: camera) cannot step: it runs in rehearsals only.
+FLOOR_PLANT_KINDS = ("in-class", "mismatch")
 
 
 class PlantPhysics:
@@ -26,15 +33,22 @@ class PlantPhysics:
 
     Args:
         seed: The plant seed (non-negative integer; never published).
+        kind: 'in-class' (default) or 'mismatch' (`FLOOR_PLANT_KINDS`): the plant
+            `EmulatedPlant(seed, kind)` runs its experiments on.
     """
 
-    __slots__ = ("__scene", "__seed")
+    __slots__ = ("__kind", "__mismatch", "__scene", "__seed")
 
-    def __init__(self, seed: int) -> None:
+    def __init__(self, seed: int, kind: str = "in-class") -> None:
         if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
             raise InputError(f"the plant seed must be a non-negative integer, got {seed!r}")
+        if kind not in FLOOR_PLANT_KINDS:
+            raise InputError(f"a floor's plant kind must be one of "
+                             f"{', '.join(FLOOR_PLANT_KINDS)}, got {kind!r}")  # fmt: skip
         self.__seed = seed
+        self.__kind = kind
         self.__scene = draw_scene(seed)
+        self.__mismatch = draw_mismatch_scene(seed) if kind == "mismatch" else None
 
     def __repr__(self) -> str:
         return "PlantPhysics(<hidden>)"
@@ -54,4 +68,8 @@ class PlantPhysics:
 
         if object_id not in set(builtin_ids()):
             raise InputError(f"the plant has no object {object_id} (it holds o1..o37)")
-        return _system(draw_object(self.__seed, object_id), self.__scene)
+        mismatch = None
+        if self.__mismatch is not None:
+            mismatch = without_parts(_mismatch_object(self.__seed, object_id),
+                                     self.__mismatch, frozenset())  # fmt: skip
+        return _system(draw_object(self.__seed, object_id), self.__scene, 0, mismatch)

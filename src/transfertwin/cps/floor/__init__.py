@@ -31,6 +31,7 @@ if TYPE_CHECKING:
     from transfertwin.cps.floor._plant_secret import (
         PLANT_SEED_FILE,
         check_plant_seed,
+        read_plant_kind,
         read_plant_seed,
         write_plant_seed,
     )
@@ -55,6 +56,7 @@ __all__ = [
     "load_asset_config",
     "load_floor",
     "parse_floor",
+    "read_plant_kind",
     "read_plant_seed",
     "write_asset_config",
     "write_plant_seed",

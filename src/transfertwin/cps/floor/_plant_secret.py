@@ -1,5 +1,7 @@
 """The emulated plant's seed, in a file of its own in the floor's work folder
-(``plant.secret``, owner-only): no asset file, status or log holds it."""
+(``plant.secret``, owner-only): no asset file, status or log holds it. The file names the
+plant's kind after the seed when it is not the in-class plant (``7 mismatch``): the seed
+and the kind together are the plant."""
 
 from __future__ import annotations
 
@@ -9,31 +11,44 @@ from pathlib import Path
 
 from transfertwin._errors import InputError
 
-__all__ = ["PLANT_SEED_FILE", "check_plant_seed", "read_plant_seed", "write_plant_seed"]
+__all__ = ["PLANT_SEED_FILE", "check_plant_seed", "read_plant_kind", "read_plant_seed",
+           "write_plant_seed"]  # fmt: skip
 
 #: What the plant seed file is called in a floor's work folder.
 PLANT_SEED_FILE = "plant.secret"
 
 
-def write_plant_seed(path: Path, seed: int) -> Path:
-    """Write the plant seed to `path`, readable by its owner only."""
+def write_plant_seed(path: Path, seed: int, kind: str = "in-class") -> Path:
+    """Write the plant seed (and a kind other than 'in-class') to `path`, readable by its
+    owner only."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
     with os.fdopen(fd, "w") as fh:
-        fh.write(f"{int(seed)}\n")
+        fh.write(f"{int(seed)}\n" if kind == "in-class" else f"{int(seed)} {kind}\n")
     os.chmod(path, stat.S_IRUSR | stat.S_IWUSR)
     return path
 
 
-def read_plant_seed(path: Path) -> int:
-    """The plant seed in `path` (InputError: missing or not a non-negative integer)."""
+def _read(path: Path) -> tuple[int, str]:
     try:
-        text = Path(path).read_text().strip()
+        words = Path(path).read_text().split()
     except OSError as exc:
         raise InputError(f"{path}: cannot read the plant seed file ({exc.strerror})") from None
-    if not text.isdigit():
-        raise InputError(f"{path}: the plant seed file must hold a non-negative integer")
-    return int(text)
+    if not 1 <= len(words) <= 2 or not words[0].isdigit():
+        raise InputError(f"{path}: the plant seed file must hold a non-negative integer "
+                         "(and optionally the plant's kind after it)")  # fmt: skip
+    return int(words[0]), words[1] if len(words) == 2 else "in-class"
+
+
+def read_plant_seed(path: Path) -> int:
+    """The plant seed in `path` (InputError: missing or not a non-negative integer)."""
+    return _read(path)[0]
+
+
+def read_plant_kind(path: Path) -> str:
+    """The plant's kind in `path`: 'in-class' unless the file names another after the
+    seed (checked where the plant is made)."""
+    return _read(path)[1]
 
 
 def check_plant_seed(seed: object) -> int:

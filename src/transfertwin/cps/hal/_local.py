@@ -20,7 +20,7 @@ import functools
 import logging
 from typing import TYPE_CHECKING
 
-from transfertwin.cps.floor import read_plant_seed
+from transfertwin.cps.floor import read_plant_kind, read_plant_seed
 from transfertwin.cps.hal._gateway import GatewayError, GatewayLink, gateway_refusal
 from transfertwin.cps.hal._gateway_module import GatewayWorld
 
@@ -55,7 +55,8 @@ def environment_for(cfg: AssetConfig, scene: SceneConfig):
         return GatewayWorld(scene)
     from transfertwin.plant import PlantPhysics
 
-    physics = PlantPhysics(read_plant_seed(cfg.hal.plant_seed_file))
+    seed_file = cfg.hal.plant_seed_file
+    physics = PlantPhysics(read_plant_seed(seed_file), read_plant_kind(seed_file))
 
     class PlantEnvironment(Environment):
         """`Environment` whose systems are the plant's (hidden scene, hidden objects)."""

@@ -31,6 +31,7 @@ import threading
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from transfertwin._errors import InputError
 from transfertwin.cps.aas import (
     Arg,
     AssetDescriptor,
@@ -38,7 +39,7 @@ from transfertwin.cps.aas import (
     demo_descriptors,
     physical_twin,
 )
-from transfertwin.cps.floor import check_plant_seed, read_plant_seed
+from transfertwin.cps.floor import check_plant_seed, read_plant_kind, read_plant_seed
 from transfertwin.cps.hal import load_scene
 from transfertwin.cps.opcua import OperationRefused
 from transfertwin.cps.roles._unit import UnitRole
@@ -120,14 +121,18 @@ class PhysicalPlant:
 
     Args:
         seed: The plant seed (draws every hidden parameter; not published).
+        kind: The plant's kind ('in-class' or 'mismatch', `FLOOR_PLANT_KINDS`).
     """
 
     __slots__ = ("__lock", "__plant")
 
-    def __init__(self, seed: int) -> None:
-        from transfertwin.plant import EmulatedPlant
+    def __init__(self, seed: int, kind: str = "in-class") -> None:
+        from transfertwin.plant import FLOOR_PLANT_KINDS, EmulatedPlant
 
-        self.__plant = EmulatedPlant(check_plant_seed(seed))
+        if kind not in FLOOR_PLANT_KINDS:
+            raise InputError(f"a floor's plant kind must be one of "
+                             f"{', '.join(FLOOR_PLANT_KINDS)}, got {kind!r}")  # fmt: skip
+        self.__plant = EmulatedPlant(check_plant_seed(seed), kind)
         self.__lock = threading.Lock()
 
     def __reduce__(self) -> None:  # type: ignore[override]
@@ -150,17 +155,17 @@ def _station(asset_id: str) -> str:
     return asset_id.removesuffix("_P")
 
 
-_PLANTS: dict[int, PhysicalPlant] = {}
+_PLANTS: dict[tuple[int, str], PhysicalPlant] = {}
 _PLANTS_LOCK = threading.Lock()
 
 
-def plant_for(seed: int) -> PhysicalPlant:
-    """This process's plant of `seed` (drawn once; fitting its docking model takes a few
-    seconds): every physical unit served here runs its cycles on it."""
+def plant_for(seed: int, kind: str = "in-class") -> PhysicalPlant:
+    """This process's plant of `seed` and `kind` (drawn once; fitting its docking model
+    takes a few seconds): every physical unit served here runs its cycles on it."""
     with _PLANTS_LOCK:
-        if seed not in _PLANTS:
-            _PLANTS[seed] = PhysicalPlant(seed)
-        return _PLANTS[seed]
+        if (seed, kind) not in _PLANTS:
+            _PLANTS[seed, kind] = PhysicalPlant(seed, kind)
+        return _PLANTS[seed, kind]
 
 
 class PlantUnitRole(UnitRole):
@@ -170,6 +175,7 @@ class PlantUnitRole(UnitRole):
     def __init__(self, node: AssetNode) -> None:
         super().__init__(node)
         self._seed = read_plant_seed(node.cfg.hal.plant_seed_file)
+        self._kind = read_plant_kind(node.cfg.hal.plant_seed_file)
         self._cycling = False
 
     def operations(self) -> tuple[OperationSpec, ...]:
@@ -182,7 +188,8 @@ class PlantUnitRole(UnitRole):
         await self.set("PossessedObjects", ",".join(self.state.data["possessed"]))
         await self.set("DockedTransportModule", self.state.data["docked"])
         self.node.server.on_client_write(self._written)
-        self.node.spawn(asyncio.to_thread(plant_for, self._seed))  # drawn before it is asked
+        # drawn before it is asked
+        self.node.spawn(asyncio.to_thread(plant_for, self._seed, self._kind))
 
     async def _set_belt(self, belt: str, speed: float) -> bool:
         if self._cycling:
@@ -195,7 +202,7 @@ class PlantUnitRole(UnitRole):
 
         if self._cycling:
             raise _refused(f"{self.aid} is running an experiment cycle")
-        plant = await asyncio.to_thread(plant_for, self._seed)
+        plant = await asyncio.to_thread(plant_for, self._seed, self._kind)
         if _station(self.aid) not in plant.stations:
             raise _refused(f"the plant has no station for {self.aid}")
         request = PlantRequest(obj, face, conveyor, int(theta_deg), _station(self.aid))

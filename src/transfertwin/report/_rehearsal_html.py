@@ -284,11 +284,11 @@ def _findings(doc: Mapping[str, object], data: RehearsalPlot) -> str:
     if note:
         items.append(f"<span class='warn'>{html.escape(note)}</span>")
     return (
-        "<h2>What it found</h2>"
+        "<section id='findings'><h2>What it found</h2>"
         + verdict_html(doc)
         + "<ul>"
         + "".join(f"<li>{t}</li>" for t in items)
-        + "</ul>"
+        + "</ul></section>"
     )
 
 

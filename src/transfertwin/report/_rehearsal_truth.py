@@ -207,8 +207,9 @@ def truth_html(doc: Mapping[str, object], truth: PlantTruth | None) -> str:
     """The hidden truth beside the fitted proxy (empty note when the seed is unknown)."""
     if truth is None:
         return (
-            "<h2>Hidden truth and fitted proxy</h2><p>The plant's seed (<code>plant.secret"
-            "</code>) is not beside this record, so its hidden truth cannot be shown.</p>"
+            "<section id='truth'><h2>Hidden truth and fitted proxy</h2><p>The plant's seed "
+            "(<code>plant.secret</code>) is not beside this record, so its hidden truth "
+            "cannot be shown.</p></section>"
         )
     struct = ""
     if truth.structural_parts:
@@ -219,7 +220,7 @@ def truth_html(doc: Mapping[str, object], truth: PlantTruth | None) -> str:
             + "); part of the gap is out of calibration's reach.</p>"
         )
     return (
-        "<h2>Hidden truth and fitted proxy</h2><p>The plant's seed, kept in "
+        "<section id='truth'><h2>Hidden truth and fitted proxy</h2><p>The plant's seed, kept in "
         "<code>plant.secret</code> beside this record, draws every hidden value; here they "
         "stand beside what calibration fitted. A proxy holds one box feature under each "
         "face's centre with a depth from the candidate list; the plant's feature may sit "
@@ -234,5 +235,5 @@ def truth_html(doc: Mapping[str, object], truth: PlantTruth | None) -> str:
         + "".join(_mass_rows(doc, truth))
         + "</table><table><tr><th>scene</th><th>hidden</th><th>twin</th></tr>"
         + "".join(_scene_rows(doc, truth))
-        + "</table>"
+        + "</table></section>"
     )

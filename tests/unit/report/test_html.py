@@ -235,3 +235,28 @@ def test_captions_are_in_words_and_the_source_figures_in_footnotes(tmp_path) -> 
         assert re.search(r"<sup><a href='#note-\d'>\d</a></sup>$", cap)
     notes = re.findall(r"<li id='note-(\d)'>After (Fig\. [\d./]+) of the source study", text)
     assert [src for _, src in notes] == ["Fig. 6.22", "Fig. 6.23", "Fig. 6.20/6.21", "Fig. 6.6/6.7"]
+
+
+def test_real_data_advice_for_o1_is_the_face_not_an_exact_state(tmp_path) -> None:
+    """The 191 real experiments: o1 went 25/31 front and 3/23 back, one run a state; the
+    advice is the face, and Alg. 1-4's exact pick (front, left, θ = -156°, 1/1) is only in
+    the formal table below it."""
+    import csv
+    from importlib import resources
+
+    with (
+        resources.files("transfertwin.data")
+        .joinpath("calibration_experiments.csv")
+        .open(encoding="utf-8") as fh
+    ):
+        real = [r for r in csv.DictReader(fh) if r["object_id"] == "o1"]
+    analysis = analyze(real)
+    text = write_report(tmp_path, analysis, {}).read_text(encoding="utf-8")
+    advice = _advice_of(text, "o1")
+    assert "<b>o1: Put it on its front face, on any conveyor, at any θ.</b>" in advice
+    assert "Face: decided: front 25/31 against back 3/23" in advice
+    best = analysis.selection_of("o1").best
+    assert (best.face, best.conveyor, best.theta_deg) == ("front", "left", -156)
+    assert "-156" not in advice
+    formal = text[text.index("formal answer") : text.index("<figure")]
+    assert "front, left, θ = -156°" in formal

@@ -54,10 +54,8 @@ def _options_text(lv: LevelDecision, values: tuple[str, ...]) -> str:
         head = f"{len(opts)} angles ({k}/{n} in all)"
         if k in (0, n):
             return f"{head}, every one {'succeeded' if k else 'failed'} every time"
-        lo = min(opts, key=lambda o: o.share)
-        hi = max(opts, key=lambda o: o.share)
-        return (f"{head}, from {lo.k}/{lo.n} at {_value('theta', lo.value)} to "
-                f"{hi.k}/{hi.n} at {_value('theta', hi.value)}")  # fmt: skip
+        lo, hi = min(o.share for o in opts), max(o.share for o in opts)
+        return f"{head}, shares {lo:.2f} to {hi:.2f}"
     return ", ".join(_count(lv.level, o) for o in opts)
 
 

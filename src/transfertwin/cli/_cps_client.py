@@ -138,11 +138,15 @@ def _remote_info(graph: str, ca: str | None, credential: str | None) -> tuple[di
                         "endpoint": graph.rstrip("/"), "standby": False}],
             "cert_dir": str(folder.resolve()), "insecure": False, "graph": graph,
             "server_trust_dir": str(_trust_folder(Path(ca))), "groups": None}  # fmt: skip
+    from asyncua import ua
+
     try:
         status = json.loads(asyncio.run(call_asset(info, creds, "KG", "Status", timeout_s=10)))
     except (OSError, TimeoutError, ConnectionError) as exc:
         raise InputError(f"--graph {graph}: the knowledge graph is not answering "
                          f"({type(exc).__name__})") from None
+    except ua.UaError as exc:  # not the floor's graph (its certificate), or refused us
+        raise InputError(f"--graph {graph}: {exc}") from None
     info["assets"] += [{"id": a["id"], "kind": a["kind"], "class": a["class"],
                         "endpoint": a["address"], "standby": False}
                        for a in status["assets"] if a["id"] != "KG" and a.get("address")]

@@ -239,6 +239,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="an emulated plant drawn from seed N (its parameters stay hidden): "
                         "every unit and module runs on it (hal = plant), and the plant's own "
                         "units (TU_<name>_P, kind physical) join beside them")  # fmt: skip
+    p.add_argument("--plant-kind", choices=("in-class", "mismatch"), default="in-class",
+                   help="with --plant-seed: the plant of the twin's own model class with hidden "
+                        "values (in-class, the default), or that plant with structural "
+                        "differences the twin cannot represent (mismatch)")  # fmt: skip
     p.add_argument("--floor", metavar="FLOOR",
                    help="a floor file (examples/floor-demo.toml), default 'demo', the built-in "
                         "floor; each asset on its own loopback address")
@@ -248,10 +252,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--detach", action="store_true",
                    help="exit once the floor is up and leave it running (stop it with "
                         "'cps down')")  # fmt: skip
-    p.add_argument("--prepare-only", action="store_true",
-                   help="write the work folder and every asset's bundle (W/assets/<id>) and "
-                        "start nothing: each bundle is copied to its host and started there "
-                        "('cps asset BUNDLE'; a floor file's [bind] gives its address)")
     p.add_argument("--lease", type=float, default=None,
                    help="seconds without a heartbeat before an asset counts as "
                         "offline (default 5 up to 66 assets, then 3 s per 40 assets: 15 at "

@@ -52,6 +52,8 @@ def _floor_to_run(args: argparse.Namespace):
     if args.lease is not None and not args.lease >= 0.5:
         raise InputError(f"--lease must be at least 0.5 s, got {args.lease}")
     floor = _with_operation(_floor_spec(args.floor), args.policy, args.study)
+    if args.plant_kind != "in-class" and args.plant_seed is None:
+        raise InputError("--plant-kind needs --plant-seed (the plant's hidden parameters)")
     if args.plant_seed is not None:  # every unit and module on the emulated plant
         from transfertwin.cps import check_plant_seed
 
@@ -82,12 +84,9 @@ def cmd_up_floor(args: argparse.Namespace) -> int:
     check_workdir(wd)
     configs = prepare_floor(floor, wd, insecure=args.insecure, seed=args.seed,
                             time_scale=args.time_scale, docking=args.docking,
-                            lease_s=args.lease, plant_seed=args.plant_seed)  # fmt: skip
+                            lease_s=args.lease, plant_seed=args.plant_seed,
+                            plant_kind=args.plant_kind)  # fmt: skip
     write_floor_info(wd, configs, floor)
-    if args.prepare_only:  # each bundle goes to its host and starts there
-        print(f"floor {floor.name} prepared: {len(configs)} bundles in {wd / 'assets'}; start "
-              "each on its host with 'transfertwin cps asset BUNDLE'", flush=True)  # fmt: skip
-        return 0
     t0 = time.monotonic()
     standby = floor.standby()
     procs = launch(configs, wd, skip=standby)
@@ -131,10 +130,9 @@ def cmd_up_local(args: argparse.Namespace) -> int:
     and cps.json as a floor of processes has them, the log in ``W/cps.log``."""
     from transfertwin.cps import LocalFloor
 
-    if args.detach or args.prepare_only:
-        raise InputError(f"{'--detach' if args.detach else '--prepare-only'} is for a floor "
-                         "of processes; --single-process runs the floor in this process: "
-                         "choose one")  # fmt: skip
+    if args.detach:
+        raise InputError("--detach leaves asset processes running; --single-process runs "
+                         "the floor in this process: choose one")  # fmt: skip
     floor = _floor_to_run(args)
     wd = out_dir(args.workdir)
     wd.mkdir(parents=True, exist_ok=True)
@@ -147,7 +145,7 @@ def cmd_up_local(args: argparse.Namespace) -> int:
     logging.getLogger("asyncua.client.client").setLevel(logging.CRITICAL)
     local = LocalFloor(floor, wd, insecure=args.insecure, seed=args.seed,
                        time_scale=args.time_scale, docking=args.docking, lease_s=args.lease,
-                       plant_seed=args.plant_seed,
+                       plant_seed=args.plant_seed, plant_kind=args.plant_kind,
                        online_timeout_s=args.start_timeout)  # fmt: skip
 
     async def serve() -> None:

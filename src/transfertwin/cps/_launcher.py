@@ -95,13 +95,15 @@ def prepare_floor(
     lease_s: float | None = None,
     base_host: str = "127.0.0.2",
     plant_seed: int | None = None,
+    plant_kind: str = "in-class",
 ) -> dict[str, AssetConfig]:
     """Write the floor's work folder and every asset's bundle; returns asset id -> its
     configuration (absolute paths; the bundle's file holds them relative to the bundle).
 
     A work folder used before keeps its credentials, certificates and every asset's state
     (the ledger, operation ids, possessions): a floor started again goes on where it was.
-    A floor with assets on the emulated plant (``hal = "plant"``) needs `plant_seed`; it is
+    A floor with assets on the emulated plant (``hal = "plant"``) needs `plant_seed` (and
+    `plant_kind`, 'in-class' or 'mismatch', `FLOOR_PLANT_KINDS`); it is
     written to ``W/plant.secret`` (owner-only) and copied into those assets' bundles only.
     The floor's study store is copied into the Experiment Manager's bundle, which answers
     the TMS's questions from it. Without `lease_s` the floor gets the default lease for its
@@ -116,7 +118,8 @@ def prepare_floor(
     workdir.mkdir(parents=True, exist_ok=True)
     seed_file = None
     if floor.uses_plant():
-        seed_file = write_plant_seed(workdir / PLANT_SEED_FILE, plant_seed).resolve()
+        seed_file = write_plant_seed(workdir / PLANT_SEED_FILE, plant_seed,
+                                     plant_kind).resolve()
         _rotate(workdir / PLANT_LOG)  # this start's E^P rows in a table of their own
     write_atomic(workdir / "floor.toml", floor_toml(floor))
     study = floor.operation.study

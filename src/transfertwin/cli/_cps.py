@@ -252,6 +252,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--detach", action="store_true",
                    help="exit once the floor is up and leave it running (stop it with "
                         "'cps down')")  # fmt: skip
+    p.add_argument("--prepare-only", action="store_true",
+                   help="write the work folder and every asset's bundle (W/assets/<id>) and "
+                        "start nothing: each bundle is copied to its host and started there "
+                        "('cps asset BUNDLE'; a floor file's [bind] gives its address)")
     p.add_argument("--lease", type=float, default=None,
                    help="seconds without a heartbeat before an asset counts as "
                         "offline (default 5 up to 66 assets, then 3 s per 40 assets: 15 at "

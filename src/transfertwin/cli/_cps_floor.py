@@ -87,6 +87,10 @@ def cmd_up_floor(args: argparse.Namespace) -> int:
                             lease_s=args.lease, plant_seed=args.plant_seed,
                             plant_kind=args.plant_kind)  # fmt: skip
     write_floor_info(wd, configs, floor)
+    if args.prepare_only:  # each bundle goes to its host and starts there
+        print(f"floor {floor.name} prepared: {len(configs)} bundles in {wd / 'assets'}; start "
+              "each on its host with 'transfertwin cps asset BUNDLE'", flush=True)  # fmt: skip
+        return 0
     t0 = time.monotonic()
     standby = floor.standby()
     procs = launch(configs, wd, skip=standby)
@@ -130,9 +134,10 @@ def cmd_up_local(args: argparse.Namespace) -> int:
     and cps.json as a floor of processes has them, the log in ``W/cps.log``."""
     from transfertwin.cps import LocalFloor
 
-    if args.detach:
-        raise InputError("--detach leaves asset processes running; --single-process runs "
-                         "the floor in this process: choose one")  # fmt: skip
+    if args.detach or args.prepare_only:
+        raise InputError(f"{'--detach' if args.detach else '--prepare-only'} is for a floor "
+                         "of processes; --single-process runs the floor in this process: "
+                         "choose one")  # fmt: skip
     floor = _floor_to_run(args)
     wd = out_dir(args.workdir)
     wd.mkdir(parents=True, exist_ok=True)

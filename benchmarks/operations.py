@@ -1,35 +1,48 @@
 """The twin in operation, measured on the emulated plant: the same orders under the TMS's
-``nearest-idle`` and ``predictive`` policies (docs/architecture.md, "Operation").
+policies (docs/architecture.md, "Operation"): does the twin earn its place beside learning
+from the floor's own transfers?
 
     PYTHONPATH=src .venv/bin/python benchmarks/operations.py --orders 200
+    PYTHONPATH=src .venv/bin/python benchmarks/operations.py --regime cold-start \
+        --plant-kind mismatch --plant-seeds 11,12,13 --campaign
 
-For each policy it starts the floor (default ``examples/floor-large.toml``: 8 stations, 3
-transport modules, 20 cores) as asset processes on the emulated plant (``--plant-seed``: the
-plant's hidden physics, not the twin's, decide every transfer), sends the same seeded
-sequence of orders by destination (each object's next destination differs from its last
-two), at most one order per object and one per module in flight, and reads every finished
-operation back from the TMS. An object lost in the gap is freed by an operator and put on
-the unit of the leg that lost it (`Locate`) before its next order. ``predictive`` loads each
-object in the twin's best state from a study store of the floor's cores (made first,
-``--runs`` runs per state of the 28-state grid, docking errors from the fitted generator),
-``nearest-idle`` in the default state. ``predictive`` also learns from the floor's own
-transfers (`cps.dispatch._learn`: each finished transfer updates the twin's per-state shares of its
-object, pick-up and delivery); ``twin-only`` is the same policy with ``learn = false``, the
-ablation that shows what the twin's study alone is worth on this plant; ``learning-alone``
-is the same policy with ``twin = false`` (every state of the grid from a flat prior, ranked
-by the floor's transfers only), the baseline that shows what the twin adds to learning
-(``predictive - learning-alone``).
+Arms (each a floor of asset processes started anew on the same plant, the same orders):
 
-Prints, per policy: orders, delivered, success share with its Clopper–Pearson 95 % interval,
-operations per hour of modelled floor time (each operation's ``floor_s``: driving from the
-planner, docking, the transfers' simulated time; the work divided among the modules) with a
-bootstrap 95 % interval; then each arm minus nearest-idle, and predictive minus
-learning-alone: the success-share difference with its Newcombe interval (better, worse, or
-undecided where the interval holds 0) and the operations-per-hour difference with a
-bootstrap interval.
+- ``nearest-idle``: the default state, no twin, no learning;
+- ``learning-alone``: every state of the grid from a flat prior, ranked by the floor's own
+  transfers only (``[operation] twin = false``);
+- ``twin-only``: the uncalibrated twin's predictions of both legs, no learning
+  (``learn = false``);
+- ``predictive``: the uncalibrated twin + learning (the default policy);
+- with ``--campaign``: ``calibrated-only`` and ``calibrated``: the same two after a
+  calibration campaign on the floor's own physical units (``cps campaign start --wait``),
+  whose floor time is counted in the arm's operations per floor hour.
+
+Regimes: **steady** (``--orders`` orders over the floor's objects, default
+``examples/floor-large.toml``: 8 stations, 3 modules, 20 cores; each object's next
+destination differs from its last two) and **cold start** (a stream of new objects: the
+floor's stations hold ``--cold-objects`` cores, 37 by default, that no prediction has seen,
+each entering with its first of ``--cold-orders`` orders, 3 by default; the metric is the
+success share of each object's first order and of its first three).
+
+The predictive arms of the steady regime rank from a study store of the floor's cores
+(made first: ``--runs`` runs per state of the 28-state grid, both legs); in cold start no
+store is given: every new object's prediction is the Experiment Manager's on-the-fly one.
+An object lost in the gap is freed by an operator and put on the unit of the leg that lost
+it (`Locate`) before its next order.
+
+Prints per plant seed and arm: orders, delivered, success share with its Clopper–Pearson
+95 % interval (over transfer outcomes; faults apart), operations per hour of modelled floor
+time (the campaign's included) with a bootstrap interval, the outcomes by leg and the
+states the twin got wrong per leg (its predicted leg probability ≥ ½ and the leg failed,
+or < ½ and it succeeded); then, pooled over the seeds, each arm's share and the
+differences with their Newcombe intervals (better, worse, or undecided where the interval
+holds 0), and the issue's targets with a verdict (met / missed / undecided). Writes
+``benchmarks/results/operations-<regime>-<plant kind>.json``.
+
 ``--camera`` runs the predictive policy a second time with the modules' depth cameras in
-the loop (floor ``sensor = "camera"``) and says whether its success share lies inside the
-ground-truth run's interval. Writes ``benchmarks/results/operations.json``.
+the loop (steady regime, first seed only) and says whether its success share lies inside
+the ground-truth run's interval.
 """
 
 from __future__ import annotations
@@ -56,13 +69,13 @@ def tt(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
 
 
 def make_study(floor, path: Path, runs: int, seed: int) -> None:
-    """The twin's study of the floor's cores (the predictive policy's store)."""
+    """The twin's study of the floor's cores, both legs (the predictive policy's store)."""
     from transfertwin.cps.apps import docking_model
     from transfertwin.store import SQLiteResultStore
     from transfertwin.study.experiment import StudyPlan, run_study
 
     objects = tuple(o for o, _ in floor.objects)
-    plan = StudyPlan(objects, 30, runs, seed, docking_model())
+    plan = StudyPlan(objects, 30, runs, seed, docking_model(), leg="operation")
     store = SQLiteResultStore(path)
     t0 = time.monotonic()
 
@@ -156,7 +169,83 @@ def drive(wd: Path, orders: list[tuple[str, str]], inflight: int, timeout_s: flo
             "wall_s": round(time.monotonic() - t0, 1)}  # fmt: skip
 
 
-def summarise(ops: list[dict], modules: int, rng: np.random.Generator) -> dict:
+def cold_floor(floor, n: int, seed: int):
+    """The floor with `n` new cores (o1, o2, …) on its stations, in a seeded order, round
+    robin: the cold start's stream of objects no prediction has seen."""
+    import dataclasses
+
+    from transfertwin.objects import builtin_ids
+
+    ids = list(builtin_ids())[:n]
+    random.Random(seed).shuffle(ids)
+    units = list(floor.units)
+    return dataclasses.replace(floor, objects=tuple((o, units[i % len(units)])
+                                                    for i, o in enumerate(ids)))  # fmt: skip
+
+
+def cold_orders(floor, per_object: int, seed: int) -> list[tuple[str, str]]:
+    """Each object's `per_object` orders in a row (it enters with the first), objects in
+    the floor's order; each destination differs from the object's last two places."""
+    rng = random.Random(seed)
+    out = []
+    for obj, at in floor.objects:
+        history = [at]
+        for _ in range(per_object):
+            dest = rng.choice([u for u in floor.units if u not in history[-2:]])
+            history.append(dest)
+            out.append((obj, dest))
+    return out
+
+
+def _leg_outcomes(result: dict) -> dict[str, int]:
+    """y of each leg that ran a transfer (its last try)."""
+    out = {}
+    for leg in result.get("legs") or []:
+        tr = leg.get("transferring")
+        if isinstance(tr, dict) and tr.get("valid"):
+            out[leg.get("leg")] = int(tr.get("y") or 0)
+    return out
+
+
+def twin_wrong(ops: list[dict]) -> dict[str, dict[str, int]]:
+    """Per leg, how often the twin's prediction of the chosen state (its leg probability
+    before the floor's evidence, `twin_priors`) was on the wrong side of ½, and of how many
+    legs it predicted."""
+    from transfertwin.cps.dispatch import twin_priors
+
+    out = {leg: {"predicted": 0, "wrong": 0, "wrong_states": {}}
+           for leg in ("pick-up", "delivery")}  # fmt: skip
+    for o in ops:
+        pred = ((o.get("plan") or {}).get("prediction")) or {}
+        if o["state"] != "finished" or not pred.get("n"):
+            continue
+        priors = twin_priors(pred)
+        for leg, y in _leg_outcomes(o["result"]).items():
+            m, w = priors[leg]
+            if w <= 2.0 and m == 0.5:  # Laplace: the twin did not predict this leg
+                continue
+            out[leg]["predicted"] += 1
+            if (m >= 0.5) != bool(y):
+                out[leg]["wrong"] += 1
+                key = f"{o['object']} {pred['face']}/{pred['conveyor']}/{pred['theta_deg']}"
+                out[leg]["wrong_states"][key] = out[leg]["wrong_states"].get(key, 0) + 1
+    return out
+
+
+def first_orders(ops: list[dict], k: int) -> tuple[int, int]:
+    """(delivered, n) over each object's first `k` finished orders (faults apart)."""
+    from transfertwin.cps.dispatch import is_fault
+
+    by_obj: dict[str, list[dict]] = {}
+    for o in sorted(ops, key=lambda o: float(o["history"][0][0])):
+        if o["state"] == "finished":
+            by_obj.setdefault(o["object"], []).append(o)
+    got = [o for mine in by_obj.values() for o in mine[:k] if not is_fault(o["result"])]
+    return sum(o["result"].get("status") == "delivered" for o in got), len(got)
+
+
+def summarise(ops: list[dict], modules: int, rng: np.random.Generator,
+              campaign_s: float = 0.0) -> dict:  # fmt: skip
     from transfertwin.cps.dispatch import is_fault
     from transfertwin.study.fullstate import clopper_pearson
 
@@ -167,16 +256,18 @@ def summarise(ops: list[dict], modules: int, rng: np.random.Generator) -> dict:
     floor_s = np.array([float(o["result"].get("floor_s") or 0.0) for o in finished])
     ci = clopper_pearson(int(ok.sum()), len(ok))
 
-    def per_hour(ok_, s_):
-        return 3600.0 * ok_.sum() / (s_.sum() / modules)
+    def per_hour(ok_, s_):  # the campaign's floor time is a cost of the arm
+        return 3600.0 * ok_.sum() / ((s_.sum() + campaign_s) / modules)
 
     idx = rng.integers(0, len(ok), size=(BOOTSTRAP, len(ok)))
     boot = np.array([per_hour(ok[i], floor_s[i]) for i in idx])
+    first = {f"first_{k}": first_orders(ops, k) for k in (1, 3)}
     return {"n": len(ok), "delivered": int(ok.sum()), "share": float(ok.mean()),
             "share_ci95": [ci.low, ci.high], "ops_per_floor_hour": per_hour(ok, floor_s),
             "ops_ci95": [float(np.percentile(boot, 2.5)), float(np.percentile(boot, 97.5))],
-            "boot": boot, "failed_by_reason": _reasons(finished),
-            "faults": len(faults)}  # fmt: skip
+            "campaign_floor_s": campaign_s, "boot": boot,
+            "failed_by_reason": _reasons(finished), "faults": len(faults),
+            "twin_wrong": twin_wrong(ended), **first}  # fmt: skip
 
 
 def _by_leg(ops: list[dict]) -> dict[str, int]:
@@ -204,159 +295,268 @@ def _reasons(finished: list[dict]) -> dict[str, int]:
     return out
 
 
-def run_arm(args, floor, name: str, policy: str, floor_file: str, study: Path, wd: Path,
-            orders: list, rng: np.random.Generator) -> dict | None:  # fmt: skip
-    """Start the floor of one arm, drive the orders, stop it; the arm's summary."""
+def campaign(pwd: Path, args) -> float:
+    """A calibration campaign on the floor's physical units (``cps campaign``); its floor
+    seconds (the E^P's transfer time on the plant's clock)."""
+    run = tt("cps", "campaign", "start", "--workdir", str(pwd), "--wait",
+             "--experiments", str(args.campaign_experiments), "--seed", str(args.seed),
+             timeout=args.timeout)  # fmt: skip
+    if run.returncode != 0:
+        raise SystemExit(f"the campaign failed: {run.stderr.strip() or run.stdout[-400:]}")
+    st = tt("cps", "campaign", "status", "--workdir", str(pwd), "--json")
+    doc = json.loads(st.stdout) if st.returncode == 0 else {}
+    return float(doc.get("floor_s") or doc.get("campaign_floor_s") or 0.0)
+
+
+def run_arm(args, floor, name: str, policy: str, floor_file: str, study: Path | None,
+            wd: Path, orders: list, rng: np.random.Generator, plant_seed: int,
+            calibrate: bool = False) -> dict | None:  # fmt: skip
+    """Start the floor of one arm, (calibrate,) drive the orders, stop it; its summary."""
     pwd = wd / name
-    print(f"{name}: starting {floor.name} on plant seed {args.plant_seed}", flush=True)
+    print(f"{name}: starting {floor.name} on the {args.plant_kind} plant of seed "
+          f"{plant_seed}", flush=True)  # fmt: skip
     up = tt("cps", "up", "--floor", floor_file, "--workdir", str(pwd), "--detach",
-            "--time-scale", "0", "--seed", str(args.seed), "--plant-seed",
-            str(args.plant_seed), "--policy", policy, "--study", str(study),
+            "--time-scale", "0", "--seed", str(args.seed), "--plant-seed", str(plant_seed),
+            "--plant-kind", args.plant_kind, "--policy", policy,
+            *(["--study", str(study)] if study else []),
             "--lease", str(args.lease), "--start-timeout", "600", timeout=900)  # fmt: skip
     if up.returncode != 0:
         print(up.stderr, file=sys.stderr)
         return None
     try:
+        campaign_s = campaign(pwd, args) if calibrate else 0.0
         run = drive(pwd, orders, len(floor.modules), args.timeout)
     finally:
         tt("cps", "down", "--workdir", str(pwd))
-    r = {**summarise(run["operations"], len(floor.modules), rng),
+    r = {**summarise(run["operations"], len(floor.modules), rng, campaign_s),
          "refused": run["refused"], "located": run["located"],
          "retried": run["retried"], "wall_s": run["wall_s"],
          "by_leg": _by_leg(run["operations"])}  # fmt: skip
     print(f"{name}: {r['delivered']}/{r['n']} delivered, share {r['share']:.3f} "
-          f"{[round(v, 3) for v in r['share_ci95']]}; {r['by_leg']}", flush=True)
+          f"{[round(v, 3) for v in r['share_ci95']]}; first orders {r['first_1']}, first "
+          f"three {r['first_3']}; {r['by_leg']}", flush=True)  # fmt: skip
     return r
 
 
-def camera_only(args, floor, arm: tuple[str, str, str], study: Path, wd: Path, orders: list,
-                rng: np.random.Generator, res: Path) -> int:  # fmt: skip
-    """The camera arm alone, against the stored predictive run of the same orders."""
-    before = json.loads(res.read_text()) if res.is_file() else {}
-    same = {"orders": args.orders, "floor": floor.name, "plant_seed": args.plant_seed,
-            "seed": args.seed, "runs": args.runs}  # fmt: skip
-    if any(before.get(k) != v for k, v in same.items()) or "predictive" not in before.get(
-            "policies", {}):  # fmt: skip
-        raise SystemExit(f"--camera-only: {res} holds no predictive run of these orders "
-                         f"({same}); run without --camera-only first")  # fmt: skip
-    name, policy, floor_file = arm
-    c = run_arm(args, floor, name, policy, floor_file, study, wd, orders, rng)
-    if c is None:
-        return 1
-    c.pop("boot")
-    b = before["policies"]["predictive"]
-    lo, hi = b["share_ci95"]
-    inside = lo <= c["share"] <= hi
-    print(f"camera in the loop: success share {c['share']:.3f} "
-          f"{[round(v, 3) for v in c['share_ci95']]}, {'inside' if inside else 'OUTSIDE'} the "
-          f"ground-truth run's interval [{lo:.3f}, {hi:.3f}] ({b['share']:.3f}); failures "
-          f"{c['failed_by_reason'] or 'none'}")  # fmt: skip
-    before["policies"][name] = c
-    res.write_text(json.dumps(before, indent=2) + "\n")
-    print(f"wrote {res}")
-    return 0
+#: The arms: (name, policy, [operation] table, campaign first).
+ARMS = (
+    ("nearest-idle", "nearest-idle", "", False),
+    ("learning-alone", "predictive", "twin = false", False),
+    ("twin-only", "predictive", "learn = false", False),
+    ("predictive", "predictive", "", False),
+    ("calibrated-only", "predictive", "learn = false", True),
+    ("calibrated", "predictive", "", True),
+)
+#: The differences reported: (arm, baseline).
+DIFFERENCES = (
+    ("learning-alone", "nearest-idle"), ("twin-only", "nearest-idle"),
+    ("predictive", "nearest-idle"), ("predictive", "learning-alone"),
+    ("calibrated-only", "nearest-idle"), ("calibrated", "learning-alone"),
+)  # fmt: skip
+
+
+def _counts(arm: dict, regime: str) -> tuple[int, int]:
+    """The arm's (delivered, n) of the regime's metric: all orders (steady) or each
+    object's first order (cold start)."""
+    return tuple(arm["first_1"]) if regime == "cold-start" else (arm["delivered"], arm["n"])
+
+
+def verdicts(pooled: dict[str, tuple[int, int]], regime: str, kind: str) -> list[dict]:
+    """The issue's targets on the pooled counts, each met / missed / undecided by its
+    Newcombe interval."""
+    from transfertwin.study.validation import newcombe_difference
+
+    out = []
+
+    def target(what: str, arm: str, base: str, margin: float, kind_: str) -> None:
+        if arm not in pooled or base not in pooled:
+            return
+        d = newcombe_difference(*pooled[arm], *pooled[base])
+        if kind_ == "better-by":  # better by at least `margin`, interval above 0
+            ok = d.estimate >= margin and d.low > 0
+            bad = d.high < margin
+        else:  # not worse by more than `margin`
+            ok = d.low > -margin
+            bad = d.high < -margin
+        out.append(
+            {
+                "target": what,
+                "difference": d.estimate,
+                "ci95": [d.low, d.high],
+                "verdict": "met" if ok else "missed" if bad else "undecided",
+            }
+        )
+
+    if regime == "cold-start" and kind == "mismatch":
+        target(
+            "cold start, mismatch: calibrated twin + learning beats learning alone by >= 0.10",
+            "calibrated",
+            "learning-alone",
+            0.10,
+            "better-by",
+        )
+        target(
+            "cold start, mismatch: the calibrated twin alone beats nearest-idle",
+            "calibrated-only",
+            "nearest-idle",
+            0.0,
+            "better-by",
+        )
+    if regime == "steady":
+        target(
+            "steady: twin + learning not worse than learning alone (margin 0.05)",
+            "calibrated" if "calibrated" in pooled else "predictive",
+            "learning-alone",
+            0.05,
+            "not-worse",
+        )
+    return out
 
 
 def main() -> int:
     from transfertwin.cps import load_floor
+    from transfertwin.cps.floor import floor_toml
     from transfertwin.study.validation import newcombe_difference
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--floor", default=str(ROOT / "examples" / "floor-large.toml"))
-    ap.add_argument("--orders", type=int, default=200)
-    ap.add_argument("--plant-seed", type=int, default=7)
+    ap.add_argument("--regime", choices=("steady", "cold-start"), default="steady")
+    ap.add_argument("--orders", type=int, default=200, help="steady: orders (default 200)")
+    ap.add_argument(
+        "--cold-objects", type=int, default=37, help="cold start: new objects (default 37)"
+    )
+    ap.add_argument(
+        "--cold-orders", type=int, default=3, help="cold start: orders per object (default 3)"
+    )
+    ap.add_argument("--plant-kind", choices=("in-class", "mismatch"), default="in-class")
+    ap.add_argument("--plant-seeds", default="7", help="comma-separated (default 7)")
+    ap.add_argument("--plant-seed", type=int, help="one plant seed (as --plant-seeds N)")
+    ap.add_argument("--arms", help="comma-separated subset of " +
+                    ", ".join(a[0] for a in ARMS))  # fmt: skip
+    ap.add_argument(
+        "--campaign",
+        action="store_true",
+        help="add the calibrated arms (a campaign on each of their floors)",
+    )
+    ap.add_argument("--campaign-experiments", type=int, default=40)
     ap.add_argument("--seed", type=int, default=0, help="orders, study and floor seed")
     ap.add_argument("--runs", type=int, default=4, help="study runs per state (default 4)")
     ap.add_argument("--study", help="an existing study store of the floor's cores")
     ap.add_argument("--workdir", help="where floors and the study go (default: a temp dir)")
-    ap.add_argument("--timeout", type=float, default=3600.0, help="per policy, seconds")
-    ap.add_argument("--camera", action="store_true",
-                    help="also run predictive with the modules' cameras in the loop")
-    ap.add_argument("--camera-only", action="store_true",
-                    help="run only the camera arm; compare it with the predictive run of the "
-                         "same orders in benchmarks/results/operations.json and add it there")
+    ap.add_argument("--timeout", type=float, default=3600.0, help="per arm, seconds")
+    ap.add_argument(
+        "--camera",
+        action="store_true",
+        help="also run predictive with the modules' cameras in the loop",
+    )
     ap.add_argument("--lease", type=float, default=30.0,
                     help="the floor's lease, s (default 30: a 35-process floor on a loaded "
                          "2-core host misses 5 s heartbeats)")  # fmt: skip
     args = ap.parse_args()
+    seeds = [args.plant_seed] if args.plant_seed is not None else [
+        int(s) for s in args.plant_seeds.split(",") if s.strip()]  # fmt: skip
+    arms = [a for a in ARMS if args.campaign or not a[3]]
+    if args.arms:
+        names = {n.strip() for n in args.arms.split(",")}
+        unknown = names - {a[0] for a in ARMS}
+        if unknown:
+            raise SystemExit(f"--arms: unknown {', '.join(sorted(unknown))}")
+        arms = [a for a in ARMS if a[0] in names]
     floor = load_floor(args.floor)
+    if "[operation]" in Path(args.floor).read_text():
+        raise SystemExit("the floor file has an [operation] table already")
     wd = Path(args.workdir or tempfile.mkdtemp(prefix="operations-"))
     wd.mkdir(parents=True, exist_ok=True)
-    study = Path(args.study) if args.study else wd / "study.sqlite"
-    if not args.study:
-        print(f"study of {len(floor.objects)} cores x 28 states x {args.runs} runs -> {study}")
-        make_study(floor, study, args.runs, args.seed)
-    orders = order_sequence(floor, args.orders, args.seed)
-    rng = np.random.default_rng(args.seed)
-    out: dict[str, dict] = {}
-    text = Path(args.floor).read_text()
-    if "[operation]" in text:
-        raise SystemExit("the floor file has an [operation] table already")
+    if args.regime == "cold-start":
+        floor = cold_floor(floor, args.cold_objects, args.seed)
+        orders = cold_orders(floor, args.cold_orders, args.seed)
+        study = None  # new objects: no study has seen them
+    else:
+        orders = order_sequence(floor, args.orders, args.seed)
+        study = Path(args.study) if args.study else wd / "study.sqlite"
+        if not args.study and not study.exists():
+            print(f"study of {len(floor.objects)} cores x 28 states x {args.runs} runs, both "
+                  f"legs -> {study}")  # fmt: skip
+            make_study(floor, study, args.runs, args.seed)
+    text = floor_toml(floor)
 
     def variant(name: str, table: str) -> str:
         path = wd / f"floor-{name}.toml"
-        path.write_text(text + f"\n[operation]\n{table}\n")
+        path.write_text(text + (f"\n[operation]\n{table}\n" if table else ""))
         return str(path)
 
-    runs = [("nearest-idle", "nearest-idle", args.floor),
-            ("learning-alone", "predictive", variant("learning-alone", "twin = false")),
-            ("twin-only", "predictive", variant("twin-only", "learn = false")),
-            ("predictive", "predictive", args.floor)]  # fmt: skip
-    res = ROOT / "benchmarks" / "results" / "operations.json"
-    if args.camera or args.camera_only:  # the same floor with the modules' cameras in the loop
-        runs.append(("predictive+camera", "predictive", variant("camera", 'sensor = "camera"')))
-    if args.camera_only:
-        return camera_only(args, floor, runs[-1], study, wd, orders, rng, res)
-    for name, policy, floor_file in runs:
-        out[name] = run_arm(args, floor, name, policy, floor_file, study, wd, orders, rng)
-        if out[name] is None:
-            return 1
-    b = out["predictive"]
+    rng = np.random.default_rng(args.seed)
+    per_seed: dict[int, dict[str, dict]] = {}
+    for ps in seeds:
+        out: dict[str, dict] = {}
+        for name, policy, table, calib in arms:
+            r = run_arm(args, floor, name, policy, variant(name, table), study,
+                        wd / f"seed-{ps}", orders, rng, ps, calib)  # fmt: skip
+            if r is None:
+                return 1
+            r.pop("boot")
+            out[name] = r
+        if args.camera and ps == seeds[0] and args.regime == "steady":
+            c = run_arm(args, floor, "predictive+camera", "predictive",
+                        variant("camera", 'sensor = "camera"'), study, wd / f"seed-{ps}",
+                        orders, rng, ps)  # fmt: skip
+            if c is not None:
+                c.pop("boot")
+                out["predictive+camera"] = c
+        per_seed[ps] = out
+    pooled = {name: tuple(map(sum, zip(*(_counts(per_seed[s][name], args.regime)
+                                          for s in seeds), strict=True)))
+              for name, *_ in arms}  # fmt: skip
+    metric = "each object's first order" if args.regime == "cold-start" else "every order"
+    print(
+        f"\n{args.regime}: {len(orders)} orders on {floor.name}, {args.plant_kind} plant, "
+        f"seeds {seeds}; success share over {metric}"
+    )
+    print(f"{'arm':<18}" + "".join(f"{'seed ' + str(s):>24}" for s in seeds) + f"{'pooled':>26}")
+    for name, *_ in arms:
+        cells = []
+        for s in seeds:
+            k, n = _counts(per_seed[s][name], args.regime)
+            cells.append(f"{k}/{n} = {k / n:.3f}" if n else "-")
+        k, n = pooled[name]
+        from transfertwin.study.fullstate import clopper_pearson
+
+        ci = clopper_pearson(k, n) if n else None
+        pooled_txt = f"{k / n:.3f} [{ci.low:.3f}, {ci.high:.3f}]" if n else "-"
+        print(f"{name:<18}" + "".join(f"{c:>24}" for c in cells) + f"{pooled_txt:>26}")
     diffs = {}
-    # each arm against nearest-idle, and the twin's part: twin + learning against learning
-    for name, base in (("learning-alone", "nearest-idle"), ("twin-only", "nearest-idle"),
-                       ("predictive", "nearest-idle"), ("predictive", "learning-alone")):
-        r, a0 = out[name], out[base]
-        d = newcombe_difference(r["delivered"], r["n"], a0["delivered"], a0["n"])
-        dboot = r["boot"] - a0["boot"]
-        diffs[f"{name} - {base}"] = {
-            "share": d, "ops": r["ops_per_floor_hour"] - a0["ops_per_floor_hour"],
-            "ops_ci95": [float(np.percentile(dboot, 2.5)), float(np.percentile(dboot, 97.5))]}
-    for r in out.values():
-        r.pop("boot")
-    print(f"\n{args.orders} orders on {floor.name}, plant seed {args.plant_seed}")
-    print(f"{'policy':<18}{'n':>5}{'deliv.':>8}{'success share [95% CP]':>30}"
-          f"{'ops/floor-hour [95% boot.]':>32}{'refused':>9}")
-    for policy, r in out.items():
-        lo, hi = r["share_ci95"]
-        olo, ohi = r["ops_ci95"]
-        share = f"{r['share']:.3f} [{lo:.3f}, {hi:.3f}]"
-        ops = f"{r['ops_per_floor_hour']:.1f} [{olo:.1f}, {ohi:.1f}]"
-        print(f"{policy:<18}{r['n']:>5}{r['delivered']:>8}{share:>30}{ops:>32}"
-              f"{len(r['refused']):>9}")
-    for name, d in diffs.items():
-        sd, (olo, ohi) = d["share"], d["ops_ci95"]
-        verdict = ("better" if sd.low > 0 else "worse" if sd.high < 0 else "undecided")
-        print(f"{name}: success share {sd.estimate:+.3f} "
-              f"[{sd.low:+.3f}, {sd.high:+.3f}] (Newcombe: {verdict}); "
-              f"ops/floor-hour {d['ops']:+.1f} [{olo:+.1f}, {ohi:+.1f}] (bootstrap)")
-    if "predictive+camera" in out:
-        c = out["predictive+camera"]
-        inside = b["share_ci95"][0] <= c["share"] <= b["share_ci95"][1]
-        print(f"camera in the loop: success share {c['share']:.3f}, "
-              f"{'inside' if inside else 'OUTSIDE'} the ground-truth run's interval "
-              f"[{b['share_ci95'][0]:.3f}, {b['share_ci95'][1]:.3f}]")
-    for policy, r in out.items():
-        print(f"{policy}: failures {r['failed_by_reason'] or 'none'}; objects located by an "
-              f"operator {r['located']}; refused {[x['reason'] for x in r['refused']]}")
-    result = {"orders": args.orders, "floor": floor.name, "plant_seed": args.plant_seed,
-              "seed": args.seed, "runs": args.runs, "policies": out,
-              "differences": {name: {
-                  "share": d["share"].estimate,
-                  "share_ci95": [d["share"].low, d["share"].high],
-                  "ops_per_floor_hour": d["ops"],
-                  "ops_per_floor_hour_ci95": d["ops_ci95"]} for name, d in diffs.items()}}
-    res.write_text(json.dumps(result, indent=2) + "\n")
+    for arm, base in DIFFERENCES:
+        if arm in pooled and base in pooled and pooled[arm][1] and pooled[base][1]:
+            d = newcombe_difference(*pooled[arm], *pooled[base])
+            verdict = "better" if d.low > 0 else "worse" if d.high < 0 else "undecided"
+            diffs[f"{arm} - {base}"] = {"share": d.estimate, "ci95": [d.low, d.high],
+                                        "verdict": verdict}  # fmt: skip
+            print(
+                f"{arm} - {base}: {d.estimate:+.3f} [{d.low:+.3f}, {d.high:+.3f}] "
+                f"(Newcombe, pooled: {verdict})"
+            )
+    targets = verdicts(pooled, args.regime, args.plant_kind)
+    for t in targets:
+        lo, hi = t["ci95"]
+        print(
+            f"target: {t['target']}: {t['difference']:+.3f} [{lo:+.3f}, {hi:+.3f}]: {t['verdict']}"
+        )
+    for s in seeds:
+        for name, r in per_seed[s].items():
+            tw = {leg: f"{v['wrong']}/{v['predicted']}" for leg, v in r["twin_wrong"].items()}
+            print(
+                f"seed {s} {name}: ops/floor-hour {r['ops_per_floor_hour']:.1f} "
+                f"{[round(v, 1) for v in r['ops_ci95']]} (campaign "
+                f"{r['campaign_floor_s']:.0f} s); faults {r['faults']}; twin wrong per leg "
+                f"{tw}; failures {r['failed_by_reason'] or 'none'}"
+            )
+    res = ROOT / "benchmarks" / "results" / f"operations-{args.regime}-{args.plant_kind}.json"
+    res.write_text(json.dumps({
+        "regime": args.regime, "plant_kind": args.plant_kind, "plant_seeds": seeds,
+        "floor": floor.name, "orders": len(orders), "seed": args.seed, "runs": args.runs,
+        "arms": [a[0] for a in arms], "per_seed": {str(s): v for s, v in per_seed.items()},
+        "pooled": {k: list(v) for k, v in pooled.items()}, "differences": diffs,
+        "targets": targets}, indent=2) + "\n")  # fmt: skip
     print(f"wrote {res}")
     return 0
 

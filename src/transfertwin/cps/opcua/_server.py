@@ -3,9 +3,12 @@
 Structure (after the OPC UA for AAS companion specification, simplified):
 ``Objects/AAS_<id>/`` holds one object per submodel, named by its idShort; a Property becomes
 a variable of the matching OPC UA data type, an Operation a method with the operation's input
-and output variables as arguments, a Capability an object carrying its semantic id. All
-nodes live in the namespace ``urn:transfertwin:aas`` with string node ids
-``<asset>.<submodel>.<element>``, so a client addresses every asset the same way.
+and output variables as arguments, a Capability an object carrying its semantic id, a
+SubmodelElementCollection an object holding its elements, a RelationshipElement an object
+with the keys of its ends (``First``, ``Second``). All nodes live in the namespace
+``urn:transfertwin:aas`` with string node ids ``<asset>.<submodel>.<element>`` (an element
+inside collections: ``<asset>.<submodel>.<collection>.<element>``), so a client addresses
+every asset the same way.
 Deviations from the companion specification: no AAS object/variable *types* are
 instantiated (plain folders, objects and variables), and references are not modelled.
 
@@ -248,26 +251,45 @@ class AssetServer:
             for element in sm.submodel_element:
                 await self._add_element(sm_node, sm.id_short, element)
 
-    async def _add_element(self, parent: Node, sm: str, element: aas.SubmodelElement) -> None:
-        nid = ua.NodeId(node_id(self.asset_id, sm, element.id_short), self._ns)
+    async def _add_element(self, parent: Node, sm: str, element: aas.SubmodelElement,
+                           path: tuple[str, ...] = ()) -> None:  # fmt: skip
+        """Add `element` (inside the collections `path` of submodel `sm`) below `parent`; an
+        element inside a collection is addressed by its dotted path, e.g.
+        ``TransferRelations.Constraints.BeltWidth``."""
+        key = ".".join((*path, element.id_short))
+        nid = ua.NodeId(node_id(self.asset_id, sm, key), self._ns)
         name = f"{self._ns}:{element.id_short}"
         if isinstance(element, aas.Property):
             ptype = _python_type(element.value_type)
             value = element.value if element.value is not None else _DEFAULTS[ptype]
             var = await parent.add_variable(nid, name, ua.Variant(ptype(value), _VARIANT[ptype]))
-            if (sm, element.id_short) in self.writable:
+            if (sm, key) in self.writable:
                 await var.set_writable()
-            self._nodes[(sm, element.id_short)] = var
-            self._types[(sm, element.id_short)] = ptype
+            self._nodes[(sm, key)] = var
+            self._types[(sm, key)] = ptype
         elif isinstance(element, aas.Operation):
             await self._add_method(parent, nid, name, element)
         elif isinstance(element, aas.Capability):
-            cap = await parent.add_object(nid, name)
             sem = element.semantic_id.key[0].value if element.semantic_id else ""
-            await cap.add_property(
-                ua.NodeId(node_id(self.asset_id, sm, element.id_short, "SemanticId"), self._ns),
-                f"{self._ns}:SemanticId", sem,
-            )  # fmt: skip
+            await self._add_strings(await parent.add_object(nid, name), sm, key,
+                                    {"SemanticId": sem})  # fmt: skip
+        elif isinstance(element, aas.SubmodelElementCollection):
+            folder = await parent.add_object(nid, name)
+            for child in element.value:
+                await self._add_element(folder, sm, child, (*path, element.id_short))
+        elif isinstance(element, aas.RelationshipElement):
+            # the ends as the referenced elements' keys, e.g. <submodel id>/<idShort>
+            ends = {"First": element.first, "Second": element.second}
+            await self._add_strings(await parent.add_object(nid, name), sm, key,
+                                    {k: "/".join(x.value for x in r.key)
+                                     for k, r in ends.items()})  # fmt: skip
+
+    async def _add_strings(self, node: Node, sm: str, key: str, values: dict[str, str]) -> None:
+        """Constant string properties of an object node (a capability's semantic id, a
+        relationship's ends)."""
+        for prop, value in values.items():
+            pid = ua.NodeId(node_id(self.asset_id, sm, key, prop), self._ns)
+            await node.add_property(pid, f"{self._ns}:{prop}", value)
 
     async def _add_method(self, parent: Node, nid: ua.NodeId, name: str, op: aas.Operation) -> None:
         ins = [(v.id_short, _python_type(v.value_type)) for v in op.input_variable]

@@ -33,10 +33,17 @@ __all__ = ["build_parser", "main"]
 
 log = logging.getLogger("transfertwin")
 
+#: What `transfertwin --help` says first: the tool in a sentence.
+DESCRIPTION = (
+    "transfertwin simulates an object crossing the gap from a transport module (TM) to a "
+    "transfer unit (TU), finds the placements that get it across, calibrates the simulation "
+    "against real experiments and runs it beside a cyber-physical floor."
+)
+
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand."""
-    parser = Parser(prog="transfertwin", description=__doc__.splitlines()[0])
+    parser = Parser(prog="transfertwin", description=DESCRIPTION)
     parser.add_argument("-v", "--verbose", action="count", default=0,
                         help="-v: progress messages (INFO), -vv: debug logging")  # fmt: skip
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)

@@ -96,7 +96,11 @@ def cmd_dock(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``dock`` to the subparsers of the `transfertwin` command."""
-    p = sub.add_parser("dock", help="emergent docking errors: navigation, laser docking, ChArUco")
+    p = sub.add_parser(
+        "dock",
+        help="docking errors that emerge from simulated navigation, laser docking and "
+        "ChArUco (compare: `docking` fits and samples a model of measured ones)",
+    )
     p.add_argument("--station", default="A,B,C,D",
                    help="station(s) A|B|C|D, comma-separated (default A,B,C,D)")  # fmt: skip
     p.add_argument("--runs", type=int, default=20, help="runs per station (default 20)")

@@ -102,7 +102,11 @@ def cmd_docking_plot(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add ``docking fit|sample|plot`` to the subparsers of the `transfertwin` command."""
-    docking = sub.add_parser("docking", help="synthetic docking errors: Gaussian copula (Sec. 6.4)")
+    docking = sub.add_parser(
+        "docking",
+        help="docking errors drawn from a model fitted to measured ones, a Gaussian copula "
+        "(Sec. 6.4; compare: `dock` simulates how they arise)",
+    )
     dsub = docking.add_subparsers(dest="docking_command", required=True, parser_class=type(docking))
     p = dsub.add_parser("fit", help="fit a Gaussian copula to measured docking errors")
     p.add_argument("csv", help="CSV with dock_err_x_mm, dock_err_y_mm, dock_err_theta_deg")

@@ -23,15 +23,23 @@ _PLANT_ONLY = ("plant_seed", "plant_seed_file", "plant_kind")
 def _plant_row(args: argparse.Namespace):  # -> PlantRow
     from transfertwin.replay import plant_row
 
-    given = [f"--{k.replace('_', '-')}" for k in (*_TRANSFER_ONLY, *_STATE, "db", "calibration",
-                                                  "run") if getattr(args, k) is not None]
+    given = [
+        f"--{k.replace('_', '-')}"
+        for k in (*_TRANSFER_ONLY, *_STATE, "db", "calibration", "run")
+        if getattr(args, k) is not None
+    ]
     if given:
         raise InputError(f"{', '.join(given)}: a plant row's experiment comes from its table "
                          "and its plant (give --row, and the plant)")  # fmt: skip
     if args.row is None:
         raise InputError("--plant-rows needs --row (the row's index in the table)")
-    return plant_row(args.plant_rows, args.row, plant_seed=args.plant_seed,
-                     plant_seed_file=args.plant_seed_file, plant_kind=args.plant_kind)
+    return plant_row(
+        args.plant_rows,
+        args.row,
+        plant_seed=args.plant_seed,
+        plant_seed_file=args.plant_seed_file,
+        plant_kind=args.plant_kind,
+    )
 
 
 def _spec(args: argparse.Namespace):  # -> (ExperimentSpec, StudyRow | CalibrationRow | None)
@@ -121,14 +129,22 @@ def cmd_replay(args: argparse.Namespace) -> int:
         elif not check["same"]:
             print("warning: the replay differs from the stored row: "
                   + "; ".join(check["differences"]), file=sys.stderr)  # fmt: skip
-    r = replay.result
-    print(f"{r.object_id} {r.face}/{r.conveyor}/{r.theta_deg}° run {r.run} seed {r.seed}: "
-          f"status {r.status}, y1 {r.y1}, y2 {r.y2}, t_end {r.t_end_s:.3f} s; "
-          f"{len(replay.t_s)} samples over {replay.duration_s:.2f} s"
-          + ("; same bits as the stored row" if source.get("check", {}) and
-             source["check"]["same"] else ""), flush=True)  # fmt: skip
+    print(replay_line(replay, same=bool(source.get("check")) and source["check"]["same"]),
+          flush=True)  # fmt: skip
     doc = replay_payload(replay, source=source)
     return _write(args, outputs, doc, replay)
+
+
+def replay_line(replay, same: bool = False) -> str:
+    """What `replay` prints of a virtual experiment: the experiment and its outcome in
+    words, then what the replay shows (simulated time; the machine form is --json's)."""
+    from transfertwin.replay import outcome_text, state_text
+
+    row = replay.result.row()
+    frames = f"{len(replay.t_s)} frames of {replay.duration_s:.2f} s simulated time"
+    stored = "; the same result as the stored row" if same else ""
+    return (f"{state_text(row)}, run {row['run']}, seed {row['seed']}: {outcome_text(row)}"
+            f"{stored}. The replay shows {frames}.")  # fmt: skip
 
 
 def _plant_replay(args: argparse.Namespace):  # -> (document, Replay)
@@ -225,9 +241,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--plant-seed-file", metavar="FILE",
                    help="with --plant-rows: a file holding the plant's seed (a plant floor's "
                    "plant.secret)")  # fmt: skip
-    p.add_argument("--plant-kind", metavar="KIND",
-                   help="with --plant-rows: in-class or mismatch (default: the rehearsal's; "
-                   "a bullet plant's rows cannot be replayed)")
+    p.add_argument(
+        "--plant-kind",
+        metavar="KIND",
+        help="with --plant-rows: in-class or mismatch (default: the rehearsal's; "
+        "a bullet plant's rows cannot be replayed)",
+    )
     p.add_argument("--object", help="object id (o1..o37) or a mesh path")
     p.add_argument("--units", default="m", help="length unit of a mesh file: m, cm, mm, in")
     p.add_argument("--face", help="front or back")
@@ -244,8 +263,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--mp4", help="write an H.264 MP4 clip (the GIF's frames) here")
     p.add_argument("--fps", type=int, default=10,
                    help="GIF and MP4 frames per second (default 10)")  # fmt: skip
-    p.add_argument("--speed", type=float, default=2.0,
-                   help="GIF and MP4 playback speed, simulated s per second (default 2)")
+    p.add_argument(
+        "--speed",
+        type=float,
+        default=2.0,
+        help="GIF and MP4 playback speed, simulated s per second (default 2)",
+    )
     p.add_argument("--serve", action="store_true", help="serve the 3-D view after writing files")
     p.add_argument("--no-browser", action="store_true", help="print the URL, open no browser")
     p.add_argument("--host", default="127.0.0.1", help="interface to serve on (loopback)")

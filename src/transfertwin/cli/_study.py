@@ -238,7 +238,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--db", required=True, help="SQLite result store (created if missing)")
     p.add_argument("--objects", help="o1,o18,... | all | mesh paths (default: preset)")
     p.add_argument("--runs", type=int, help="repetitions per state (default: preset)")
-    p.add_argument("--theta-step", type=int, help="keep θ multiples of this (default: preset)")
+    p.add_argument("--theta-step", type=int, help="keep θ multiples of this; it must divide 360 "
+                   "(default: preset)")  # fmt: skip
     p.add_argument("--preset", choices=("quick", "full"), default="quick")
     p.add_argument("--workers", type=int, help="worker processes (default: all cores)")
     p.add_argument("--seed", type=int, default=0)

@@ -22,12 +22,6 @@ if TYPE_CHECKING:
 
 __all__ = ["register"]
 
-_RESULT_KEYS = (
-    "object_id", "face", "conveyor", "theta_deg", "seed", "dock_err_x_mm", "dock_err_y_mm",
-    "dock_err_theta_deg", "status", "y1", "y2", "success", "t_end_1_s", "t_end_2_s",
-    "t_end_s", "message",
-)  # fmt: skip
-
 
 def hull_notice(ref: str, units: str = "m") -> str:
     """The line to print before a mesh's first CoACD decomposition (seconds to minutes),
@@ -126,21 +120,32 @@ def strip_title(result: ExperimentResult) -> list[str]:
     return lines
 
 
+def result_lines(row: dict[str, object]) -> list[str]:
+    """What `transfer` prints: the experiment, then its outcome in words (the machine form,
+    status, y1, y2 and success, is `--json`'s)."""
+    from transfertwin.replay import outcome_text, state_text
+
+    x, y, t = (float(row[k]) for k in ("dock_err_x_mm", "dock_err_y_mm", "dock_err_theta_deg"))
+    return [
+        f"{state_text(row)}, seed {row['seed']}; docking error x {x:.2f} mm, y {y:.2f} mm, "
+        f"θ {t:.2f}°",
+        outcome_text(row),
+    ]
+
+
 def _print_result(row: dict[str, object]) -> None:
-    table = Table(title="virtual transfer experiment E^V", show_header=False)
-    for key in _RESULT_KEYS:
-        value = row[key]
-        text = f"{value:.3f}" if isinstance(value, float) else str(value)
-        table.add_row(key, "-" if value is None or text == "nan" else text)
-    Console().print(table)
+    for line in result_lines(row):
+        print(line)
 
 
 def cmd_states(args: argparse.Namespace) -> int:
     """Print the experiment state set (Eq. 6.7–6.10) as CSV."""
     from transfertwin.ots import experiment_states, filter_theta_step, states_csv
+    from transfertwin.study.experiment import check_theta_step
 
     states = experiment_states()
     if args.theta_step:
+        check_theta_step(args.theta_step)
         states = filter_theta_step(states, args.theta_step)
     sys.stdout.write(states_csv(states))
     return 0
@@ -190,8 +195,9 @@ def demo_row(r: ExperimentResult) -> list[str]:
 
 def cmd_demo(args: argparse.Namespace) -> int:
     """A short demo of single transfers with a real docking error."""
-    from transfertwin.study.experiment import run_demo
+    from transfertwin.study.experiment import check_theta_step, run_demo
 
+    check_theta_step(args.theta_step)
     out = out_dir(args.out)
     console = Console()
     with progress_bar(f"E^V {args.object}", console) as on_progress:
@@ -228,7 +234,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--image", help="write a strip of frames from t0 to t_end to this PNG")
     p.set_defaults(func=cmd_transfer)
     p = sub.add_parser("states", help="print the 924 pre-transfer states as CSV")
-    p.add_argument("--theta-step", type=int, default=0, help="keep θ multiples of this")
+    p.add_argument("--theta-step", type=int, default=0,
+                   help="keep θ multiples of this; it must divide 360 "
+                   "(default: every state)")  # fmt: skip
     p.set_defaults(func=cmd_states)
     objects = sub.add_parser("objects", help="built-in cores")
     osub = objects.add_subparsers(dest="objects_command", required=True, parser_class=type(objects))
@@ -239,6 +247,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_objects_export)
     p = sub.add_parser("demo", help="a short demo of single transfers")
     p.add_argument("--out", default="out/demo", help="output directory")
-    p.add_argument("--object", default="o1")
-    p.add_argument("--theta-step", type=int, default=45)
+    p.add_argument("--object", default="o1",
+                   help="built-in core id (o1..o37) or a mesh path (default o1)")  # fmt: skip
+    p.add_argument("--theta-step", type=int, default=45,
+                   help="θ every this many degrees; it must divide 360 (default 45)")  # fmt: skip
     p.set_defaults(func=cmd_demo)

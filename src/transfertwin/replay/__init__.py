@@ -34,6 +34,7 @@ from transfertwin.replay._source import (
     study_spec,
     transfer_spec,
 )
+from transfertwin.replay._words import outcome_text, state_text, status_text
 
 __all__ = [
     "BARRIER_NAMES",
@@ -58,6 +59,7 @@ __all__ = [
     "compile_system",
     "gif_frame_times",
     "glb_bytes",
+    "outcome_text",
     "plant_row",
     "plant_source",
     "record_experiment",
@@ -66,6 +68,8 @@ __all__ = [
     "replay_geometry",
     "replay_payload",
     "scene_geometry",
+    "state_text",
+    "status_text",
     "study_spec",
     "transfer_spec",
     "write_gif",

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import pytest
 
 from transfertwin import InputError
@@ -107,6 +109,19 @@ def test_parse_objects_all_is_the_37_cores():
 def test_invalid_plans_are_input_errors(kw):
     with pytest.raises(InputError):
         _plan(**kw)
+
+
+@pytest.mark.parametrize("step", [7, 25, 361])
+def test_a_theta_step_that_does_not_divide_360_is_refused_naming_the_divisors(step):
+    with pytest.raises(InputError, match=r"--theta-step must divide 360 .*\b45\b.*got"):
+        _plan(theta_step=step)
+
+
+@pytest.mark.parametrize("step", [1, 5, 30, 45, 90, 360])
+def test_every_divisor_of_360_makes_an_even_grid(step):
+    thetas = sorted({s.theta_deg for s in _plan(theta_step=step).states()})
+    assert len(thetas) == 360 // step
+    assert {b - a for a, b in itertools.pairwise(thetas)} <= {step}
 
 
 def test_plan_with_the_default_copula_round_trips_and_resumes_identically():

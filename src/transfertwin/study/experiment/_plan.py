@@ -31,6 +31,7 @@ __all__ = [
     "SAMPLING_MODES",
     "Preset",
     "StudyPlan",
+    "check_theta_step",
     "delivery_docking_seed",
     "experiment_seeds",
     "parse_objects",
@@ -57,6 +58,17 @@ PRESETS: dict[str, Preset] = {
     # The study's Full State Experiments: 37 × 924 × 50 = 1,709,400 (Eq. 6.20).
     "full": Preset(tuple(builtin_ids()), theta_step=1, runs=50),
 }
+
+
+def check_theta_step(step_deg: int, option: str = "--theta-step") -> int:
+    """`step_deg` if it divides 360, so that the θ grid is even (every step the same size,
+    including the one across ±180°); else an InputError naming `option` and the divisors."""
+    if not 1 <= step_deg <= 360 or 360 % step_deg:
+        divisors = ", ".join(str(d) for d in range(1, 361) if 360 % d == 0)
+        raise InputError(
+            f"{option} must divide 360 so that the θ grid is even ({divisors}), got {step_deg}"
+        )
+    return step_deg
 
 
 def parse_objects(text: str) -> tuple[str, ...]:
@@ -137,8 +149,7 @@ class StudyPlan:
         object.__setattr__(self, "sampling_options", tuple(sorted(self.sampling_options)))
         if self.runs < 1:
             raise InputError(f"--runs must be >= 1, got {self.runs}")
-        if not 1 <= self.theta_step <= 360:
-            raise InputError(f"--theta-step must be in 1..360, got {self.theta_step}")
+        check_theta_step(self.theta_step)
         if self.seed < 0:
             raise InputError(f"--seed must be >= 0, got {self.seed}")
         if not self.objects:

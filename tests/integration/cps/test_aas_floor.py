@@ -2,7 +2,8 @@
 that show their state (the demo floor in one process, real asyncua servers on loopback).
 
 * Every operation in an asset's served ControlInterface has a handler on its server (a
-  call of one without answers BadNotImplemented).
+  call of one without answers BadNotImplemented); a capability's relations and constraints
+  are nodes of the server.
 * After an order the object's AAS, read over OPC UA, holds where it lies, the face,
   conveyor and yaw it was transferred in, the outcome, and its transfer history.
 """
@@ -38,6 +39,13 @@ def test_served_operations_are_implemented_and_an_object_shows_its_transfer(tmp_
         async with LocalFloor(default_floor_spec(), wd, time_scale=0.0) as floor:
             assert set(floor.nodes) >= {"TU_A", "TM_1", "o2", "TMS", "EM", "PropS", "KG"}
             assert unimplemented(floor) == {}
+            async with floor.client("TM_1", role="viewer") as tm:  # the capability pattern
+                width = await tm.read("Capabilities", "TransferRelations.Constraints.BeltWidth")
+                dock = await tm.read("Capabilities", "TransferRelations.RealizedByDock.Second")
+                cap = await tm.read("Capabilities", "TransferRelations.RealizedByDock.First")
+            assert width == 0.195
+            assert dock.endswith("/sm/TM_1/ControlInterface/Dock")
+            assert cap.endswith("/sm/TM_1/Capabilities/Transfer")
 
             done = asyncio.Event()
 

@@ -402,8 +402,8 @@ def cmd_down(args: argparse.Namespace) -> int:
     left = asset_pids(wd)
     if left:  # what did not stop in time is killed (its state is on disk already)
         stop_floor(wd, signal.SIGKILL)
-    print(f"stopped {len(asked) + len(pids) - len(left)} asset processes ({len(asked)} over "
-          f"OPC UA, {len(pids) - len(left)} by signal)"
+    print(f"stopped {len(asked) + len(pids) - len(left)} assets ({len(asked)} over OPC UA, "
+          f"{len(pids) - len(left)} by signal)"
           f"{f'; killed {sorted(left)} (no exit within {args.timeout:g} s)' if left else ''}")
     return 0
 

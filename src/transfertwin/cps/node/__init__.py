@@ -26,6 +26,7 @@ if TYPE_CHECKING:
         AssetNode,
         RoleFactory,
         heartbeat_payload,
+        lifecycle_submodel,
     )
     from transfertwin.cps.node._peers import Peers
     from transfertwin.cps.node._role import Role
@@ -49,6 +50,7 @@ __all__ = [
     "heartbeat_payload",
     "heartbeat_period",
     "instance_id",
+    "lifecycle_submodel",
 ]
 
 __getattr__, __dir__ = lazy_exports(__name__, __file__)

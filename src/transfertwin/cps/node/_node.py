@@ -24,9 +24,9 @@ import time
 from collections.abc import Awaitable, Callable
 from typing import Any
 
-from transfertwin._errors import InputError
 from basyx.aas import model
 
+from transfertwin._errors import InputError
 from transfertwin.cps.aas import (
     Arg,
     AssetDescriptor,
@@ -50,7 +50,8 @@ from transfertwin.cps.opcua import (
     load_credentials,
 )
 
-__all__ = ["LIFECYCLE", "SHUTDOWN", "AssetNode", "RoleFactory", "heartbeat_payload"]
+__all__ = ["LIFECYCLE", "SHUTDOWN", "AssetNode", "RoleFactory", "heartbeat_payload",
+           "lifecycle_submodel"]  # fmt: skip
 
 log = logging.getLogger("transfertwin.cps")
 
@@ -68,6 +69,13 @@ LIFECYCLE = "Lifecycle"
 
 #: Seconds between a Shutdown's answer and the stop (the answer must get out first).
 SHUTDOWN_DELAY_S = 0.2
+
+def lifecycle_submodel(asset_id: str) -> model.Submodel:
+    """The submodel `LIFECYCLE` every asset's server has besides its AAS (`SHUTDOWN`)."""
+    return model.Submodel(submodel_iri(asset_id, LIFECYCLE), id_short=LIFECYCLE,
+                          semantic_id=semantic(LIFECYCLE),
+                          submodel_element=[operation(SHUTDOWN)])  # fmt: skip
+
 
 #: Makes the role of a node's asset (`transfertwin.cps.roles.role_for`).
 RoleFactory = Callable[["AssetNode"], Role]
@@ -128,14 +136,12 @@ class AssetNode:
                                    provenance=PROVENANCE[cfg.hal.kind])  # fmt: skip
         for spec in self.role.operations():
             rep.submodel("ControlInterface").submodel_element.add(operation(spec))
-        lifecycle = model.Submodel(submodel_iri(self.desc.asset_id, LIFECYCLE),
-                                   id_short=LIFECYCLE, semantic_id=semantic(LIFECYCLE),
-                                   submodel_element=[operation(SHUTDOWN)])  # fmt: skip
         writable = {("OperationalData", p) for p in externally_synced(rep)}
         writable |= {("OperationalData", p) for p in self.role.writable()}
         scfg = ServerConfig(host=cfg.host, port=cfg.port, insecure=cfg.insecure,
                             cert_dir=cfg.cert_dir, trust_dir=cfg.trust_dir,
                             credentials=self.credentials)  # fmt: skip
+        lifecycle = lifecycle_submodel(self.desc.asset_id)
         self.server = AssetServer(self.desc.asset_id, (*rep.submodels, lifecycle), scfg,
                                   {**self.role.handlers(), "Shutdown": self._shutdown},
                                   frozenset(writable))  # fmt: skip

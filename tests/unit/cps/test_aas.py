@@ -261,7 +261,7 @@ def test_externally_synced_properties_follow_table_3_1() -> None:
     reps = {a: build_representation(DEMO[a]) for a in ("TU_A", "TM_1", "o1", "PropS")}
     assert externally_synced(reps["TU_A"]) == {"PossessedObjects", "DockedTransportModule"}
     assert externally_synced(reps["o1"]) == {"PossessedBy", "Face", "Conveyor", "Theta",
-                                             "LastTransfer", "TransferHistoryJson"}
+                                             "LastTransfer", "TransferHistoryJson"}  # fmt: skip
     assert externally_synced(reps["TM_1"]) == frozenset()
     assert externally_synced(reps["PropS"]) == frozenset()
 

@@ -146,7 +146,7 @@ def register(csub: argparse._SubParsersAction) -> None:
     p = ssub.add_parser("start", help="start or resume a study from a JSON plan")
     p.add_argument("--workdir", required=True, help="the floor's work folder (cps up --floor)")
     p.add_argument("--plan", required=True,
-                   help="plan.json: objects, states or theta_step, runs, seed, docking, "
+                   help="plan.json: objects, states or theta_step, runs, seed, docking, leg, "
                         "executor (local|ray), workers, store (docs/architecture.md)")
     p.add_argument("--store", help="SQLite result store (default: the plan's 'store', else "
                                    "one in the Experiment Manager's state folder)")

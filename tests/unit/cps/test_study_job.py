@@ -33,6 +33,8 @@ def test_a_plan_names_its_states_runs_and_executor():
     step = StudyRequest.parse(json.dumps({"objects": "o1", "theta_step": 90, "runs": 1,
                                           "docking": "resample"}))
     assert step.plan.n_experiments == len(step.plan.states()) > 2
+    legs = _request(leg="operation")  # the EM plans a floor's operation E^V as well
+    assert legs.plan.leg == "operation" and legs.plan.plan_hash != _request().plan.plan_hash
 
 
 @pytest.mark.parametrize(("changes", "message"), [
@@ -47,6 +49,7 @@ def test_a_plan_names_its_states_runs_and_executor():
     ({"executor": "slurm"}, "local or ray"),
     ({"address": "auto"}, "needs executor ray"),
     ({"docking": {"fixed": [1, 2]}}, "fixed"),
+    ({"leg": "there"}, "--leg must be one of"),
 ])  # fmt: skip
 def test_a_bad_plan_is_refused_with_the_reason(changes, message):
     d = {k: v for k, v in (TINY | changes).items() if v is not None}

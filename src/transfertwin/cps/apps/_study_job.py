@@ -38,7 +38,7 @@ __all__ = [
 STUDY_INDEX = "study-stores.json"
 
 _KEYS = {"objects", "states", "theta_step", "runs", "seed", "docking", "profile",
-         "executor", "workers", "address", "chunk_size", "store"}  # fmt: skip
+         "executor", "workers", "address", "chunk_size", "store", "leg"}  # fmt: skip
 _EXECUTORS = ("local", "ray")
 
 
@@ -153,7 +153,8 @@ class StudyRequest:
             objects=_objects(d["objects"]),
             theta_step=1 if only else _int(d, "theta_step", 30, 1),
             runs=_int(d, "runs", None, 1), seed=_int(d, "seed", 0, 0),
-            docking=_docking(d.get("docking", "copula")), only_states=only, **kwargs,
+            docking=_docking(d.get("docking", "copula")), only_states=only,
+            leg=str(d.get("leg", "round-trip")), **kwargs,
         )  # fmt: skip
         check_plan(plan)
         store = d.get("store")

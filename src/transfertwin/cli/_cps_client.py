@@ -22,8 +22,8 @@ from typing import TypeVar
 from transfertwin._errors import InputError
 from transfertwin.cli._paths import out_dir
 
-__all__ = ["add_access", "call_asset", "endpoint_of", "floor_access", "load_info", "run_client",
-           "text_table", "workdir_of"]  # fmt: skip
+__all__ = ["add_access", "call_asset", "check_access", "endpoint_of", "floor_access",
+           "load_info", "run_client", "text_table", "workdir_of"]  # fmt: skip
 
 #: What an operator credential folder holds (`--credential`): the client's application
 #: certificate and key, and the operator's user name and password.
@@ -99,17 +99,24 @@ def floor_access(args: argparse.Namespace) -> tuple[str, dict, object]:
     """(where, the floor's description as cps.json has it, the client credentials) from
     ``--workdir``, or from ``--graph``/``--ca``/``--credential`` (the assets and their
     endpoints then come from the graph's ``Status``); InputError for a bad combination."""
-    graph = getattr(args, "graph", None)
-    if (args.workdir is None) == (graph is None):
-        raise InputError("give the floor's --workdir (this host), or --graph URL with --ca "
-                         "and --credential (any host)")  # fmt: skip
+    graph = check_access(args)
     if graph is None:
-        if args.ca is not None or args.credential is not None:
-            raise InputError("--ca and --credential go with --graph (a floor on this host "
-                             "uses its --workdir's)")  # fmt: skip
         wd = workdir_of(args.workdir, must_exist=True)
         return str(wd), *load_info(wd)
     return graph, *_remote_info(graph, args.ca, args.credential)
+
+
+def check_access(args: argparse.Namespace) -> str | None:
+    """The ``--graph`` URL (None: ``--workdir``), after checking that the options say where
+    the floor is in one way (InputError otherwise)."""
+    graph = args.graph
+    if (args.workdir is None) == (graph is None):
+        raise InputError("give the floor's --workdir (this host), or --graph URL with --ca "
+                         "and --credential (any host)")  # fmt: skip
+    if graph is None and (args.ca is not None or args.credential is not None):
+        raise InputError("--ca and --credential go with --graph (a floor on this host uses "
+                         "its --workdir's)")  # fmt: skip
+    return graph
 
 
 def _remote_info(graph: str, ca: str | None, credential: str | None) -> tuple[dict, object]:

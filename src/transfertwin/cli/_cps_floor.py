@@ -20,6 +20,7 @@ from transfertwin._errors import InputError
 from transfertwin.cli._cps_client import (
     add_access,
     call_asset,
+    check_access,
     floor_access,
     load_info,
     text_table,
@@ -384,6 +385,7 @@ def cmd_down(args: argparse.Namespace) -> int:
     ``--timeout``."""
     from transfertwin.cps import asset_pids, stop_floor
 
+    check_access(args)
     wd = Path(args.workdir) if args.workdir is not None else None
     asked, refused = [], []
     if wd is None or (wd / "cps.json").is_file():

@@ -89,9 +89,8 @@ class Floor:
     def restart(self, aid: str) -> subprocess.Popen:
         log = (self.wd / "logs" / f"{aid}.log").open("ab")
         return subprocess.Popen(
-            [sys.executable, "-m", "transfertwin", "cps", "asset", "--config",
-             str(self.wd / "assets" / f"{aid}.toml")], stdout=log, stderr=subprocess.STDOUT,
-            start_new_session=True)  # fmt: skip
+            [sys.executable, "-m", "transfertwin", "cps", "asset", str(self.wd / "assets" / aid)],
+            stdout=log, stderr=subprocess.STDOUT, start_new_session=True)  # its bundle
 
 
 async def wait_online(floor: Floor, aid: str, online: bool, timeout_s: float,

@@ -1,0 +1,34 @@
+"""A pool of worker processes kept warm between studies (`WarmPool`, the Experiment
+Manager's predictions): the same rows as the study's own workers, study after study."""
+
+from __future__ import annotations
+
+import pytest
+
+from transfertwin import InputError
+from transfertwin.store import MemoryResultStore
+from transfertwin.study.docking import docking_model
+from transfertwin.study.experiment import StudyPlan, WarmPool, run_study
+
+
+def _rows(plan: StudyPlan, **kw) -> list[dict]:
+    store = MemoryResultStore()
+    run_study(plan, store, **kw)
+    key = ("object_id", "face", "conveyor", "theta_deg", "run")
+    rows = [{k: v for k, v in r.items() if k != "finished_utc"} for r in store.rows()]
+    return sorted(rows, key=lambda r: tuple(r[k] for k in key))
+
+
+def test_a_warm_pool_gives_the_rows_of_the_studys_own_workers_and_stays_up() -> None:
+    plans = [StudyPlan((obj,), 180, 1, 5, docking_model("copula"), leg="operation")
+             for obj in ("o23", "o1")]  # fmt: skip
+    with WarmPool(2) as pool:
+        first = [_rows(p, executor=pool) for p in plans]
+        pids = set(pool._pool._processes)  # the same processes served both studies
+        again = _rows(plans[0], executor=pool)
+        assert set(pool._pool._processes) == pids
+    assert first == [_rows(p) for p in plans]  # in this process: the same bits
+    assert again == first[0]
+    assert {r["status"] for rows in first for r in rows} == {"ok"}
+    with pytest.raises(InputError, match="at least 1"):
+        WarmPool(0)

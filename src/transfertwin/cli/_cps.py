@@ -20,8 +20,8 @@ from transfertwin.cli._cps_client import (
 from transfertwin.cli._cps_floor import (
     cmd_up_floor,
     cmd_up_local,
+    floor_document,
     floor_order,
-    floor_status,
     print_floor_status,
 )
 from transfertwin.cli._cps_floor import register as register_floor
@@ -42,7 +42,7 @@ def cmd_up(args: argparse.Namespace) -> int:
 def cmd_status(args: argparse.Namespace) -> int:
     """List the assets as the knowledge graph knows them, with where each object is and
     where each transport module stands on the shop floor (and the unit it is docked at)."""
-    doc = floor_status(*floor_access(args))
+    doc = floor_document(*floor_access(args))
     if args.json:
         print(json.dumps(doc, indent=2))
     else:

@@ -69,11 +69,9 @@ async def call_asset(info: dict, creds, aid: str, op: str, *args, timeout_s: flo
     """Call method `op` of asset `aid` as an operator; its answer."""
     from transfertwin.cps.opcua import connect
 
-    # a floor reached from elsewhere: its servers checked against the CA given (--ca)
-    trust = {"trust_dir": Path(info["server_trust_dir"])} if info.get("server_trust_dir") else {}
     async with connect(endpoint_of(info, aid), aid, credentials=creds, role="operator",
                        cert_dir=Path(info["cert_dir"]), insecure=info["insecure"],
-                       timeout_s=timeout_s, **trust) as s:  # fmt: skip
+                       timeout_s=timeout_s) as s:  # fmt: skip
         return await s.call(op, *args, submodel=submodel)
 
 
@@ -143,8 +141,8 @@ def _remote_info(graph: str, ca: str | None, credential: str | None) -> tuple[di
                          f"user ({type(exc).__name__})") from None
     info = {"assets": [{"id": "KG", "kind": "logical", "class": "knowledge_graph",
                         "endpoint": graph.rstrip("/"), "standby": False}],
-            "cert_dir": str(folder.resolve()), "insecure": False, "graph": graph,
-            "server_trust_dir": str(_trust_folder(Path(ca))), "groups": None}  # fmt: skip
+            "cert_dir": str(_client_folder(folder, Path(ca))), "insecure": False,
+            "graph": graph, "groups": None}  # fmt: skip
     from asyncua import ua
 
     try:
@@ -160,23 +158,35 @@ def _remote_info(graph: str, ca: str | None, credential: str | None) -> tuple[di
     return info, creds
 
 
-def _trust_folder(ca: Path) -> Path:
-    """A trust folder with the CA: `ca` itself when it is one, else a private folder of
-    this process holding the certificate file `ca` (as DER), removed at exit."""
+def _client_folder(credential: Path, ca: Path) -> Path:
+    """This process's client folder, as a floor's ``W/certs`` is laid out: the credential's
+    certificate and key (links to them, nothing copied), and in ``trusted/`` the CA `ca`
+    (a certificate file, written as ``ca.der``; or links to the files of a folder holding
+    it and its CRL), against which every server is checked. Removed at exit."""
     from cryptography.hazmat.primitives.serialization import Encoding
 
     from transfertwin.cps.opcua import read_certificate
 
     if ca.is_dir():
-        return ca.resolve()
-    try:
-        cert = read_certificate(ca)
-    except (ValueError, OSError) as exc:
-        raise InputError(f"--ca {ca}: not a certificate ({exc})") from None
-    folder = Path(tempfile.mkdtemp(prefix="transfertwin-ca-"))
+        trusted = [p for p in sorted(ca.iterdir()) if p.is_file()]
+        der = None
+    else:
+        trusted = []
+        try:
+            der = read_certificate(ca).public_bytes(Encoding.DER)
+        except (ValueError, OSError) as exc:
+            raise InputError(f"--ca {ca}: not a certificate ({exc})") from None
+    folder = Path(tempfile.mkdtemp(prefix="transfertwin-client-"))
     atexit.register(shutil.rmtree, folder, True)
-    (folder / "ca.der").write_bytes(cert.public_bytes(Encoding.DER))
+    for name in CREDENTIAL_FILES[:2]:
+        (folder / name).symlink_to((credential / name).resolve())
+    (folder / "trusted").mkdir()
+    for path in trusted:
+        (folder / "trusted" / path.name).symlink_to(path.resolve())
+    if der is not None:
+        (folder / "trusted" / "ca.der").write_bytes(der)
     return folder
+
 
 
 def run_client(wd: Path, coro_fn: Callable[[], Awaitable[T]]) -> T:

@@ -28,7 +28,8 @@ from transfertwin.cli._cps_client import (
 from transfertwin.cli._cps_ops import register as register_ops
 from transfertwin.cli._paths import out_dir
 
-__all__ = ["cmd_asset", "cmd_down", "cmd_locate", "cmd_up_floor", "floor_status", "register"]
+__all__ = ["cmd_asset", "cmd_down", "cmd_locate", "cmd_up_floor", "floor_document", "floor_status",
+           "register"]  # fmt: skip
 
 
 def _floor_spec(name: str):
@@ -246,7 +247,7 @@ def _wait_online(wd: Path, expected: set[str], timeout_s: float, procs) -> set[s
                 raise InputError(f"asset {aid} exited with code {p.returncode} while the floor "
                                  f"started: {last} ({log})")
         try:
-            doc = floor_status(str(wd), *load_info(wd), with_objects=False)
+            doc = floor_status(wd, with_objects=False)
             online = {a["id"] for a in doc["assets"] if a["online"]}
         except (InputError, OSError, TimeoutError, ConnectionError):
             pass
@@ -441,7 +442,12 @@ async def _shutdown_floor(info: dict, creds, timeout_s: float) -> tuple[list[str
     return asked, refused
 
 
-def floor_status(where: str, info: dict, creds, *, with_objects: bool = True) -> dict:
+def floor_status(wd: Path, *, with_objects: bool = True) -> dict:
+    """The floor of work folder `wd` as one document (`floor_document`)."""
+    return floor_document(str(wd), *load_info(wd), with_objects=with_objects)
+
+
+def floor_document(where: str, info: dict, creds, *, with_objects: bool = True) -> dict:
     """The floor as one document: assets (id, kind, class, address, pid, online, state)
     from the knowledge graph, objects' locations from the TMS's ledger (`where`, `info`,
     `creds`: as `floor_access` gives them)."""

@@ -25,6 +25,7 @@ import hmac
 import json
 import logging
 from collections.abc import AsyncIterator, Awaitable, Callable
+from datetime import UTC, datetime
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -224,6 +225,9 @@ def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = No
             response.set_cookie(_COOKIE, token, httponly=True, samesite="strict")
         return response
 
+    async def favicon(request: Request) -> Response:
+        return FileResponse(_static_dir() / "favicon.svg", media_type="image/svg+xml")
+
     def page_of(name: str) -> Callable[[Request], Awaitable[Response]]:
         async def page(request: Request) -> Response:
             given = request.query_params.get("token")
@@ -272,7 +276,9 @@ def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = No
     @_api
     async def api_aas(request: Request) -> Response:
         check_read(request)
-        return JSONResponse({"submodels": await gateway().aas(request.path_params["aid"])})
+        submodels = await gateway().aas(request.path_params["aid"])
+        read = datetime.now(UTC).isoformat(timespec="seconds")
+        return JSONResponse({"submodels": submodels, "read_utc": read})
 
     @_api
     async def api_live(request: Request) -> Response:
@@ -410,6 +416,7 @@ def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = No
 
     routes = [
         Route("/", index),
+        Route("/favicon.ico", favicon),
         Route("/static/vendor/plotly.min.js", plotly),
         Mount("/static", StaticFiles(directory=_static_dir()), name="static"),
         Route("/api/config", api_config),

@@ -21,6 +21,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from transfertwin.web._display import step_text, unreachable_text
+
 __all__ = [
     "FloorInfo",
     "asset_condition",
@@ -28,6 +30,7 @@ __all__ = [
     "order_rows",
     "read_floor_info",
 ]
+
 
 @dataclass(frozen=True)
 class FloorInfo:
@@ -133,7 +136,7 @@ def asset_condition(
     if standby:
         return False, "on standby (prepared, not started)"
     if session_error:
-        return False, f"not answering ({session_error})"
+        return False, unreachable_text(session_error)
     return False, "connecting"
 
 
@@ -157,7 +160,7 @@ def _ledger_row(op: dict[str, Any]) -> dict[str, Any]:
     outcome = result.get("status")
     if outcome and result.get("reason"):
         outcome += f" ({result.get('failed_step') or 'step'}: {result['reason']})"
-    steps = [{"t": float(t), "text": str(what)} for t, what in op.get("history", ())]
+    steps = [{"t": float(t), "text": step_text(str(what))} for t, what in op.get("history", ())]
     return {"id": op["operation"], "operation": op["operation"], "object": op.get("object"),
             "source": op.get("source"), "target": op.get("target"),
             "state": op.get("state", "queued"), "outcome": outcome,
@@ -182,8 +185,13 @@ def order_rows(operations: list[dict[str, Any]],
         row = rows.pop(order.get("operation") or "", None)
         merged = dict(order, placed_by="console")
         if row is not None:  # the TMS's record is the authority
-            merged.update(state=row["state"], outcome=row["outcome"], steps=row["steps"],
-                          module=row["module"], source=row["source"] or order["source"])
+            merged.update(
+                state=row["state"],
+                outcome=row["outcome"],
+                steps=row["steps"],
+                module=row["module"],
+                source=row["source"] or order["source"],
+            )
         out.append(merged)
     out.extend(rows.values())
     return sorted(out, key=lambda r: _op_number(r.get("operation")))

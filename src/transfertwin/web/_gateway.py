@@ -38,6 +38,7 @@ from transfertwin.cps.opcua import (
     node_id,
 )
 from transfertwin.cps.opcua import load_credentials as _load_credentials
+from transfertwin.web._display import display_values, unreachable_text, value_text
 from transfertwin.web._floor import (
     FloorInfo,
     asset_condition,
@@ -149,8 +150,10 @@ class CpsGateway(OrderDesk):
                 await ensure_certificate(self.info.cert_dir, f"client-{role}")
 
     def _start_floor_tasks(self) -> None:
-        self._floor_tasks = [asyncio.create_task(self._watch_graph()),
-                             asyncio.create_task(self._watch_ledger())]
+        self._floor_tasks = [
+            asyncio.create_task(self._watch_graph()),
+            asyncio.create_task(self._watch_ledger()),
+        ]
 
     async def stop(self) -> None:
         """Close every session."""
@@ -261,7 +264,7 @@ class CpsGateway(OrderDesk):
             except asyncio.CancelledError:
                 raise
             except Exception as exc:
-                self.kg_error = f"knowledge graph not answering ({type(exc).__name__})"
+                self.kg_error = f"the knowledge graph is {unreachable_text(type(exc).__name__)}"
                 self.kg_rows, self.kg_status = [], None  # nothing stale shown as current
             finally:
                 self._kg = None
@@ -292,7 +295,7 @@ class CpsGateway(OrderDesk):
             except asyncio.CancelledError:
                 raise
             except Exception as exc:
-                self.tms_error = f"the TMS is not answering ({type(exc).__name__})"
+                self.tms_error = f"the TMS is {unreachable_text(type(exc).__name__)}"
             await asyncio.sleep(1.0)
 
     async def _query(self, sparql: str) -> list[dict[str, Any]]:
@@ -365,14 +368,17 @@ class CpsGateway(OrderDesk):
                           if not c[0] and self.values.get(aid)],
                 "seen": {aid: self.seen[aid] for aid in self._assets if aid in self.seen},
                 "values": {aid: self.values.get(aid, {}) for aid in self._assets},
+                "display": {aid: display_values(self.values.get(aid, {}))
+                            for aid in self._assets},
                 "kg_error": self.floor_error or self.kg_error}  # fmt: skip
 
     async def aas(self, aid: str) -> list[dict[str, Any]]:
         """The asset's AAS as its server exposes it: submodels, their elements and values."""
         self._known(aid)
         s = self._sessions.get(aid)
-        if s is None:
-            raise LookupError(f"{aid} is not reachable right now")
+        online, reason = self.condition(aid)
+        if s is None or not online:
+            raise LookupError(f"{aid} is offline: {reason or 'not reachable right now'}")
         root = await _node(s)
         out = []
         for sm in await root.get_children_descriptions():
@@ -392,6 +398,7 @@ class CpsGateway(OrderDesk):
             vals = await s.client.read_values([n for _, n in variables]) if variables else []
             for (el, _), v in zip(variables, vals, strict=True):
                 el["value"] = _jsonable(v)
+                el["text"] = value_text(el["id_short"], el["value"])
             out.append({"id_short": sm.BrowseName.Name, "elements": elements})
         return out
 

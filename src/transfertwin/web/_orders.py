@@ -99,6 +99,9 @@ class OrderDesk:
         """A transfer unit id, or the unit standing at a station named by its id (or, for
         the target, a destination group)."""
         units = self.ids_of("transfer_unit")
+        if value is None or value == "":
+            raise InputError(f"the order has no {what}: choose a transfer unit or station "
+                             f"({', '.join(units)})")  # fmt: skip
         if not isinstance(value, str) or not _ID.match(value):
             raise InputError(f"{what} must be a transfer unit or station id, got {value!r:.70}")
         if value in units or (what == "target" and value in self.destination_groups()):
@@ -116,6 +119,8 @@ class OrderDesk:
             raise InputError(f"unknown field(s): {', '.join(unknown)}")
         obj = body.get("object")
         objects = self.ids_of("object")
+        if obj is None or obj == "":
+            raise InputError(f"the order has no object: choose one of {', '.join(objects)}")
         if not isinstance(obj, str) or obj not in objects:
             raise InputError(f"object must be one of {', '.join(objects)}, got {obj!r:.70}")
         target = self._unit("target", body.get("target"))

@@ -64,15 +64,21 @@ def test_item3_an_asset_that_joined_at_runtime_is_watched_at_its_announced_addre
 def test_item8_1_offline_assets_say_why():
     assert asset_condition(True, None, {"online": True}) == (True, None)
     assert asset_condition(False, "ConnectionRefusedError", None) == (
-        False, "not answering (ConnectionRefusedError)")  # fmt: skip
+        False, "not answering: nothing listens at its address (is the floor running?)")  # fmt: skip
     online, reason = asset_condition(False, "TimeoutError",
                                      {"online": False, "last_seen_s": 4.2})  # fmt: skip
     assert not online and reason == "left the floor (last heartbeat 4 s ago)"
     # the graph tells an announced leave from a lapsed lease, and since when
     left = {"online": False, "offline": {"reason": "left", "since_s": 12.4, "detail": "x"}}
     assert asset_condition(False, "X", left) == (False, "left the floor 12 s ago (announced)")
-    lapsed = {"online": False, "offline": {"reason": "lapsed", "since_s": 3.0,
-                                           "detail": "no heartbeat for 5 s (lease expired)"}}
+    lapsed = {
+        "online": False,
+        "offline": {
+            "reason": "lapsed",
+            "since_s": 3.0,
+            "detail": "no heartbeat for 5 s (lease expired)",
+        },
+    }
     assert asset_condition(False, "X", lapsed) == (
         False, "lease lapsed 3 s ago (no heartbeat for 5 s (lease expired))")  # fmt: skip
     # up and idle (its lease held) is online while the console's session is reopened;

@@ -76,6 +76,9 @@ function showFloorError(text) {
   $("kg-error").textContent = text || "";
 }
 
+// where each object lies (its PossessedBy, from the live feed): the order form's default
+// target is a unit other than the one the object lies on, so the default is a valid order
+const placeOf = {};
 function fillOrderForm(data) {
   const fill = (sel, values, keep) => {
     const s = $(sel);
@@ -85,26 +88,57 @@ function fillOrderForm(data) {
   fill("order-object", data.objects, false);
   fill("order-source", data.units, true);
   fill("order-target", [...data.units, ...(data.groups || [])], false);
+  defaultTarget();
 }
+let targetChosen = false;
+function defaultTarget() {
+  if (targetChosen) return;
+  const here = placeOf[$("order-object").value];
+  const target = $("order-target");
+  const other = [...target.options].find((o) => o.value !== here);
+  if (other && target.value === here) target.value = other.value;
+}
+$("order-object").addEventListener("change", () => { targetChosen = false; defaultTarget(); });
+$("order-target").addEventListener("change", () => { targetChosen = true; });
 
+// the AAS panel is read again every few seconds while it is open, with its read time: an
+// asset that went offline shows offline, not its last values
+let aasShown = null, aasTimer = null;
 async function showAas(id) {
+  const fresh = aasShown !== id;
+  aasShown = id;
   $("aas").hidden = false;
   $("aas-id").textContent = id;
   const body = $("aas-body");
-  body.replaceChildren(el("p", { class: "muted", text: "reading over OPC UA ..." }));
+  if (fresh) {
+    body.replaceChildren(el("p", { class: "muted", text: "reading over OPC UA ..." }));
+    $("aas-read").textContent = "";
+  }
+  const open = new Set([...body.querySelectorAll("details[open]")].map((d) => d.dataset.submodel));
+  clearTimeout(aasTimer);
+  aasTimer = setTimeout(() => { if (aasShown === id && !$("aas").hidden) showAas(id); }, 3000);
   try {
     const data = await api("/api/assets/" + encodeURIComponent(id) + "/aas");
+    if (aasShown !== id) return;
     body.replaceChildren();
+    $("aas").dataset.state = "online";
+    $("aas-read").textContent = "read over OPC UA at " + new Date(data.read_utc).toLocaleTimeString() +
+      " (wall clock); read again every 3 s";
     for (const sm of data.submodels) {
       const table = el("table", {}, el("tr", {}, el("th", { text: "element" }), el("th", { text: "kind" }), el("th", { text: "value" })));
       for (const e of sm.elements) {
         table.append(el("tr", {}, el("td", { text: e.id_short }), el("td", { text: e.kind }),
-          el("td", { text: "value" in e ? fmt(e.value) : "" })));
+          el("td", { text: "text" in e ? e.text : "value" in e ? fmt(e.value) : "" })));
       }
-      body.append(el("details", { class: "submodel", "data-submodel": sm.id_short },
-        el("summary", { text: sm.id_short + " (" + sm.elements.length + ")" }), table));
+      const d = el("details", { class: "submodel", "data-submodel": sm.id_short },
+        el("summary", { text: sm.id_short + " (" + sm.elements.length + ")" }), table);
+      if (open.has(sm.id_short)) d.open = true;
+      body.append(d);
     }
   } catch (e) {
+    if (aasShown !== id) return;
+    $("aas").dataset.state = "offline";
+    $("aas-read").textContent = "tried at " + new Date().toLocaleTimeString() + " (wall clock)";
     body.replaceChildren(el("p", { class: "error", text: e.message }));
   }
 }
@@ -127,7 +161,9 @@ function connectLive() {
       cell.className = "c-reachable " + (online ? "on" : "off");
       tr.dataset.online = online ? "yes" : "no";
       const vals = data.values[id] || {};
-      const text = Object.entries(vals).map(([k, v]) => k + "=" + fmt(v === "" ? "–" : v)).join("  ");
+      if ("PossessedBy" in vals) placeOf[id] = vals.PossessedBy;
+      const shown = (data.display || {})[id] || Object.entries(vals).map(([k, v]) => [k, fmt(v)]);
+      const text = shown.map(([k, v]) => k + ": " + v).join(" · ");
       const seen = (data.seen || {})[id];
       tr.querySelector(".c-live").replaceChildren(stale.has(id)
         ? el("span", { class: "live stale", text: "stale (last read " +
@@ -136,6 +172,7 @@ function connectLive() {
     }
     renderOrders(data.orders);
     renderKpis(data.kpis);
+    defaultTarget();
   });
   source.onerror = () => { $("live-status").textContent = "live: reconnecting ..."; };
 }
@@ -165,6 +202,7 @@ function renderOrders(orders) {
   const tbody = document.querySelector("#orders tbody");
   tbody.replaceChildren(...orders.slice().reverse().map((o) => {
     // one row per operation id (unique on the floor), placed here or from the command line
+    // steps are stamped with the wall clock; an "expected … s" in them is modelled floor time
     const when = (t) => (typeof t === "number" ? new Date(1000 * t).toLocaleTimeString() + " " : "");
     const steps = el("ol", { class: "steps" }, ...o.steps.map((s) => el("li", { text: when(s.t) + s.text })));
     const tr = el("tr", { id: "order-" + o.id, "data-state": o.state, "data-operation": o.operation || "",

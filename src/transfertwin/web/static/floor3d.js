@@ -7,21 +7,35 @@ import { OrbitControls } from './vendor/three/OrbitControls.js';
 
 const $ = (id) => document.getElementById(id);
 const state = { ready: false, error: null, updates: 0, renders: 0, modules: {}, start: {},
-  moved: {}, objects: {}, orders: [] };
+  moved: {}, objects: {}, orders: [], offline: {}, trails: {} };
+const TRAIL_MAX = 2000;  // points a module's path keeps (a fixed buffer: no reallocation)
 window.__floor = state;
 
-function label(text) {  // a sprite with the text, ~0.3 m high
-  const c = document.createElement('canvas');
-  c.width = 256; c.height = 64;
+function drawLabel(c, text, color) {
   const g = c.getContext('2d');
-  g.fillStyle = 'rgba(20,22,28,0.8)'; g.fillRect(0, 0, 256, 64);
-  g.fillStyle = '#fff'; g.font = '36px sans-serif'; g.textAlign = 'center';
-  g.fillText(text, 128, 45);
+  g.clearRect(0, 0, c.width, c.height);
+  g.fillStyle = 'rgba(20,22,28,0.8)'; g.fillRect(0, 0, c.width, c.height);
+  g.fillStyle = color || '#fff'; g.font = '36px sans-serif'; g.textAlign = 'center';
+  g.fillText(text, c.width / 2, 45);
+}
+
+function label(text, width = 256) {  // a sprite with the text, ~0.25 m high
+  const c = document.createElement('canvas');
+  c.width = width; c.height = 64;
+  drawLabel(c, text);
   const tex = new THREE.CanvasTexture(c);
   tex.colorSpace = THREE.SRGBColorSpace;
   const s = new THREE.Sprite(new THREE.SpriteMaterial({ map: tex, depthTest: false }));
-  s.scale.set(1.0, 0.25, 1);
+  s.scale.set(width / 256, 0.25, 1);
+  s.userData = { canvas: c, text };
   return s;
+}
+
+function relabel(sprite, text, color) {  // redraw a label's text (offline, unknown)
+  if (sprite.userData.text === text) return;
+  sprite.userData.text = text;
+  drawLabel(sprite.userData.canvas, text, color);
+  sprite.material.map.needsUpdate = true;
 }
 
 async function main() {
@@ -51,19 +65,21 @@ async function main() {
   scene.add(grid);
 
   const holders = {};  // asset id -> Object3D an object rides on
+  const assets = {};  // asset id -> its body and label, drawn offline when it is
   for (const s of layout.stations) {
     const yaw = s.yaw_deg * Math.PI / 180;
     const body = new THREE.Group();
     body.position.set(s.x_m, s.y_m, 0);
     body.rotation.z = yaw;
     const box = new THREE.Mesh(new THREE.BoxGeometry(0.8, 1.0, 0.75),
-      new THREE.MeshLambertMaterial({ color: 0x8a8f99 }));
+      new THREE.MeshLambertMaterial({ color: 0x8a8f99, transparent: true }));
     box.position.set(0.4, 0, 0.375);  // behind its front face, along its yaw
     body.add(box);
     const top = new THREE.Object3D();
     top.position.set(0.4, 0, 0.8);
     body.add(top);
-    const tag = label(s.unit);
+    const tag = label(s.unit, 384);
+    assets[s.unit] = { box, tag, color: 0x8a8f99, name: s.unit };
     tag.position.set(0.4, 0, 1.2);
     body.add(tag);
     scene.add(body);
@@ -72,8 +88,9 @@ async function main() {
   const modules = {};
   for (const m of layout.modules) {
     const g = new THREE.Group();
+    const color = m.standby ? 0x4a5a7a : 0x3d7ff5;
     const box = new THREE.Mesh(new THREE.BoxGeometry(0.7, 0.5, 0.35),
-      new THREE.MeshLambertMaterial({ color: m.standby ? 0x4a5a7a : 0x3d7ff5 }));
+      new THREE.MeshLambertMaterial({ color, transparent: true }));
     box.position.z = 0.175;
     const nose = new THREE.Mesh(new THREE.ConeGeometry(0.12, 0.25, 12),
       new THREE.MeshLambertMaterial({ color: 0xffd060 }));
@@ -81,14 +98,20 @@ async function main() {
     nose.position.set(0.45, 0, 0.2);
     const top = new THREE.Object3D();
     top.position.z = 0.4;
-    const tag = label(m.id);
+    const tag = label(m.id, 384);
     tag.position.z = 0.8;
+    assets[m.id] = { box, tag, color, name: m.id };
     g.add(box, nose, top, tag);
     g.position.set(m.x_m, m.y_m, 0);
     g.rotation.z = m.theta_deg * Math.PI / 180;
     scene.add(g);
-    const trail = new THREE.Line(new THREE.BufferGeometry(),
-      new THREE.LineBasicMaterial({ color: 0x7fb0ff }));
+    // the path: a buffer allocated once for TRAIL_MAX points, drawn up to the points so far
+    // (setFromPoints on a growing path would overflow the first buffer three.js made)
+    const geometry = new THREE.BufferGeometry();
+    geometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * TRAIL_MAX), 3));
+    geometry.setDrawRange(0, 0);
+    const trail = new THREE.Line(geometry, new THREE.LineBasicMaterial({ color: 0x7fb0ff }));
+    trail.frustumCulled = false;
     scene.add(trail);
     modules[m.id] = { group: g, trail, points: [] };
     holders[m.id] = top;
@@ -112,7 +135,39 @@ async function main() {
     holders[holder].add(mesh);
     const k = Object.keys(objects).filter((o) => state.objects[o] === holder).length;
     mesh.position.set(0, 0.2 * k - 0.2, 0.1);
+    mesh.visible = true;
     state.objects[oid] = holder;
+  }
+
+  // an object the ledger has lost (PossessedBy '') is drawn nowhere: not on the unit it
+  // was last seen on; the list beside the view says it is unknown
+  function lose(oid) {
+    const mesh = objects[oid];
+    if (!mesh || state.objects[oid] === 'unknown') return;
+    if (mesh.parent) mesh.parent.remove(mesh);
+    mesh.visible = false;
+    state.objects[oid] = 'unknown';
+  }
+
+  function markOnline(id, online) {
+    const a = assets[id];
+    if (!a || state.offline[id] === !online) return;
+    state.offline[id] = !online;
+    a.box.material.color.setHex(online ? a.color : 0x555555);
+    a.box.material.opacity = online ? 1.0 : 0.35;
+    relabel(a.tag, online ? a.name : a.name + ' offline', online ? '#fff' : '#ff8a80');
+  }
+
+  function extendTrail(m, id, x, y) {
+    const last = m.points[m.points.length - 1];
+    if (last && Math.hypot(last[0] - x, last[1] - y) <= 0.01) return;
+    m.points.push([x, y]);
+    if (m.points.length > TRAIL_MAX) m.points.shift();
+    const pos = m.trail.geometry.attributes.position;
+    m.points.forEach(([px, py], i) => pos.setXYZ(i, px, py, 0.01));
+    pos.needsUpdate = true;
+    m.trail.geometry.setDrawRange(0, m.points.length);
+    state.trails[id] = m.points.length;
   }
   Object.keys(objects).forEach((oid) => { const h = state.objects[oid]; state.objects[oid] = null; place(oid, h); });
 
@@ -128,24 +183,22 @@ async function main() {
       state.modules[id] = [v.PoseX, v.PoseY, th];
       const s = state.start[id];
       state.moved[id] = Math.max(state.moved[id], Math.hypot(v.PoseX - s[0], v.PoseY - s[1]));
-      const last = m.points[m.points.length - 1];
-      if (!last || Math.hypot(last.x - v.PoseX, last.y - v.PoseY) > 0.01) {
-        m.points.push(new THREE.Vector3(v.PoseX, v.PoseY, 0.01));
-        if (m.points.length > 2000) m.points.shift();
-        m.trail.geometry.setFromPoints(m.points);
-      }
+      extendTrail(m, id, v.PoseX, v.PoseY);
     }
+    for (const [id, online] of Object.entries(data.online || {})) markOnline(id, online);
     for (const oid of Object.keys(objects)) {
       const holder = (values[oid] || {}).PossessedBy;
       if (holder) place(oid, holder);
+      else if (holder === '') lose(oid);
     }
     state.orders = (data.orders || []).filter((o) => !['finished', 'failed'].includes(o.state));
     $('live').textContent = `${state.updates} updates, ` +
       `${Object.values(data.online || {}).filter(Boolean).length} assets online`;
     $('modules').textContent = Object.entries(state.modules).map(([id, p]) =>
-      `${id} (${p[0].toFixed(2)}, ${p[1].toFixed(2)}) m`).join('; ');
-    $('objects').textContent = Object.entries(state.objects).map(([o, h]) => `${o} on ${h}`)
-      .join(', ');
+      `${id} (${p[0].toFixed(2)}, ${p[1].toFixed(2)}) m` + (state.offline[id] ? ' offline' : ''))
+      .join('; ');
+    $('objects').textContent = Object.entries(state.objects).map(([o, h]) =>
+      h === 'unknown' ? `${o}: place unknown` : `${o} on ${h}`).join(', ');
     $('orders').textContent = state.orders.length ? state.orders.map((o) =>
       `${o.operation || o.id || ''} ${o.object || ''} → ${o.target || ''}: ${o.state}`).join('; ')
       : 'none running';

@@ -148,3 +148,18 @@ def test_to_dict_holds_every_level():
     assert d["face"]["verdict"] == "decided"
     assert d["face"]["options"][0] == {"value": "front", "k": 56, "n": 56, "p_adjusted": None}
     assert d["conveyor"]["verdict"] == "open" and d["theta"]["verdict"] == "open"
+
+
+def test_analyze_writes_the_advice_to_placement_json(tmp_path) -> None:
+    import json
+
+    from transfertwin.study.fullstate import analyze
+
+    analyze(_tutorial_o18(), tmp_path)
+    doc = json.loads((tmp_path / "placement.json").read_text(encoding="utf-8"))
+    assert list(doc) == ["o18"]
+    o18 = doc["o18"]
+    assert o18["advice"] == "Put it on its front face, on any conveyor, at any θ."
+    assert o18["face"]["verdict"] == "decided" and o18["face"]["kept"] == ["front"]
+    assert o18["face"]["options"][1]["k"] == 6 and o18["face"]["options"][1]["n"] == 56
+    assert o18["conveyor"]["verdict"] == o18["theta"]["verdict"] == "open"

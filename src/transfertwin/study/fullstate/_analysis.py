@@ -31,6 +31,8 @@ from transfertwin._errors import InputError
 from transfertwin.ots import (
     SERIES_ORDER,
 )
+from transfertwin.study.fullstate._decision import decide_placement
+from transfertwin.study.fullstate._decision_text import placement_headline
 from transfertwin.study.fullstate._selection import (
     CircularSeries,
     GlobalChoice,
@@ -53,6 +55,7 @@ __all__ = [
     "Selection",
     "SeriesStats",
     "analyze",
+    "placement_json_text",
     "select",
     "select_from_series",
     "selection_json_text",
@@ -282,6 +285,19 @@ def selection_json_text(result: AnalysisResult) -> str:
     return json.dumps({s.object_id: s.to_dict() for s in result.selections}, indent=2) + "\n"
 
 
+def placement_json_text(result: AnalysisResult) -> str:
+    """``placement.json``: per object the advice decided face → conveyor → θ
+    (`decide_placement`): ``{"advice": headline, "alpha": …, "face": {…}, "conveyor": {…},
+    "theta": {…}}``, each level with its verdict, kept and avoided options and pooled counts."""
+    out = {}
+    for sel in result.selections:
+        d = decide_placement(result.states, sel.object_id)
+        body = d.to_dict()
+        body.pop("object_id")
+        out[sel.object_id] = {"advice": placement_headline(d), **body}
+    return json.dumps(out, indent=2, ensure_ascii=False) + "\n"
+
+
 def analyze(
     rows: Iterable[Mapping[str, object] | ResultRecord],
     out_dir: str | os.PathLike[str] | None = None,
@@ -292,7 +308,7 @@ def analyze(
 
     Everything is computed (and bad input rejected) before anything is
     written. With ``out_dir`` the folder is created if needed and
-    ``states.csv`` and ``selection.json`` are written atomically. Plots and the
+    ``states.csv``, ``selection.json`` and ``placement.json`` are written atomically. Plots and the
     HTML report are made by `transfertwin.report` (a higher layer).
 
     Raises:
@@ -321,4 +337,5 @@ def analyze(
         out.mkdir(parents=True, exist_ok=True)
         write_atomic(out / "states.csv", states_csv_text(result))
         write_atomic(out / "selection.json", selection_json_text(result))
+        write_atomic(out / "placement.json", placement_json_text(result))
     return result

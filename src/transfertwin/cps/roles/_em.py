@@ -22,7 +22,7 @@ from typing import Any
 from transfertwin._errors import InputError
 from transfertwin.cps.aas import AssetKind
 from transfertwin.cps.apps import StudyJob, StudyRequest, record_store, study_opcua_values
-from transfertwin.cps.dispatch import virtual_predictions
+from transfertwin.cps.dispatch import study_predictions, virtual_predictions
 from transfertwin.cps.hal import load_scene
 from transfertwin.cps.node import Role
 from transfertwin.cps.opcua import OpcUaUnitHAL
@@ -62,14 +62,17 @@ class ExperimentRole(Role):
                 "Predict": self._predict}  # fmt: skip
 
     async def _predict(self, obj: str, runs: int, seed: int) -> str:
-        """The twin's ranked states for `obj` from virtual experiments (the TMS asks when
-        its study store has no answer; `cps.dispatch.virtual_predictions`). They take longer
+        """The twin's ranked states for `obj`: from the floor's study store when it has
+        them (`_from_study`), else from virtual experiments (`cps.dispatch.
+        virtual_predictions`; the TMS asks here, it reads no store itself). These take longer
         than a request may: the first call starts them and answers '' (running), a later
         call with the same arguments answers the JSON list once they are done."""
         if obj not in {o for o, _ in self.node.floor.objects}:
             raise ValueError(f"{obj!r} is not an object of this floor")
         if not 1 <= int(runs) <= 100:
             raise ValueError(f"runs must be 1..100, got {runs}")
+        if (found := await self._from_study(obj)) is not None:
+            return found
         jobs = self.__dict__.setdefault("_predicting", {})
         key = (obj, int(runs), int(seed))
         job = jobs.get(key)
@@ -81,6 +84,26 @@ class ExperimentRole(Role):
             del jobs[key]  # asked again: tried again
             raise job.exception()
         return job.result()
+
+    async def _from_study(self, obj: str) -> str | None:
+        """`obj`'s ranked states from the floor's study store (in this asset's bundle,
+        ``[runtime] study``), as `_predict` answers them; None when the floor has none, or
+        it cannot be read or holds no state of `obj` (both logged: the answer then comes
+        from virtual experiments, and says so in its ``source``)."""
+        store = self.node.cfg.study_file
+        if store is None:
+            return None
+        try:
+            found = await asyncio.to_thread(study_predictions, store, obj)
+        except Exception as exc:
+            log.warning("EM: study store %s not readable (%s): %s from virtual experiments",
+                        store, exc, obj)  # fmt: skip
+            return None
+        if not found:
+            log.warning("EM: study store %s has no state of %s: virtual experiments",
+                        store.name, obj)  # fmt: skip
+            return None
+        return json.dumps([p.as_dict() for p in found])
 
     async def _predict_now(self, obj: str, runs: int, seed: int) -> str:
 
@@ -113,10 +136,12 @@ class ExperimentRole(Role):
     async def start(self) -> None:
         self._loop = asyncio.get_running_loop()
         self._warming = None
-        # the predictions' worker processes start now, beside the node, not on the
-        # first order's request
-        task = self._loop.create_task(self._warm_pool())
-        task.add_done_callback(lambda t: t.cancelled() or t.exception())
+        op = self.node.floor.operation
+        if op.policy == "predictive" and op.twin:
+            # the predictions' worker processes start now, beside the node, not on the
+            # first order's request (a floor that never asks starts none)
+            task = self._loop.create_task(self._warm_pool())
+            task.add_done_callback(lambda t: t.cancelled() or t.exception())
         study = self.state.data.get("study")
         if study and study.get("want") == "running":  # it was running when we went down
             log.info("EM: resuming the study into %s", study["store"])

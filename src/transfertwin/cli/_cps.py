@@ -9,6 +9,7 @@ import math
 from pathlib import Path
 
 from transfertwin._errors import InputError
+from transfertwin.cli._cps_ca import register_ca
 from transfertwin.cli._cps_client import (
     add_access,
     endpoint_of,
@@ -317,3 +318,4 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_export)
     register_floor(csub)
     register_study(csub)
+    register_ca(csub)

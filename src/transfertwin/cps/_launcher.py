@@ -29,6 +29,7 @@ from pathlib import Path
 
 from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
+from transfertwin.cps._pki import prepare_certificates
 from transfertwin.cps.floor import (
     PLANT_SEED_FILE,
     AssetConfig,
@@ -41,11 +42,8 @@ from transfertwin.cps.floor import (
 )
 from transfertwin.cps.node import default_lease
 from transfertwin.cps.opcua import (
-    ROLES,
-    ensure_certificate,
     free_port,
     new_credentials,
-    trust_certificates,
     write_credentials,
 )
 from transfertwin.cps.roles import PLANT_LOG
@@ -202,14 +200,9 @@ def _copy_private(source: Path, target: Path) -> Path:
 
 
 async def _certificates(workdir: Path, configs: Iterable[AssetConfig]) -> None:
-    """Each process's own client certificate, and every one trusted by every asset (the
-    floor trusts its members and the command-line clients in ``W/certs``)."""
-    configs = list(configs)
-    clients = [(await ensure_certificate(workdir / "certs", f"client-{r}"))[0] for r in ROLES]
-    for cfg in configs:
-        clients.append((await ensure_certificate(cfg.cert_dir, "client-operator"))[0])
-    folders = [workdir / "certs" / "trusted", *sorted({cfg.trust_dir for cfg in configs})]
-    trust_certificates(folders, clients)  # each written once, hard-linked into the others
+    """Every asset's certificate signed by the floor's CA (``W/ca``), the command-line
+    clients' too, and in every trust folder the CA and its CRL (`prepare_certificates`)."""
+    prepare_certificates(workdir, configs)
 
 
 def _rotate(path: Path) -> None:

@@ -34,10 +34,12 @@ from transfertwin.cps.opcua import (
     ROLES,
     AssetServer,
     Credentials,
+    FloorCA,
     ServerConfig,
-    ensure_certificate,
+    init_ca,
+    install_certificate,
     new_credentials,
-    trust_certificate,
+    new_request,
 )
 
 _HERE = Path(__file__).resolve().parent
@@ -45,11 +47,13 @@ _HERE = Path(__file__).resolve().parent
 
 @dataclass(frozen=True)
 class Pki:
-    """A CPS-like workdir: ``root/certs`` (application certificates) and
-    ``root/certs/trusted`` (the trust list, holding the client certificates of every role)."""
+    """A CPS-like workdir: a floor CA (``root/ca``), ``root/certs`` (application
+    certificates, the CA's: a server started with `config` gets its certificate from it)
+    and ``root/certs/trusted`` (the trust list: the CA and its CRL)."""
 
     root: Path
     credentials: Credentials
+    ca: FloorCA
 
     @property
     def cert_dir(self) -> Path:
@@ -60,7 +64,8 @@ class Pki:
         return self.cert_dir / "trusted"
 
     def config(self, **kw: Any) -> ServerConfig:
-        return ServerConfig(cert_dir=self.cert_dir, credentials=self.credentials, **kw)
+        given = {"cert_dir": self.cert_dir, "credentials": self.credentials, "issuer": self.ca}
+        return ServerConfig(**{**given, **kw})
 
     def client_kw(self) -> dict[str, Any]:
         return {"credentials": self.credentials, "cert_dir": self.cert_dir}
@@ -68,34 +73,33 @@ class Pki:
 
 @pytest.fixture(scope="session")
 def pki(tmp_path_factory: pytest.TempPathFactory) -> Pki:
-    """Credentials and trusted client certificates made once per test run."""
-    out = Pki(tmp_path_factory.mktemp("pki"), new_credentials())
-
-    async def make() -> None:
-        for role in ROLES:
-            cert, _ = await ensure_certificate(out.cert_dir, f"client-{role}")
-            trust_certificate(out.trust_dir, cert)
-
-    asyncio.run(make())
+    """Credentials, a CA and its client certificates made once per test run."""
+    root = tmp_path_factory.mktemp("pki")
+    out = Pki(root, new_credentials(), init_ca(root / "ca"))
+    for role in ROLES:
+        name = f"client-{role}"
+        install_certificate(out.cert_dir, name, out.ca.issue(new_request(out.cert_dir, name)))
+    out.ca.install(out.trust_dir)
     return out
 
 
 @pytest.fixture(scope="session")
 def cps_certs(tmp_path_factory: pytest.TempPathFactory) -> Callable[[Path], Path]:
-    """The application certificates of every asset of a CPS (the demo's and the plant's)
-    and of its clients, made once per run: a function that puts a copy of them into a CPS
-    workdir (created) and returns it. The CPS finds them usable and makes no keys."""
-    certs = tmp_path_factory.mktemp("cps-certs") / "certs"
+    """A floor CA and the certificates it issued to every asset of a CPS (the demo's and
+    the plant's) and to its clients, made once per run: a function that puts a copy of
+    them into a CPS workdir (created: ``ca/``, ``certs/``, ``assets/<id>/certs/``) and
+    returns it. The CPS finds them current and makes no keys."""
+    root = tmp_path_factory.mktemp("cps-certs")
+    ca = init_ca(root / "ca")
     names = [d.asset_id for d in (*demo_descriptors(), *plant_descriptors())]
-
-    async def make() -> None:
-        for name in [*names, *(f"client-{role}" for role in ROLES)]:
-            await ensure_certificate(certs, name)
-
-    asyncio.run(make())
+    folders = {name: root / "assets" / name / "certs" for name in names}
+    folders |= {f"client-{role}": root / "certs" for role in ROLES}
+    for name, folder in folders.items():
+        install_certificate(folder, name, ca.issue(new_request(folder, name)))
 
     def workdir(path: Path) -> Path:
-        shutil.copytree(certs, path / "certs")
+        for part in ("ca", "certs", "assets"):
+            shutil.copytree(root / part, path / part)
         return path
 
     return workdir

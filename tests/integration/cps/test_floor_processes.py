@@ -161,7 +161,9 @@ def test_every_asset_is_its_own_process_on_its_own_address(floor):
     for aid in online:
         cfg = (floor / "assets" / aid / "asset.toml").read_text()
         assert f'id = "{aid}"' in cfg and "insecure = false" in cfg
-        assert (floor / "assets" / aid / "certs" / "client-operator.der").is_file()
+        assert (floor / "assets" / aid / "certs" / f"{aid}.der").is_file()  # the CA's
+        trusted = floor / "assets" / aid / "trusted"
+        assert sorted(p.name for p in trusted.iterdir()) == ["ca.der", "crl.der"]
     info = json.loads((floor / "cps.json").read_text())
     assert {a["id"]: a["config"] for a in info["assets"] if a["id"] in online} == {
         aid: str((floor / "assets" / aid / "asset.toml").resolve()) for aid in online}

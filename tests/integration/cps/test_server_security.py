@@ -7,7 +7,6 @@ Most tests share one TU_A server and the run's certificates (see conftest.py).
 from __future__ import annotations
 
 import asyncio
-import shutil
 from pathlib import Path
 
 import pytest
@@ -93,7 +92,7 @@ def test_unknown_client_certificate_is_refused_until_cps_trust(tu_a, pki, tmp_pa
 
     async def attempt() -> str:
         async with connect(tu_a.endpoint, "TU_A", role="operator", cert_dir=stranger,
-                           credentials=pki.credentials) as op:  # fmt: skip
+                           trust_dir=pki.trust_dir, credentials=pki.credentials) as op:  # fmt: skip
             return await op.read("Identification", "AssetId")
 
     with pytest.raises(ua.UaStatusCodeError, match="BadCertificateUntrusted"):
@@ -225,12 +224,16 @@ def test_cps_trust_refuses_what_is_not_a_certificate(pki, tmp_path, capsys):
         assert len(err) == 1 and reason in err[0], err
         assert sorted(p.name for p in pki.trust_dir.iterdir()) == before
     # PEM works as well as DER, and trusting twice changes nothing
+    der, _ = asyncio.run(ensure_certificate(tmp_path / "outsider", "client-viewer"))
     pem = tmp_path / "viewer.pem"
-    shutil.copy(pki.cert_dir / "client-viewer.der", tmp_path / "viewer.der")
-    pem.write_bytes(read_certificate(tmp_path / "viewer.der").public_bytes(Encoding.PEM))
+    pem.write_bytes(read_certificate(der).public_bytes(Encoding.PEM))
     before = sorted(p.name for p in pki.trust_dir.iterdir())
+    assert main(["cps", "trust", str(der), "--workdir", str(pki.root)]) == 0
+    added = set(pki.trust_dir.iterdir()) - {pki.trust_dir / n for n in before}
     assert main(["cps", "trust", str(pem), "--workdir", str(pki.root)]) == 0
-    assert sorted(p.name for p in pki.trust_dir.iterdir()) == before
+    assert set(pki.trust_dir.iterdir()) - {pki.trust_dir / n for n in before} == added
+    assert len(added) == 1
+    added.pop().unlink()
 
 
 def test_a_usable_certificate_is_kept_and_a_wrong_one_is_made_anew(tmp_path):

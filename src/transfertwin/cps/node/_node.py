@@ -38,6 +38,7 @@ from transfertwin.cps.aas import (
     submodel_iri,
 )
 from transfertwin.cps.floor import PROVENANCE, AssetConfig, FloorSpec, load_floor
+from transfertwin.cps.node._identity import peer_roles
 from transfertwin.cps.node._lease import NO_LEASE, Renewal, heartbeat_period, instance_id
 from transfertwin.cps.node._peers import Peers
 from transfertwin.cps.node._role import Role
@@ -140,7 +141,8 @@ class AssetNode:
         writable |= {("OperationalData", p) for p in self.role.writable()}
         scfg = ServerConfig(host=cfg.host, port=cfg.port, insecure=cfg.insecure,
                             cert_dir=cfg.cert_dir, trust_dir=cfg.trust_dir,
-                            credentials=self.credentials)  # fmt: skip
+                            credentials=self.credentials,
+                            peer_roles=peer_roles(self.descriptors.values()))  # fmt: skip
         lifecycle = lifecycle_submodel(self.desc.asset_id)
         self.server = AssetServer(self.desc.asset_id, (*rep.submodels, lifecycle), scfg,
                                   {**self.role.handlers(), "Shutdown": self._shutdown},
@@ -234,8 +236,11 @@ class AssetNode:
         # asyncua's own probe of it (a read every 10 s by default) would be one more call
         # per asset at the one lease holder
         watchdog = max(10.0, 3.0 * cfg.lease_s) if aid == "KG" else None
-        return connect(url, aid, credentials=self.credentials, role="operator",
-                       cert_dir=cfg.cert_dir, insecure=cfg.insecure, timeout_s=timeout_s,
+        # the node is its certificate (an X.509 identity, `peer_roles`), no password; the
+        # server must be the asset `aid` under the floor's CA (`trust_dir`)
+        return connect(url, aid, credentials=None, role="operator", cert_dir=cfg.cert_dir,
+                       certificate=cfg.asset_id, trust_dir=cfg.trust_dir,
+                       insecure=cfg.insecure, timeout_s=timeout_s,
                        watchdog_s=watchdog)  # fmt: skip
 
     def _connector(self, url: str):

@@ -13,7 +13,7 @@ from transfertwin.cps.opcua._ca import (
     new_request,
     request_name,
 )
-from transfertwin.cps.opcua._client import AssetClient, connect
+from transfertwin.cps.opcua._client import AssetClient, UntrustedServer, connect, trust_list
 from transfertwin.cps.opcua._discovery import Discovery, Peer
 from transfertwin.cps.opcua._remote_hal import OpcUaUnitHAL
 from transfertwin.cps.opcua._security import (
@@ -23,6 +23,7 @@ from transfertwin.cps.opcua._security import (
     RoleUserManager,
     TrustList,
     certificate_uris,
+    check_valid_now,
     ensure_certificate,
     free_port,
     load_credentials,
@@ -59,9 +60,11 @@ __all__ = [
     "RoleUserManager",
     "ServerConfig",
     "TrustList",
+    "UntrustedServer",
     "application_uri",
     "build_standard_address_space",
     "certificate_uris",
+    "check_valid_now",
     "connect",
     "ensure_ca",
     "ensure_certificate",
@@ -77,5 +80,6 @@ __all__ = [
     "request_name",
     "trust_certificate",
     "trust_certificates",
+    "trust_list",
     "write_credentials",
 ]

@@ -8,18 +8,20 @@ from pathlib import Path
 from typing import Any
 
 from asyncua import Client, ua
+from asyncua.common.utils import ServiceError
 from asyncua.crypto import uacrypto
 from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
 
 from transfertwin.cps.opcua._security import (
     Credentials,
+    TrustList,
     ensure_certificate,
     parsed_private_key,
     read_certificate,
 )
 from transfertwin.cps.opcua._server import NAMESPACE, OperationRefused, node_id
 
-__all__ = ["AssetClient", "connect"]
+__all__ = ["AssetClient", "UntrustedServer", "connect", "trust_list"]
 
 
 _DENIED = ua.StatusCodes.BadUserAccessDenied
@@ -114,17 +116,53 @@ class AssetClient:
         return sub
 
 
-async def _secure(client: Client, cert: Path, key: Path) -> None:
+class UntrustedServer(ua.UaError):
+    """The server a client reached is not the one it meant: its certificate is not
+    trusted (no CA here signed it, or it is revoked or outside its validity) or names
+    another application. Raised before the client sends any credential.
+
+    Attributes:
+        status: The OPC UA status code's name (BadCertificateUntrusted, ...UriInvalid, ...).
+        endpoint: The server's URL.
+    """
+
+    def __init__(self, endpoint: str, asset_id: str, status: int) -> None:
+        self.status = ua.StatusCode(status).name
+        self.endpoint = endpoint
+        super().__init__(f"{endpoint} is not {asset_id} of this floor ({self.status}): "
+                         "refused before any credential was sent")  # fmt: skip
+
+
+_TRUST: dict[Path, TrustList] = {}
+
+
+def trust_list(folder: Path) -> TrustList:
+    """The `TrustList` of `folder`, one per folder and process (it caches what it read)."""
+    folder = Path(folder).resolve()
+    trust = _TRUST.get(folder)
+    if trust is None:
+        if len(_TRUST) >= 256:
+            _TRUST.clear()
+        trust = _TRUST[folder] = TrustList(folder)
+    return trust
+
+
+async def _secure(client: Client, cert: Path, key: Path, endpoint_url: str,
+                  asset_id: str) -> None:  # fmt: skip
     """What `Client.set_security(Basic256Sha256, cert, key)` does in SignAndEncrypt mode,
-    with the private key parsed once per process: asyncua parses the key file on every
-    connection, and an RSA key's validation costs ~45 ms (a CPS's applications, discovery
-    and console open hundreds of sessions). `ensure_certificate` has made the certificate
-    current and checked its URI and host, which asyncua would check here."""
+    with the server's certificate checked first (the client's ``certificate_validator``:
+    `TrustList.server_validator`, before the secure channel is opened; asyncua checks it
+    again at CreateSession) and the private key parsed once per process: asyncua parses the
+    key file on every connection, and an RSA key's validation costs ~45 ms."""
     mode = ua.MessageSecurityMode.SignAndEncrypt
     endpoints = await client.connect_and_get_server_endpoints()  # over SecurityPolicy None
     endpoint = Client.find_endpoint(endpoints, mode, SecurityPolicyBasic256Sha256.URI)
     # x509_from_der takes the server's certificate, also where its chain follows it
     server_cert = uacrypto.x509_from_der(endpoint.ServerCertificate)
+    try:
+        await client.certificate_validator(server_cert, endpoint.Server)
+    except ServiceError as exc:
+        raise UntrustedServer(endpoint_url, asset_id, exc.code) from None
     policy = SecurityPolicyBasic256Sha256(
         server_cert, read_certificate(cert), parsed_private_key(key), mode
     )
@@ -143,15 +181,23 @@ async def connect(
     insecure: bool = False,
     timeout_s: float = 10.0,
     watchdog_s: float | None = None,
+    trust_dir: Path | None = None,
+    certificate: str | None = None,
 ) -> AsyncIterator[AssetClient]:
-    """A session with an asset server (secure unless `insecure`).
+    """A session with asset `asset_id`'s server (secure unless `insecure`).
 
-    The client's application certificate is ``cert_dir/client-<role>.der`` (created on
-    first use); the server accepts it only if it is on the server's trust list. asyncua
-    probes an open session every `watchdog_s` seconds (default: 10 s or `timeout_s`, the
-    longer).
+    The client's application certificate is ``cert_dir/<certificate>.der`` (default
+    ``client-<role>``; created self-signed on first use where no CA issued one); the server
+    accepts it only if it trusts it. The server's certificate is checked before anything
+    is sent: trusted by ``trust_dir`` (default ``cert_dir/trusted``: on a floor, the CA
+    and its CRL) and naming ``urn:transfertwin:<asset_id>`` (`UntrustedServer` otherwise).
+    The user is `role` with `credentials` (a person), or, with ``credentials=None`` on a
+    secure session, the application certificate itself (an X.509 identity: a peer asset).
+    asyncua probes an open session every `watchdog_s` seconds (default: 10 s or
+    `timeout_s`, the longer).
 
     Raises:
+        UntrustedServer: The server is not `asset_id` of this floor.
         ua.UaStatusCodeError: BadCertificateUntrusted (the server does not trust this
             client's certificate), BadUserAccessDenied (wrong credentials), ...
     """
@@ -161,10 +207,16 @@ async def connect(
     # A probe may take as long as any request, and runs at most every 10 s.
     watchdog = max(10.0, timeout_s) if watchdog_s is None else watchdog_s
     client = Client(url=endpoint, timeout=timeout_s, watchdog_intervall=watchdog)
-    client.application_uri = f"urn:transfertwin:client-{role}"
+    name = certificate or f"client-{role}"
+    client.application_uri = f"urn:transfertwin:{name}"
     if not insecure:
-        cert, key = await ensure_certificate(cert_dir, f"client-{role}")
-        await _secure(client, cert, key)
+        cert, key = await ensure_certificate(cert_dir, name)
+        trust = trust_list(trust_dir if trust_dir is not None else cert_dir / "trusted")
+        client.certificate_validator = trust.server_validator(f"urn:transfertwin:{asset_id}")
+        await _secure(client, cert, key, endpoint, asset_id)
+        if credentials is None:  # the application's certificate is the user (a peer asset)
+            client.user_certificate = read_certificate(cert)
+            client.user_private_key = parsed_private_key(key)
     if credentials is not None:
         user, password = credentials.for_role(role)
         client.set_user(user)

@@ -6,6 +6,15 @@ and takes their lists; then every asset periodically asks each known peer for it
 (pull gossip), so a newcomer spreads to all within a few rounds. A peer that cannot be
 reached for `max_misses` rounds in a row is dropped: that is how a leaving asset is
 noticed. Listeners hear about every join and leave.
+
+On a secure floor a peer is taken only once its server proved to be the asset it names:
+an entry heard of (gossip, or a registration, which asyncua accepts on any channel, even
+without security) is a *candidate* until a round asks it, and asking it checks the
+certificate of its SignAndEncrypt endpoint against the trust list (the floor's CA, not
+revoked, valid now, naming the entry's URI: `TrustList.server_validator`). A candidate
+that fails is dropped and never passed on (it is taken off the server's FindServers
+answer too); one that answers becomes a peer. Asking costs the connection a round makes
+anyway (GetEndpoints and FindServers on one channel).
 """
 
 from __future__ import annotations
@@ -18,8 +27,11 @@ from contextlib import AbstractAsyncContextManager, suppress
 from dataclasses import dataclass, field
 
 from asyncua import Client, ua
+from asyncua.common.utils import ServiceError
+from asyncua.crypto import uacrypto
+from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
 
-from transfertwin.cps.opcua._client import AssetClient
+from transfertwin.cps.opcua._client import AssetClient, UntrustedServer, trust_list
 from transfertwin.cps.opcua._server import AssetServer
 
 __all__ = ["Discovery", "Peer"]
@@ -63,6 +75,7 @@ class Discovery:
     on_change: Callable[[str, Peer], None] | None = None
     entries_per_s: float = 0.0
     peers: dict[str, Peer] = field(default_factory=dict)
+    candidates: dict[str, Peer] = field(default_factory=dict)
     _misses: dict[str, int] = field(default_factory=dict)
     _gone: dict[str, float] = field(default_factory=dict)  # uri -> when it was dropped
     _turn: int = 0
@@ -73,18 +86,30 @@ class Discovery:
         """This asset as a peer."""
         return Peer(f"urn:transfertwin:{self.server.asset_id}", self.server.endpoint)
 
-    def _add(self, peer: Peer, *, direct: bool = False) -> None:
-        if peer.uri == self.me.uri or peer.uri in self.peers:
+    @property
+    def verifies(self) -> bool:
+        """Whether peers must prove who they are (a secure server: yes)."""
+        return self.server.config is not None and not self.server.config.insecure
+
+    def _add(self, peer: Peer, *, direct: bool = False, verified: bool = False) -> None:
+        if peer.uri == self.me.uri:
+            return
+        known = self.peers.get(peer.uri)
+        if known is not None and (known.url == peer.url or not direct):
             return
         dropped = self._gone.get(peer.uri)
         if dropped is not None and not direct and time.monotonic() - dropped < self.tombstone_s:
             return  # hearsay about a peer we saw leave; only its own re-registration counts
+        if self.verifies and not verified:
+            self.candidates.setdefault(peer.uri, peer)  # asked (and so checked) in a round
+            return
+        self.candidates.pop(peer.uri, None)
         self._gone.pop(peer.uri, None)
         self.peers[peer.uri] = peer
         self._misses[peer.uri] = 0
         self.server.register_peer(peer.uri, peer.url, peer.asset_id)
         log.info("%s discovered %s at %s", self.server.asset_id, peer.asset_id, peer.url)
-        if self.on_change is not None:
+        if self.on_change is not None and known is None:
             self.on_change("join", peer)
 
     def _drop(self, uri: str) -> None:
@@ -96,10 +121,45 @@ class Discovery:
         if self.on_change is not None:
             self.on_change("leave", peer)
 
-    async def _ask(self, url: str) -> list[Peer]:
+    async def _ask(self, url: str, uri: str | None = None) -> list[Peer]:
+        """The peers `url` knows (FindServers). On a secure floor the server is checked
+        first, on the same channel (GetEndpoints): its certificate must be trusted here
+        and name `uri` (default: the URI of the asset the URL names), else
+        `UntrustedServer`."""
+        uri = uri or f"urn:transfertwin:{url.rstrip('/').rsplit('/', 1)[-1]}"
         client = Client(url=url, timeout=2)
-        servers = await asyncio.wait_for(client.connect_and_find_servers(), 3)
+
+        async def ask() -> list[ua.ApplicationDescription]:
+            await client.connect_socket()
+            try:
+                await client.send_hello()
+                await client.open_secure_channel()
+                try:
+                    if self.verifies:
+                        await self._check(url, uri, await client.get_endpoints())
+                    return await client.find_servers()
+                finally:
+                    await client.close_secure_channel()
+            finally:
+                client.disconnect_socket()
+
+        servers = await asyncio.wait_for(ask(), 3)
         return [Peer(s.ApplicationUri, s.DiscoveryUrls[0]) for s in servers if s.DiscoveryUrls]
+
+    async def _check(self, url: str, uri: str, endpoints: list) -> None:
+        """UntrustedServer unless the SignAndEncrypt endpoint's certificate is trusted
+        here and names `uri`."""
+        mode = ua.MessageSecurityMode.SignAndEncrypt
+        try:
+            endpoint = Client.find_endpoint(endpoints, mode, SecurityPolicyBasic256Sha256.URI)
+        except ua.UaError:
+            raise UntrustedServer(url, uri, ua.StatusCodes.BadSecurityPolicyRejected) from None
+        trust = trust_list(self.server.config.trust_folder)
+        cert = uacrypto.x509_from_der(endpoint.ServerCertificate)
+        try:
+            await trust.server_validator(uri)(cert, endpoint.Server)
+        except ServiceError as exc:
+            raise UntrustedServer(url, uri, exc.code) from None
 
     async def _announce(self, url: str, connector: Connector) -> None:
         registered = ua.RegisteredServer()
@@ -125,35 +185,61 @@ class Discovery:
         for url in seeds:
             try:
                 await self._announce(url, connector)
-                for peer in await self._ask(url):
+                found = await self._ask(url)
+                self._add(Peer(f"urn:transfertwin:{url.rsplit('/', 1)[-1]}", url),
+                          verified=True)  # fmt: skip
+                for peer in found:
                     self._add(peer)
             except (TimeoutError, OSError, ua.UaError) as exc:
                 log.warning("%s: seed %s unreachable: %s", self.server.asset_id, url, exc)
         self._task = asyncio.ensure_future(self._gossip())
 
     async def round(self) -> None:
-        """One gossip round: take the registrations our own server received, then ask the
-        next known peer (round robin) for its list; drop a peer silent `max_misses` times.
+        """One gossip round: take the registrations our own server received (candidates,
+        off its FindServers answer until checked), then ask the next known peer or
+        candidate (round robin) for its list, which checks it; drop a peer silent
+        `max_misses` times, and a candidate that is not who it says at once.
 
         One peer per round keeps the traffic linear in the number of assets; every peer is
         visited once per len(peers) rounds.
         """
         for uri, url in self.server.registered_peers():
             if uri not in self.peers and uri not in self._gone:
+                if self.verifies:
+                    self.server.unregister_peer(uri)
                 self._add(Peer(uri, url), direct=True)
-        if not self.peers:
+            elif uri in self.peers and self.peers[uri].url != url:  # moved: check it again
+                self.server.register_peer(uri, self.peers[uri].url, self.peers[uri].asset_id)
+                self.candidates[uri] = Peer(uri, url)
+        everyone = {**self.candidates, **self.peers}
+        if not everyone:
             return
-        uris = sorted(self.peers)
+        uris = sorted(everyone)
         self._turn = (self._turn + 1) % len(uris)
         uri = uris[self._turn]
+        peer = self.candidates.get(uri) or self.peers[uri]
         try:
-            found = await self._ask(self.peers[uri].url)
+            found = await self._ask(peer.url, uri)
+        except UntrustedServer as exc:
+            log.warning("%s: refused %s: %s", self.server.asset_id, uri, exc)
+            if self.candidates.get(uri) == peer:
+                del self.candidates[uri]
+                return
+            self._misses[uri] = self.max_misses  # a peer whose certificate went bad
+            self._drop(uri)
+            return
         except (TimeoutError, OSError, ua.UaError, ConnectionError):
             self._misses[uri] = self._misses.get(uri, 0) + 1
             if self._misses[uri] >= self.max_misses:
-                self._drop(uri)
+                if uri in self.peers and self.peers[uri] == peer:
+                    self._drop(uri)
+                else:
+                    self.candidates.pop(uri, None)
+                    self._misses.pop(uri, None)
             return
         self._misses[uri] = 0
+        if self.candidates.get(uri) == peer:
+            self._add(peer, direct=True, verified=True)
         for other in found:
             self._add(other)
 

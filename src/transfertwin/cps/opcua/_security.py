@@ -24,7 +24,7 @@ import logging
 import os
 import secrets
 import socket
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -42,6 +42,7 @@ from cryptography.hazmat.primitives.serialization import Encoding, load_pem_priv
 from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
 
 from transfertwin._atomic import file_stamp, write_atomic
+from transfertwin._errors import InputError
 
 __all__ = [
     "ROLES",
@@ -50,6 +51,7 @@ __all__ = [
     "RoleUserManager",
     "TrustList",
     "certificate_uris",
+    "check_valid_now",
     "ensure_certificate",
     "free_port",
     "load_credentials",
@@ -153,23 +155,35 @@ def load_credentials(path: Path) -> Credentials:
 
 
 class RoleUserManager:
-    """Username/password users mapped to roles; asyncua calls `get_user` on activation.
+    """Users mapped to roles; asyncua calls `get_user` on activation.
+
+    Two kinds of user: a person (operator, viewer) by user name and password, and a peer
+    asset by its application certificate (an X.509 identity token, signed with its key:
+    asyncua checks that signature), the certificate trusted by `trust` (a CA's, not
+    revoked, valid now) and naming ``urn:transfertwin:<id>`` of an asset in `peers`, which
+    gives its role (by the asset's class: `transfertwin.cps.node.PEER_ROLES`).
 
     Args:
-        creds: The users.
+        creds: The people's users.
         trust: If given, a session is refused unless the client's application certificate
-            (the secure channel's peer certificate) is on this trust list.
+            (the secure channel's peer certificate) is trusted by it; needed for peers.
+        peers: Asset id -> the role its certificate gets (empty: no peer identities).
     """
 
-    def __init__(self, creds: Credentials, trust: TrustList | None = None) -> None:
+    def __init__(self, creds: Credentials, trust: TrustList | None = None,
+                 peers: Mapping[str, str] | None = None) -> None:  # fmt: skip
         self._users = {u: (p, role) for role, (u, p) in creds.users.items()}
         self._trust = trust
+        self._peers = dict(peers or {})
 
     def get_user(self, iserver, username=None, password=None, certificate=None) -> User | None:
-        """The user for these credentials, or None (refused)."""
+        """The user for these credentials, or None (refused). `certificate` is the X.509
+        token's certificate for a peer, the channel's for a person."""
         if self._trust is not None and not self._trust.is_trusted(certificate):
             return None
-        if username is None or username not in self._users:
+        if username is None:
+            return self._peer(certificate)
+        if username not in self._users:
             return None
         expected, role = self._users[username]
         ok = hmac.compare_digest(
@@ -177,6 +191,18 @@ class RoleUserManager:
             hashlib.sha256((password or "").encode()).digest(),
         )
         return User(role=UserRole.User, name=role) if ok else None
+
+    def _peer(self, der: bytes | None) -> User | None:
+        if der is None or self._trust is None:
+            return None
+        uris = certificate_uris(x509.load_der_x509_certificate(bytes(der)))
+        ids = [u.removeprefix("urn:transfertwin:") for u in uris
+               if u.startswith("urn:transfertwin:")]  # fmt: skip
+        role = self._peers.get(ids[0]) if len(ids) == 1 else None
+        if role is None:
+            log.warning("refused X.509 identity %s: not an asset of this floor", uris)
+            return None
+        return User(role=UserRole.User, name=role)
 
 
 def read_certificate(path: Path) -> x509.Certificate:
@@ -482,10 +508,26 @@ def _is_ca(cert: x509.Certificate) -> bool:
 async def ensure_certificate(
     cert_dir: Path, name: str, host: str = "127.0.0.1"
 ) -> tuple[Path, Path]:
-    """(certificate, private key) of an application, created on first use."""
+    """(certificate, private key) of an application ``cert_dir/<name>.der`` and ``.pem``.
+
+    A certificate a CA issued (issuer not its subject) is used as it is, never replaced
+    here. Without one, a self-signed certificate is made on first use (and again when it
+    expired or no longer names `name` and `host`): what a client or server outside a floor
+    (a HAL gateway, a test) uses; a floor's CA does not trust it.
+
+    Raises:
+        InputError: The certificate is not valid yet (this host's clock is behind the
+            issuer's) or has expired (a CA's: have a new one issued), or a signing request
+            of this key waits for the CA (``<name>.csr.pem``, no certificate yet).
+    """
     cert_dir.mkdir(parents=True, exist_ok=True)
     cert, key = cert_dir / f"{name}.der", cert_dir / f"{name}.pem"
     uri = f"urn:transfertwin:{name}"
+    csr = cert_dir / f"{name}.csr.pem"
+    if not cert.is_file() and key.is_file() and csr.is_file():
+        raise InputError(f"{cert}: no certificate yet; have the signing request {csr} signed "
+                         f"by the floor's CA ('transfertwin cps ca issue {csr} --ca CA_DIR "
+                         f"--out {cert}')")  # fmt: skip
     if _usable(cert, key, uri, host):
         return cert, key
     await setup_self_signed_certificate(
@@ -497,11 +539,28 @@ async def ensure_certificate(
     return cert, key
 
 
+def check_valid_now(cert: x509.Certificate, where: Path | str) -> None:
+    """InputError (one line naming `where`) unless `cert` is valid now: a certificate not
+    valid yet means this host's clock is behind its issuer's; it is never replaced by a
+    self-signed one."""
+    now = datetime.now(UTC)
+    fmt = "%Y-%m-%d %H:%M:%S UTC"
+    if now < cert.not_valid_before_utc:
+        raise InputError(f"{where}: certificate not valid before "
+                         f"{cert.not_valid_before_utc.strftime(fmt)} and this host's clock "
+                         f"says {now.strftime(fmt)}: set the clock (NTP)")  # fmt: skip
+    if now > cert.not_valid_after_utc:
+        raise InputError(f"{where}: certificate expired at "
+                         f"{cert.not_valid_after_utc.strftime(fmt)}; have a new one issued "
+                         "('transfertwin cps ca issue')")  # fmt: skip
+
+
 def _usable(cert: Path, key: Path, uri: str, host: str) -> bool:
-    """Whether an existing certificate can be used as it is: both files there, the
-    certificate current and naming `uri` and `host` (asyncua's checks). The private key is
-    not parsed here (an RSA key's validation costs ~0.1 s, and every client connection
-    asked for it twice: here and in asyncua's set_security, which loads it anyway)."""
+    """Whether an existing certificate can be used as it is: both files there and either
+    issued by a CA and valid now (`check_valid_now` raises otherwise) or self-signed,
+    current and naming `uri` and `host` (asyncua's checks; a self-signed one that is not
+    valid yet is refused as a CA's is). The private key is not parsed here (an RSA key's
+    validation costs ~0.1 s, and asyncua's set_security loads it anyway)."""
     if not (cert.is_file() and key.is_file()):
         return False
     try:
@@ -509,6 +568,9 @@ def _usable(cert: Path, key: Path, uri: str, host: str) -> bool:
     except ValueError:  # not a certificate: made anew (asyncua would fail on it)
         cert.unlink()
         return False
+    if parsed.issuer != parsed.subject or datetime.now(UTC) < parsed.not_valid_before_utc:
+        check_valid_now(parsed, cert)
+        return True
     return not check_certificate(parsed, uri, host)
 
 

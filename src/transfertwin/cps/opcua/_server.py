@@ -32,8 +32,10 @@ import basyx.aas.model as aas
 from asyncua import Server, ua
 from asyncua.common.callback import CallbackType
 from asyncua.common.node import Node
+from cryptography import x509
 
 from transfertwin.cps.opcua._aspace import share_standard_address_space
+from transfertwin.cps.opcua._ca import CA_CERT, FloorCA, install_certificate, new_request
 from transfertwin.cps.opcua._security import (
     Credentials,
     RoleRuleset,
@@ -142,7 +144,15 @@ class ServerConfig:
         insecure: Serve NoSecurity without users (explicit opt-in only).
         cert_dir: Where application certificates are created on first start.
         credentials: Users and passwords per role (required unless insecure).
-        trust_dir: The trust list: client certificates accepted (None: ``cert_dir/trusted``).
+        trust_dir: The trust list: client certificates accepted (None: ``cert_dir/trusted``);
+            on a floor, the floor CA's certificate and CRL (`transfertwin.cps.opcua.FloorCA`).
+        peer_roles: (asset id, role) of the peer assets that may open sessions with their
+            application certificate as X.509 identity (none: only user names).
+        issuer: A CA that issues the server's certificate when it has none (one host, a
+            test); None: a server without one under a CA makes its key and signing request
+            and stops with a line naming them (`ensure_certificate`).
+        reread_s: How often the trust list is read again for revocations: the sessions
+            of a client whose certificate was revoked are closed within this period.
     """
 
     host: str = "127.0.0.1"
@@ -151,6 +161,9 @@ class ServerConfig:
     cert_dir: Path = Path("certs")
     credentials: Credentials | None = None
     trust_dir: Path | None = None
+    peer_roles: tuple[tuple[str, str], ...] = ()
+    issuer: FloorCA | None = field(default=None, compare=False)
+    reread_s: float = 2.0
 
     @property
     def trust_folder(self) -> Path:
@@ -183,6 +196,7 @@ class AssetServer:
     _ns: int = 0
     _write_listeners: list[Callable[[str, str, Any], None]] = field(default_factory=list)
     _keys: dict[ua.NodeId, tuple[str, str]] = field(default_factory=dict)
+    _watch: asyncio.Task | None = None
 
     @property
     def security_policy(self) -> str:
@@ -194,7 +208,8 @@ class AssetServer:
         if not cfg.insecure and cfg.credentials is None:
             raise ValueError("a secure asset server needs credentials")
         trust = None if cfg.insecure else TrustList(cfg.trust_folder)
-        users = RoleUserManager(cfg.credentials, trust) if cfg.credentials else None
+        users = (RoleUserManager(cfg.credentials, trust, dict(cfg.peer_roles))
+                 if cfg.credentials else None)  # fmt: skip
         server = Server(user_manager=users)
         share_standard_address_space(server)
         await server.init()
@@ -206,7 +221,7 @@ class AssetServer:
         if cfg.insecure:
             server.set_security_policy([ua.SecurityPolicyType.NoSecurity])
         else:
-            cert, key = await ensure_certificate(cfg.cert_dir, self.asset_id, cfg.host)
+            cert, key = await self._certificate()
             await server.load_certificate(str(cert))
             # what Server.load_private_key does, with the key parsed once per process
             server.iserver.private_key = parsed_private_key(key)
@@ -214,7 +229,9 @@ class AssetServer:
                 [ua.SecurityPolicyType.Basic256Sha256_SignAndEncrypt],
                 permission_ruleset=RoleRuleset(),
             )
-            server.set_identity_tokens([ua.UserNameIdentityToken])
+            tokens = [ua.UserNameIdentityToken]
+            server.set_identity_tokens([*tokens, ua.X509IdentityToken] if cfg.peer_roles
+                                       else tokens)  # fmt: skip
             server.set_certificate_validator(trust)
         server.subscribe_server_callback(CallbackType.PostWrite, self._written)
         self._ns = await server.register_namespace(NAMESPACE)
@@ -222,10 +239,53 @@ class AssetServer:
         self._keys = {n.nodeid: key for key, n in self._nodes.items()}
         await server.start()
         self._server = server
+        if trust is not None:
+            self._watch = asyncio.ensure_future(self._watch_revocations(trust))
         log.info("%s serving at %s (%s)", self.asset_id, self.endpoint, self.security_policy)
         return self
 
+    async def _certificate(self) -> tuple[Path, Path]:
+        """The server's application certificate and key (`ServerConfig.issuer`)."""
+        cfg, name = self.config, self.asset_id
+        pending = cfg.cert_dir / f"{name}.csr.pem"
+        if not (cfg.cert_dir / f"{name}.der").is_file():
+            if cfg.issuer is not None:
+                csr = new_request(cfg.cert_dir, name, cfg.host)
+                install_certificate(cfg.cert_dir, name, cfg.issuer.issue(csr))
+            elif (cfg.trust_folder / CA_CERT).is_file() and not pending.is_file():
+                new_request(cfg.cert_dir, name, cfg.host)  # ensure_certificate names it
+        return await ensure_certificate(cfg.cert_dir, name, cfg.host)
+
+    async def _watch_revocations(self, trust: TrustList) -> None:
+        """Every `reread_s`: read the trust list again, and close the connections of
+        clients whose certificates it revokes now (new ones are refused at CreateSession)."""
+        seen = trust.revoked()
+        while True:
+            await asyncio.sleep(self.config.reread_s)
+            revoked = trust.revoked()
+            if revoked != seen:
+                seen = revoked
+                self.drop_revoked(revoked)
+
+    def drop_revoked(self, serials: frozenset[int]) -> int:
+        """Close every client connection whose certificate's serial is in `serials`."""
+        dropped = 0
+        for proto in list(self._server.bserver.clients if self._server.bserver else []):
+            conn = getattr(getattr(proto, "processor", None), "_connection", None)
+            der = conn.security_policy.peer_certificate if conn is not None else None
+            if der and x509.load_der_x509_certificate(der).serial_number in serials:
+                log.warning("%s: closed the connection of a revoked certificate (%s)",
+                            self.asset_id, proto.peer_name)  # fmt: skip
+                proto.transport.close()
+                dropped += 1
+        return dropped
+
     async def __aexit__(self, *exc: object) -> None:
+        if self._watch is not None:
+            self._watch.cancel()
+            with suppress(asyncio.CancelledError):
+                await self._watch
+            self._watch = None
         if self._server is not None:
             # asyncua's stop waits for its clock task to finish its 1 s sleep (each server,
             # each stop); the task only writes CurrentTime, so it is cancelled instead.

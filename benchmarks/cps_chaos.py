@@ -3,6 +3,13 @@ every few seconds and restarted by hand (Jepsen-style: a workload, injected faul
 invariant checked at the end).
 
     PYTHONPATH=src .venv/bin/python benchmarks/cps_chaos.py --kills 10 --period 8
+    PYTHONPATH=src .venv/bin/python benchmarks/cps_chaos.py --kills 100 --period 8 \
+        --plant-seed 3 --lease 15
+
+With ``--plant-seed`` the floor runs on the emulated plant (its hidden physics decide every
+transfer) and the TMS's policy is the default, predictive: the twin's best state per
+object, learnt from the floor's transfers, so hand-overs happen under faults as they do in
+operation (``--policy nearest-idle`` for the baseline without a twin).
 
 Prints the kills, the orders completed / failed with their reasons / lost (must be 0),
 objects lost or duplicated (must be 0) and marked unknown (with the operation that lost
@@ -141,9 +148,11 @@ async def order_flow(floor: Floor, rng: random.Random, stop: asyncio.Event,
 async def chaos(args: argparse.Namespace) -> int:
     wd = Path(args.workdir or tempfile.mkdtemp(prefix="cps-chaos-")) / "floor"
     t0 = time.monotonic()
+    plant = [] if args.plant_seed is None else [
+        "--plant-seed", str(args.plant_seed), "--plant-kind", args.plant_kind]  # fmt: skip
     up = tt("cps", "up", "--floor", args.floor, "--workdir", str(wd), "--detach",
             "--time-scale", "0", "--lease", str(args.lease), "--seed", str(args.seed),
-            "--start-timeout", "300", timeout=400)  # fmt: skip
+            "--policy", args.policy, *plant, "--start-timeout", "300", timeout=400)  # fmt: skip
     if up.returncode != 0:
         print(up.stderr, file=sys.stderr)
         return 1
@@ -249,6 +258,9 @@ def main() -> int:
     ap.add_argument("--drain", type=float, default=120.0,
                     help="seconds to let operations end after the last kill")  # fmt: skip
     ap.add_argument("--workdir", help="where the floor's work folder goes (default: a temp dir)")
+    ap.add_argument("--plant-seed", type=int, help="run the floor on the emulated plant")
+    ap.add_argument("--plant-kind", choices=("in-class", "mismatch"), default="in-class")
+    ap.add_argument("--policy", choices=("predictive", "nearest-idle"), default="predictive")
     return asyncio.run(chaos(ap.parse_args()))
 
 

@@ -285,6 +285,7 @@ def _findings(doc: Mapping[str, object], data: RehearsalPlot) -> str:
         items.append(f"<span class='warn'>{html.escape(note)}</span>")
     return (
         "<section id='findings'><h2>What it found</h2>"
+        + metrics_html()
         + verdict_html(doc)
         + "<ul>"
         + "".join(f"<li>{t}</li>" for t in items)
@@ -395,7 +396,6 @@ def write_rehearsal_report(
         "<p class='lead'>The study's procedure — calibrate, predict, validate — tried "
         "against a plant whose truth is known.</p>"
         + _what_was_done(doc)
-        + metrics_html()
         + _findings(doc, data)
         + "<figure><img alt='held-out F0.5 before/after calibration; best/worst states, "
         f"twin vs plant' src='data:image/png;base64,{base64.b64encode(png).decode()}'>"

@@ -60,6 +60,14 @@ def _brier(doc: Mapping[str, object], which: str) -> float | None:
     return None
 
 
+def _split_text(doc: Mapping[str, object]) -> str:
+    cfg: Mapping[str, object] = doc.get("config") or {}  # type: ignore[assignment]
+    k, train, held = cfg.get("calibration_experiments"), doc.get("training"), doc.get("held_out")
+    if cfg.get("test_experiments") or k is None:
+        return f"With {train} calibration experiments"
+    return f"With {k} calibration experiments ({train} to calibrate, {held} held out to score)"
+
+
 def verdict_html(doc: Mapping[str, object]) -> str:
     """'Calibration made the twin worse …' with the reasons, or '' when it did not."""
     f_b, f_a = float(doc["f05_before"]), float(doc["f05_after"])  # type: ignore[arg-type]
@@ -77,8 +85,8 @@ def verdict_html(doc: Mapping[str, object]) -> str:
     return (
         "<p class='warn'><b>Calibration made the twin worse on these rows</b>: "
         + " and ".join(worse)
-        + f". With {doc.get('training')} calibration experiments for {n_obj} "
-        f"object{'s' if n_obj > 1 else ''}, each face's protrusion depth was chosen on "
+        + f". {_split_text(doc)} for {n_obj} object{'s' if n_obj > 1 else ''}: each "
+        "face's protrusion depth was chosen on "
         f"about {per_face:.0f} yes/no outcomes at random states. So few outcomes are "
         "matched about as well by a wrong depth as by the right one: the plant's own "
         "noise (placement scatter, outcomes that flip by chance) can pick the wrong one, "

@@ -136,7 +136,10 @@ def test_a_calibration_that_made_things_worse_gets_a_plain_verdict(tmp_path: Pat
         "and the Brier score rose from 0.042 to 0.167"
     ) in page
     # 28 training rows over 2 objects x 2 faces: about 7 outcomes per face's depth.
-    assert "With 28 calibration experiments for 2 objects" in page
+    assert (
+        "With 40 calibration experiments (28 to calibrate, 12 held out to score) for 2 "
+        "objects: each face's protrusion depth was chosen on about 7 yes/no outcomes"
+    ) in page
     assert "about 7 yes/no outcomes" in page
     better = {**DOC, "f05_after": 0.95, "scores_after": {**DOC["scores_after"], "brier": 0.03}}
     page = write_rehearsal_report(better, tmp_path / "b").read_text(encoding="utf-8")

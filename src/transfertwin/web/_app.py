@@ -85,6 +85,27 @@ def _error(status: int, message: str) -> JSONResponse:
     return JSONResponse({"error": message}, status_code=status)
 
 
+def _parse_body(request: Request, raw: bytes) -> dict[str, Any]:
+    """A write action's body (JSON or a form) as a dict; 4xx for anything else."""
+    ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    if ctype == "application/json":
+        try:
+            data = json.loads(raw.decode("utf-8"))
+        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise HTTPException(400, f"malformed JSON: {exc}") from None
+    elif ctype == "application/x-www-form-urlencoded":
+        try:
+            form = parse_qs(raw.decode("utf-8"), keep_blank_values=True, strict_parsing=False)
+        except (UnicodeDecodeError, ValueError) as exc:
+            raise HTTPException(400, f"malformed form: {exc}") from None
+        data = {k: v[-1] for k, v in form.items()}
+    else:
+        raise HTTPException(415, "send application/json or a form")
+    if not isinstance(data, dict):
+        raise HTTPException(400, "the body must be a JSON object")
+    return data
+
+
 def _api(fn: Callable[..., Awaitable[Response]]) -> Callable[[Request], Awaitable[Response]]:
     """Every failure becomes a JSON error; nothing of a traceback reaches the client."""
 
@@ -169,39 +190,44 @@ def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = No
             raise HTTPException(404, "no CPS: start the console with --cps WORKDIR")
         return state["cps"]
 
-    def check_write(request: Request, body: dict[str, Any], what: str) -> str:
-        client = request.client.host if request.client else "?"
-        if not (matches(header_token(request)) or matches(body.get("token"))):
-            audit.warning("%s refused: no valid token from %s", what, client)
-            raise HTTPException(401, f"{what} needs the console's token")
-        return client
-
     def study(name: str) -> StudyView:
         if name not in studies:
             raise HTTPException(404, f"no study {name[:80]!r}; studies: {', '.join(studies)}")
         return studies[name]
 
-    async def body_of(request: Request) -> dict[str, Any]:
-        raw = await request.body()
-        if len(raw) > MAX_BODY_BYTES:
-            raise HTTPException(413, f"request body over {MAX_BODY_BYTES} bytes")
-        ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
-        if ctype == "application/json":
-            try:
-                data = json.loads(raw.decode("utf-8"))
-            except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-                raise HTTPException(400, f"malformed JSON: {exc}") from None
-        elif ctype == "application/x-www-form-urlencoded":
-            try:
-                form = parse_qs(raw.decode("utf-8"), keep_blank_values=True, strict_parsing=False)
-            except (UnicodeDecodeError, ValueError) as exc:
-                raise HTTPException(400, f"malformed form: {exc}") from None
-            data = {k: v[-1] for k, v in form.items()}
-        else:
-            raise HTTPException(415, "send application/json or a form")
-        if not isinstance(data, dict):
-            raise HTTPException(400, "the body must be a JSON object")
-        return data
+    async def write_body(request: Request, what: str) -> tuple[dict[str, Any], str]:
+        """The body of a write action and its client, refused as early as can be: without
+        a valid token in the header, a body declared (Content-Length) or streamed past
+        `MAX_BODY_BYTES` is refused (401) before or as soon as the limit is passed, never
+        read to its end; with one, such a body gets 413 as soon as the limit is passed.
+        A body within the limit may carry the token itself (a ``token`` field). Every
+        refusal is a line in the audit log."""
+        client = request.client.host if request.client else "?"
+        authorised = matches(header_token(request))
+
+        def refuse(status: int, why: str) -> HTTPException:
+            audit.warning("%s refused: %s from %s", what, why, client)
+            if status == 413:
+                return HTTPException(413, f"request body over {MAX_BODY_BYTES} bytes")
+            return HTTPException(401, f"{what} needs the console's token")
+
+        def too_large(size: str) -> HTTPException:
+            if authorised:
+                return refuse(413, f"a body {size}")
+            return refuse(401, f"no valid token (and a body {size})")
+
+        declared = request.headers.get("content-length", "")
+        if declared.isdigit() and int(declared) > MAX_BODY_BYTES:
+            raise too_large(f"of {declared} bytes")  # nothing of it read
+        raw = bytearray()
+        async for chunk in request.stream():
+            raw += chunk
+            if len(raw) > MAX_BODY_BYTES:  # the rest is never read
+                raise too_large(f"over {MAX_BODY_BYTES} bytes")
+        body = _parse_body(request, bytes(raw))
+        if not (authorised or matches(body.get("token"))):
+            raise refuse(401, "no valid token")
+        return body, client
 
     def max_events_of(request: Request) -> int:
         try:
@@ -307,8 +333,7 @@ def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = No
         if request.method == "GET":
             check_read(request)
             return JSONResponse({"orders": gw.order_rows()})
-        body = await body_of(request)
-        client = check_write(request, body, "placing an order")
+        body, client = await write_body(request, "placing an order")
         obj, source, target = await gw.validate_order(body)
         order = await gw.submit(obj, source, target, client)
         return JSONResponse(order.public(), status_code=201)
@@ -360,8 +385,7 @@ def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = No
         if request.method == "GET":
             check_read(request)
             return JSONResponse(live.snapshot())
-        body = await body_of(request)
-        client = check_write(request, body, "starting a transfer")
+        body, client = await write_body(request, "starting a transfer")
         return JSONResponse(live.start(TransferRequest.parse(body), client), status_code=201)
 
     @_api

@@ -211,3 +211,61 @@ def test_cli_serves_until_sigterm(tiny_study, console_factory):
     assert res.status_code == 200 and res.json()["studies"][0]["done"] == 6
     console.stop()
     assert console.proc.returncode == 0
+
+
+def _post_chunked(app, path: str, total: int, token: str | None = None,
+                  length: int | None = None) -> tuple[int, int]:  # fmt: skip
+    """POST a JSON body of `total` bytes in 64 KiB chunks straight to the ASGI app, as a
+    chunked upload (or with a declared Content-Length `length`); (status, bytes the app
+    took from the stream)."""
+    import asyncio
+
+    chunk = b" " * 65536
+    left, taken, sent = total, 0, []
+
+    async def receive():
+        nonlocal left, taken
+        if left <= 0:
+            return {"type": "http.request", "body": b"", "more_body": False}
+        part = chunk[: min(left, len(chunk))]
+        left -= len(part)
+        taken += len(part)
+        return {"type": "http.request", "body": part, "more_body": left > 0}
+
+    async def send(message):
+        sent.append(message)
+
+    headers = [(b"host", b"127.0.0.1"), (b"content-type", b"application/json")]
+    headers.append((b"content-length", str(length).encode()) if length is not None
+                   else (b"transfer-encoding", b"chunked"))  # fmt: skip
+    if token is not None:
+        headers.append((b"authorization", f"Bearer {token}".encode()))
+    scope = {"type": "http", "asgi": {"version": "3.0"}, "http_version": "1.1",
+             "method": "POST", "scheme": "http", "path": path, "raw_path": path.encode(),
+             "query_string": b"", "root_path": "", "headers": headers,
+             "client": ("127.0.0.1", 50000), "server": ("127.0.0.1", 80)}  # fmt: skip
+    asyncio.run(app(scope, receive, send))
+    return next(m["status"] for m in sent if m["type"] == "http.response.start"), taken
+
+
+def test_a_large_body_without_token_is_refused_before_it_is_read(tiny_study, caplog):
+    """64 MiB chunked to a write action with no token: 401 once the limit is passed, the
+    rest never read, and the refusal in the audit log; declared too large: nothing read."""
+    app = create_app(WebConfig(dbs=(tiny_study,)))
+    with caplog.at_level("WARNING", logger="transfertwin.web.audit"):
+        status, taken = _post_chunked(app, "/api/transfer", 64 * 2**20)
+    assert status == 401
+    assert taken <= MAX_BODY_BYTES + 65536  # the first chunk past the limit, no more
+    assert any("starting a transfer refused: no valid token" in r.getMessage()
+               for r in caplog.records)  # fmt: skip
+    status, taken = _post_chunked(app, "/api/transfer", 64 * 2**20, length=64 * 2**20)
+    assert (status, taken) == (401, 0)
+
+
+def test_a_large_body_with_the_token_gets_413_as_soon_as_the_limit_is_passed(tiny_study, caplog):
+    cfg = WebConfig(dbs=(tiny_study,))
+    app = create_app(cfg)
+    with caplog.at_level("WARNING", logger="transfertwin.web.audit"):
+        status, taken = _post_chunked(app, "/api/transfer", 64 * 2**20, cfg.session_token)
+    assert status == 413 and taken <= MAX_BODY_BYTES + 65536
+    assert any("over" in r.getMessage() for r in caplog.records)

@@ -116,6 +116,24 @@ class Tms:
         return asyncio.run(call_asset(self.info, self.creds, "TMS", op, *args, timeout_s=20))
 
 
+def unload_idle(tms, units: set[str], pending: list, running: dict) -> int:
+    """An object a module still carries after a failed delivery, with no order of it left
+    or running, blocks that module: an operator takes it off onto a unit (`Locate` onto
+    its order's destination). Returns how many were taken off."""
+    ledger = json.loads(tms("Ledger"))
+    wanted = {o for o, _ in pending} | set(running)
+    ops = ledger["operations"]
+    n = 0
+    for obj, at in ledger["locations"].items():
+        if at in units or obj in wanted or obj in ledger["moving"]:
+            continue
+        last = [o for o in ops if o["object"] == obj]
+        unit = (last[-1].get("target") or (last[-1].get("targets") or [None])[0]) if last else None
+        tms("Locate", obj, unit if unit in units else sorted(units)[0])
+        n += 1
+    return n
+
+
 def drive(wd: Path, orders: list[tuple[str, str]], inflight: int, timeout_s: float) -> dict:
     """Send `orders` to the floor in `wd`; returns the finished operations and counts."""
     from transfertwin.cps.opcua import OperationRefused
@@ -155,6 +173,7 @@ def drive(wd: Path, orders: list[tuple[str, str]], inflight: int, timeout_s: flo
                 if exc.status == "BadResourceUnavailable":  # no module now: try again later
                     pending.insert(nxt, (obj, dest))
                     retried += 1
+                    located += unload_idle(tms, units, pending, running)
                     break
                 refused.append({"object": obj, "destination": dest, "reason": exc.reason})
         done = len(orders) - len(pending) - len(running)

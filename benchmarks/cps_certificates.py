@@ -1,20 +1,21 @@
-"""How long a process floor's trust lists take to prepare: every one of N assets trusts
-every asset's client certificate (and the command-line clients'), one trust folder per
-asset process (docs/scaling.md).
+"""How long a process floor's credentials take to prepare, two ways in one run (docs/scaling.md,
+docs/security.md "Floor CA"):
 
-    PYTHONPATH=src .venv/bin/python benchmarks/cps_certificates.py --assets 50
+    PYTHONPATH=src .venv/bin/python benchmarks/cps_certificates.py --assets 200
 
-It makes N application certificates once (`ensure_certificate`, one RSA key each: printed
-as the key time, the same for both ways), then fills N + 1 fresh trust folders with the
-N + 2 certificates two ways, in the same run:
+- pinned (the way before the floor CA, its code kept here): one self-signed application
+  certificate per asset and command-line client (`ensure_certificate`, one RSA key each,
+  one after the other), then every certificate on every asset's trust list (N + 1 folders
+  x N + 2 certificates, each written once and hard-linked into the others:
+  `trust_certificates`);
+- CA (what ``cps up`` does now: `transfertwin.cps._pki.prepare_certificates`): the floor's
+  CA, each asset's own key and signing request (made in parallel, one process per core),
+  each request signed, and in every trust folder the CA certificate and its CRL only.
 
-- baseline: `trust_certificate` per folder and certificate, as `cps up` did (each file
-  written atomically with its own fsync: (N + 1)(N + 2) fsynced files);
-- now: `trust_certificates` (`cps up` since): each certificate written once, hard-linked
-  into the other folders, one directory sync per folder.
-
-Both ways are checked to give every folder the same list (`TrustList`). Prints the seconds
-of each and the ratio; the host may be shared, so the load average is printed too.
+Both results are checked: every pinned folder trusts every certificate, and every CA trust
+folder trusts every asset's certificate (`TrustList`, chain and CRL). Prints the seconds of
+each, the files in the trust folders and the ratio; the host may be shared, so the load
+average is printed too.
 """
 
 from __future__ import annotations
@@ -26,13 +27,53 @@ import tempfile
 import time
 from pathlib import Path
 
+from transfertwin.cps._pki import prepare_certificates
+from transfertwin.cps.floor import AssetConfig
 from transfertwin.cps.opcua import (
+    ROLES,
     TrustList,
     ensure_certificate,
     read_certificate,
-    trust_certificate,
     trust_certificates,
 )
+
+
+def pinned(base: Path, n: int) -> tuple[float, float, int]:
+    """The way before the CA: (key seconds, trust list seconds, files in the lists)."""
+    t0 = time.perf_counter()
+    paths = [asyncio.run(ensure_certificate(base / "certs", f"client-{r}"))[0] for r in ROLES]
+    paths += [asyncio.run(ensure_certificate(base / f"a{i}" / "certs", "client-operator"))[0]
+              for i in range(n)]  # fmt: skip
+    keys_s = time.perf_counter() - t0
+    certs = [read_certificate(p) for p in paths]
+    folders = [base / "certs" / "trusted", *(base / f"a{i}" / "trusted" for i in range(n))]
+    t0 = time.perf_counter()
+    added = trust_certificates(folders, certs)
+    lists_s = time.perf_counter() - t0
+    ders = [p.read_bytes() for p in paths]
+    for folder in (folders[0], folders[-1]):
+        assert all(TrustList(folder).is_trusted(d) for d in ders)
+    return keys_s, lists_s, added
+
+
+def with_ca(base: Path, n: int) -> tuple[float, int]:
+    """The floor CA: (seconds for everything, files in the trust folders)."""
+    configs = [AssetConfig(asset_id=f"a{i}", floor_file=base / "floor.toml",
+                           host=f"127.0.{1 + i // 250}.{2 + i % 250}", port=4840, seeds=(),
+                           cert_dir=base / f"a{i}" / "certs", trust_dir=base / f"a{i}" / "trusted",
+                           credentials_file=base / "credentials.json",
+                           state_dir=base / f"a{i}" / "state")
+               for i in range(n)]  # fmt: skip
+    t0 = time.perf_counter()
+    prepare_certificates(base, configs)
+    total_s = time.perf_counter() - t0
+    files = sum(len(os.listdir(c.trust_dir)) for c in configs)
+    files += len(os.listdir(base / "certs" / "trusted"))
+    for cfg in (configs[0], configs[-1]):
+        trust = TrustList(cfg.trust_dir)
+        assert all(trust.is_trusted((c.cert_dir / f"{c.asset_id}.der").read_bytes())
+                   for c in configs)  # fmt: skip
+    return total_s, files
 
 
 def main() -> None:
@@ -43,43 +84,16 @@ def main() -> None:
         ap.error("--assets must be at least 1")
     n = args.assets
     with tempfile.TemporaryDirectory(prefix="cps-certs-", dir=os.environ.get("TMPDIR")) as tmp:
-        base = Path(tmp)
-        t0 = time.perf_counter()
-        paths = [asyncio.run(ensure_certificate(base / "clients", f"client-{r}"))[0]
-                 for r in ("viewer", "operator")]  # fmt: skip
-        paths += [asyncio.run(ensure_certificate(base / f"a{i}" / "certs", "client-operator"))[0]
-                  for i in range(n)]  # fmt: skip
-        keys_s = time.perf_counter() - t0
-        certs = [read_certificate(p) for p in paths]  # as the launcher holds them
-
-        def folders(way: str) -> list[Path]:
-            return [base / way / "certs" / "trusted",
-                    *(base / way / f"a{i}" / "trusted" for i in range(n))]  # fmt: skip
-
-        t0 = time.perf_counter()
-        for folder in folders("baseline"):
-            for cert in certs:
-                trust_certificate(folder, cert)
-        baseline_s = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        added = trust_certificates(folders("now"), certs)
-        now_s = time.perf_counter() - t0
-        files = (n + 1) * (n + 2)
-        assert added == files, (added, files)
-        ders = [p.read_bytes() for p in paths]
-        for old, new in zip(folders("baseline"), folders("now"), strict=True):
-            assert sorted(os.listdir(old)) == sorted(os.listdir(new))
-            assert all(TrustList(new).is_trusted(d) for d in ders)
+        keys_s, lists_s, files = pinned(Path(tmp) / "pinned", n)
+        ca_s, ca_files = with_ca(Path(tmp) / "ca", n)
     load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
-    print(f"{n} assets: {n + 1} trust folders x {n + 2} certificates = {files} files "
-          f"(load average {load})")  # fmt: skip
-    print(f"  keys (once, both ways):          {keys_s:8.2f} s ({keys_s / (n + 2) * 1e3:.0f} ms "
-          f"per certificate)")  # fmt: skip
-    print(f"  baseline (a fsynced file each):  {baseline_s:8.2f} s "
-          f"({baseline_s / files * 1e3:.2f} ms per file)")  # fmt: skip
-    print(f"  now (written once, hard links):  {now_s:8.2f} s ({now_s / files * 1e3:.3f} ms "
-          f"per file)")  # fmt: skip
-    print(f"  ratio baseline / now: {baseline_s / now_s:.0f}x")
+    old_s = keys_s + lists_s
+    print(f"{n} assets, {os.cpu_count()} cores (load average {load})")
+    print(f"  pinned, hard-linked lists: {old_s:8.2f} s (keys {keys_s:.2f} s, trust lists "
+          f"{lists_s:.2f} s; {files} files in {n + 1} trust folders)")  # fmt: skip
+    print(f"  floor CA:                  {ca_s:8.2f} s (CA, {n + 2} keys and requests, "
+          f"signing, CA + CRL copied; {ca_files} files in {n + 1} trust folders)")  # fmt: skip
+    print(f"  ratio pinned / CA: {old_s / ca_s:.1f}x")
 
 
 if __name__ == "__main__":

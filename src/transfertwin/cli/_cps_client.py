@@ -190,11 +190,16 @@ def _client_folder(credential: Path, ca: Path) -> Path:
 
 
 def run_client(wd: Path, coro_fn: Callable[[], Awaitable[T]]) -> T:
-    """Run a client coroutine; a CPS that does not answer is reported in one line."""
+    """Run a client coroutine; a CPS that does not answer, or a server that is not the
+    asset meant (`UntrustedServer`), is reported in one line."""
     from asyncua import ua
+
+    from transfertwin.cps.opcua import UntrustedServer
 
     try:
         return asyncio.run(coro_fn())
+    except UntrustedServer as exc:
+        raise InputError(f"{wd}: {exc}") from None
     except (TimeoutError, ConnectionError, OSError) as exc:
         raise InputError(
             f"{wd}: the CPS is not running or not answering "

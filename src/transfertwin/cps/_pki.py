@@ -72,7 +72,7 @@ def _requests(todo: list[tuple[Path, str, str | None]]):
     """(folder, name, host, signing request) for each of `todo`, the keys made in
     parallel when there are many."""
     if len(todo) < 8:
-        return [(*t, new_request(*t)) for t in todo]
+        return [(*t, new_request(*t, write_request=False)) for t in todo]
     with ProcessPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
         csrs = list(pool.map(_request, todo, chunksize=max(1, len(todo) // 32)))
     return [(*t, x509.load_pem_x509_csr(pem)) for t, pem in zip(todo, csrs, strict=True)]
@@ -81,7 +81,7 @@ def _requests(todo: list[tuple[Path, str, str | None]]):
 def _request(item: tuple[Path, str, str | None]) -> bytes:
     from cryptography.hazmat.primitives.serialization import Encoding
 
-    return new_request(*item).public_bytes(Encoding.PEM)
+    return new_request(*item, write_request=False).public_bytes(Encoding.PEM)
 
 
 def _current(ca: FloorCA, folder: Path, name: str, host: str | None,

@@ -213,3 +213,11 @@ async def _register_insecurely(url: str, uri: str, rogue_url: str) -> None:
         await client.close_secure_channel()
     finally:
         client.disconnect_socket()
+
+
+def test_the_cli_says_in_one_line_that_a_server_is_not_the_asset_meant(pki, tu_a, tmp_path):
+    from transfertwin._errors import InputError
+    from transfertwin.cli._cps_client import run_client
+
+    with pytest.raises(InputError, match=r"is not TU_B of this floor \(BadCertificateUriInvalid\)"):
+        run_client(tmp_path, lambda: _reach(tu_a.endpoint, "TU_B", pki))

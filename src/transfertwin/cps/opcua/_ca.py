@@ -25,6 +25,7 @@ The API (``transfertwin cps ca init|issue|revoke|list`` call it):
 from __future__ import annotations
 
 import json
+import os
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
@@ -152,11 +153,12 @@ def ensure_ca(folder: Path, name: str = "transfertwin floor CA") -> FloorCA:
     return load_ca(folder) if (folder / CA_CERT).exists() else init_ca(folder, name)
 
 
-def new_request(cert_dir: Path, name: str, host: str | None = None,
-                *, key_size: int = 2048) -> x509.CertificateSigningRequest:  # fmt: skip
+def new_request(cert_dir: Path, name: str, host: str | None = None, *, key_size: int = 2048,
+                write_request: bool = True) -> x509.CertificateSigningRequest:  # fmt: skip
     """Where the asset runs: a new private key ``cert_dir/<name>.pem`` (mode 0600) and a
     signing request ``cert_dir/<name>.csr.pem`` for ``urn:transfertwin:<name>`` (and
-    `host`, an IP address or DNS name, in the SAN). The key never leaves `cert_dir`."""
+    `host`, an IP address or DNS name, in the SAN; the file only with `write_request`: a
+    request signed at once needs none). The key never leaves `cert_dir`."""
     cert_dir = Path(cert_dir)
     cert_dir.mkdir(parents=True, exist_ok=True)
     key = rsa.generate_private_key(public_exponent=65537, key_size=key_size)
@@ -171,7 +173,8 @@ def new_request(cert_dir: Path, name: str, host: str | None = None,
         .add_extension(x509.SubjectAlternativeName(alt), critical=False)
         .sign(key, hashes.SHA256())
     )  # fmt: skip
-    write_bytes_atomic(cert_dir / f"{name}.csr.pem", csr.public_bytes(Encoding.PEM))
+    if write_request:
+        write_bytes_atomic(cert_dir / f"{name}.csr.pem", csr.public_bytes(Encoding.PEM))
     return csr
 
 
@@ -191,7 +194,9 @@ def install_certificate(cert_dir: Path, name: str, cert: x509.Certificate) -> Pa
         ValueError: The certificate is not for the key ``cert_dir/<name>.pem``.
     """
     key_file = Path(cert_dir) / f"{name}.pem"
-    key = load_pem_private_key(key_file.read_bytes(), password=None)
+    # only its public half is compared: the RSA key's validation (~40 ms) is not needed
+    key = load_pem_private_key(key_file.read_bytes(), password=None,
+                               unsafe_skip_rsa_key_validation=True)  # fmt: skip
     if key.public_key().public_numbers() != cert.public_key().public_numbers():
         raise ValueError(f"{key_file}: the certificate is not for this key (another request?)")
     path = Path(cert_dir) / f"{name}.der"
@@ -338,7 +343,10 @@ class FloorCA:
         return path
 
     def install(self, trust_dir: Path) -> None:
-        """Copy the CA certificate and its CRL into an asset's trust folder (created)."""
+        """Copy the CA certificate and its CRL into an asset's trust folder (created; a
+        file already the same is left alone). Each copy replaces the old one whole (a
+        reader sees one or the other) but is not synced: the CA's own files are, and
+        installing again repairs a copy a crash lost (``cps up`` and ``cps ca revoke`` do)."""
         trust_dir = Path(trust_dir)
         trust_dir.mkdir(parents=True, exist_ok=True)
         for name in (CA_CERT, CRL_FILE):
@@ -349,7 +357,9 @@ class FloorCA:
                     continue
             except OSError:
                 pass
-            write_bytes_atomic(target, data)
+            tmp = trust_dir / f".{name}.{os.getpid()}.tmp"
+            tmp.write_bytes(data)
+            os.replace(tmp, target)
 
 
 def request_name(csr: x509.CertificateSigningRequest) -> str:

@@ -451,9 +451,9 @@ CONTROL_INTERFACE: Mapping[str, tuple[OperationSpec, ...]] = MappingProxyType(
                 (Arg("heartbeat_json", _S),),
                 (Arg("directory_json", _S),),
                 "Renew an asset's lease: with its description and live state, or a renewal "
-                "(id and pid) when they did not change (refused with BadNotFound when no "
-                "lease of that process is held); answers the directory's version, and the "
-                "endpoints of the online assets when the sender holds another version.",
+                "(id and instance) when they did not change (refused with BadNotFound when no "
+                "lease of that start of its process is held); answers the directory's version, "
+                "and the endpoints of the online assets when the sender holds another version.",
             ),
             OperationSpec(
                 "Leave",

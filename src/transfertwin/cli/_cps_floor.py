@@ -67,6 +67,21 @@ def _floor_to_run(args: argparse.Namespace):
     return floor
 
 
+def _check_here(floor) -> None:
+    """Refuse to start a floor whose file binds an asset (not on standby) to an address this
+    host does not have: that asset starts on its own host, from its bundle."""
+    from transfertwin.cps._launcher import local_address
+
+    standby = floor.standby()
+    away = [(aid, floor.bind_address(aid)[0]) for aid, _ in floor.bind if aid not in standby]
+    away = [(aid, host) for aid, host in away if not local_address(host)]
+    if away:
+        aid, host = away[0]
+        raise InputError(f"{aid} is bound to {host}, an address of another host "
+                         f"({len(away)} such assets): prepare the bundles with 'cps up "
+                         "--prepare-only' and start each on its host ('cps asset BUNDLE')")
+
+
 def cmd_up_floor(args: argparse.Namespace) -> int:
     """Start one process per asset of the floor; wait until the knowledge graph knows them
     all; then stay until SIGINT/SIGTERM (stopping the floor) or until no asset process of
@@ -82,6 +97,8 @@ def cmd_up_floor(args: argparse.Namespace) -> int:
     )
 
     floor = _floor_to_run(args)
+    if not args.prepare_only:
+        _check_here(floor)
     wd = out_dir(args.workdir)
     check_workdir(wd)
     configs = prepare_floor(floor, wd, insecure=args.insecure, seed=args.seed,
@@ -141,6 +158,7 @@ def cmd_up_local(args: argparse.Namespace) -> int:
                          "of processes; --single-process runs the floor in this process: "
                          "choose one")  # fmt: skip
     floor = _floor_to_run(args)
+    _check_here(floor)
     wd = out_dir(args.workdir)
     wd.mkdir(parents=True, exist_ok=True)
     handler = logging.FileHandler(wd / "cps.log")

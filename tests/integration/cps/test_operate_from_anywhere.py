@@ -58,6 +58,21 @@ def test_where_the_floor_is_is_checked_in_one_line(credential, capfd, monkeypatc
     assert len(lines) == 1 and message in lines[0], done.stderr
 
 
+@pytest.mark.parametrize("mode", [(), ("--single-process",)])
+def test_a_floor_bound_to_other_hosts_is_not_started_here(tmp_path, capfd, mode):
+    floor = tmp_path / "floor.toml"
+    floor.write_text(two_module_floor("away", {"o1": "TU_A"}) + '\n[bind]\nTU_A = "198.18.0.250"\n')
+    done = run_main(capfd, "cps", "up", "--floor", str(floor), "--workdir", str(tmp_path / "w"),
+                    *mode)  # fmt: skip
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert "TU_A is bound to 198.18.0.250, an address of another host" in done.stderr
+    assert "--prepare-only" in done.stderr and not (tmp_path / "w" / "assets").exists()
+    prepared = run_main(capfd, "cps", "up", "--floor", str(floor), "--workdir",
+                        str(tmp_path / "w"), "--prepare-only")  # fmt: skip
+    assert prepared.returncode == 0, prepared.stderr
+    assert (tmp_path / "w" / "assets" / "TU_A" / "asset.toml").is_file()
+
+
 def test_an_asset_needs_its_bundle_or_file(capfd):
     done = run_main(capfd, "cps", "asset")
     assert done.returncode == 2 and "give the asset's bundle folder" in done.stderr

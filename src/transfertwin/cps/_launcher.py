@@ -3,8 +3,9 @@
 `prepare_floor` writes the work folder: the floor file, the command-line clients'
 certificates, and one **bundle** per asset, ``assets/<id>/``: everything its process needs
 and nothing else, with paths relative to the bundle (`asset.toml`; a copy of the floor file,
-of the credentials, of the plant seed for an asset on the plant, of the study store for
-the Experiment Manager; its certificates, trust list and state). A bundle copied to another
+of the people's user table (hashes, no password), of the plant seed for an asset on the
+plant, of the study store for the Experiment Manager; its certificates, trust list and
+state). A bundle copied to another
 host runs there with ``transfertwin cps asset BUNDLE``. An asset listens on a loopback
 address of its own, or on the address the floor file's ``[bind]`` gives it (then with
 security only). `launch` starts one detached process per asset of this host: the floor does
@@ -43,8 +44,10 @@ from transfertwin.cps.floor import (
 from transfertwin.cps.node import default_lease
 from transfertwin.cps.opcua import (
     free_port,
+    load_credentials,
     new_credentials,
     write_credentials,
+    write_user_table,
 )
 from transfertwin.cps.roles import PLANT_LOG
 
@@ -126,6 +129,7 @@ def prepare_floor(
     creds_file = workdir / "credentials.json"
     if not insecure and not creds_file.is_file():
         write_credentials(creds_file, new_credentials())
+    users_file = None if insecure else _user_table(creds_file, workdir / "users.json")
     descs = floor.descriptors()
     if lease_s is None:
         lease_s = default_lease(len(descs))
@@ -148,8 +152,8 @@ def prepare_floor(
         configs[aid] = AssetConfig(
             asset_id=aid, floor_file=floor_file, host=hosts[aid], port=ports[aid],
             seeds=seeds, cert_dir=home / "certs", trust_dir=home / "trusted",
-            credentials_file=None if insecure else _copy_private(creds_file,
-                                                                 home / "credentials.json"),
+            credentials_file=None if insecure else _copy_private(users_file,
+                                                                 home / "users.json"),
             state_dir=home / "state", insecure=insecure,
             allow_remote=not ipaddress.ip_address(hosts[aid]).is_loopback, lease_s=lease_s,
             seed=seed, time_scale=time_scale, docking=docking, hal=hal, study_file=own_study,
@@ -183,6 +187,15 @@ def _addresses(floor: FloorSpec, order: list[str],
             used.add((hosts[aid], str(port)))
         ports[aid] = port
     return hosts, ports
+
+
+def _user_table(creds_file: Path, table: Path) -> Path:
+    """``W/users.json``: the people's users as the servers check them (salted scrypt
+    hashes, no password: `write_user_table`), made again when the credentials changed.
+    Every bundle gets a copy; the passwords stay in ``W/credentials.json``."""
+    if not table.is_file() or table.stat().st_mtime_ns < creds_file.stat().st_mtime_ns:
+        write_user_table(table, load_credentials(creds_file))
+    return table
 
 
 def _copy_private(source: Path, target: Path) -> Path:

@@ -156,6 +156,7 @@ class LocalFloor:
         cfg = self.configs[aid]
         insecure = cfg.insecure
         return connect(cfg.endpoint, aid,
-                       credentials=None if insecure else load_credentials(cfg.credentials_file),
+                       credentials=None if insecure else load_credentials(
+                           self.workdir / "credentials.json"),
                        role=role, cert_dir=self.workdir / "certs", insecure=insecure,
                        timeout_s=timeout_s)  # fmt: skip

@@ -290,3 +290,23 @@ def test_a_stopped_server_leaves_no_task_behind(pki):
         return [t for t in asyncio.all_tasks() - before if not t.done()]
 
     assert _run(scenario()) == []
+
+
+def test_a_servers_user_table_holds_no_password_and_checks_them(pki, tmp_path):
+    """What an asset's bundle holds of the people's users: salted scrypt hashes only; the
+    server still tells the operator's password from a wrong one."""
+    from transfertwin.cps.opcua import UserTable, load_users, write_user_table
+
+    table_file = write_user_table(tmp_path / "users.json", pki.credentials)
+    text = table_file.read_text()
+    assert table_file.stat().st_mode & 0o077 == 0
+    assert all(password not in text for _, password in pki.credentials.users.values())
+    table = load_users(table_file)
+    assert isinstance(table, UserTable)
+    users = RoleUserManager(table, TrustList(pki.trust_dir))
+    own = (pki.cert_dir / "client-operator.der").read_bytes()
+    name, password = pki.credentials.for_role("operator")
+    assert users.get_user(None, name, password, own).name == "operator"
+    assert users.get_user(None, name, password + "x", own) is None
+    viewer, viewer_password = pki.credentials.for_role("viewer")
+    assert users.get_user(None, viewer, viewer_password, own).name == "viewer"

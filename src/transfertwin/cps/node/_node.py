@@ -48,7 +48,7 @@ from transfertwin.cps.opcua import (
     OperationRefused,
     ServerConfig,
     connect,
-    load_credentials,
+    load_users,
 )
 
 __all__ = ["LIFECYCLE", "SHUTDOWN", "AssetNode", "RoleFactory", "heartbeat_payload",
@@ -115,7 +115,8 @@ class AssetNode:
                         f"({cfg.floor_file})")  # fmt: skip
         self.desc = by_id[cfg.asset_id]
         self.descriptors = by_id
-        self.credentials = None if cfg.insecure else load_credentials(cfg.credentials_file)
+        # the people's users (a user table: hashes only); the node itself is its certificate
+        self.credentials = None if cfg.insecure else load_users(cfg.credentials_file)
         self.server: AssetServer | None = None
         self.discovery: Discovery | None = None
         self.peers = Peers(self.endpoint_of, self._open)

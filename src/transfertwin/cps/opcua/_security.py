@@ -50,17 +50,20 @@ __all__ = [
     "RoleRuleset",
     "RoleUserManager",
     "TrustList",
+    "UserTable",
     "certificate_uris",
     "check_valid_now",
     "ensure_certificate",
     "free_port",
     "load_credentials",
+    "load_users",
     "new_credentials",
     "parsed_private_key",
     "read_certificate",
     "trust_certificate",
     "trust_certificates",
     "write_credentials",
+    "write_user_table",
 ]
 
 log = logging.getLogger(__name__)
@@ -154,6 +157,55 @@ def load_credentials(path: Path) -> Credentials:
     return Credentials({r: (d["username"], d["password"]) for r, d in data.items()})
 
 
+@dataclass(frozen=True)
+class UserTable:
+    """People's users as a server keeps them: user name -> (role, salt, scrypt hash of the
+    password); no password in it. An asset's bundle holds this, not the passwords
+    (`write_user_table`); the people's clear credentials stay with them."""
+
+    users: dict[str, tuple[str, bytes, bytes]]
+
+    @classmethod
+    def of(cls, creds: Credentials) -> UserTable:
+        """The table of `creds` (one salt per user; ~50 ms a user)."""
+        table = {}
+        for role, (name, password) in creds.users.items():
+            salt = secrets.token_bytes(16)
+            table[name] = (role, salt, _scrypt(password, salt))
+        return cls(table)
+
+    def role_of(self, username: str, password: str) -> str | None:
+        """The user's role if `password` is theirs, else None."""
+        entry = self.users.get(username)
+        if entry is None:
+            return None
+        role, salt, digest = entry
+        return role if hmac.compare_digest(_scrypt(password, salt), digest) else None
+
+
+def _scrypt(password: str, salt: bytes) -> bytes:
+    return hashlib.scrypt(password.encode(), salt=salt, n=2**14, r=8, p=1, dklen=32)
+
+
+def write_user_table(path: Path, creds: Credentials) -> Path:
+    """Write the servers' table of `creds` (`UserTable`: hashes, no password; mode 0600)."""
+    table = UserTable.of(creds)
+    data = {"users": {name: {"role": role, "salt": salt.hex(), "scrypt": digest.hex()}
+                      for name, (role, salt, digest) in table.users.items()}}  # fmt: skip
+    write_atomic(path, json.dumps(data, indent=2) + "\n", mode=0o600)
+    return path
+
+
+def load_users(path: Path) -> Credentials | UserTable:
+    """What a server checks people against: a `UserTable` file (`write_user_table`) or,
+    for a floor of one host or a test, a credentials file (`write_credentials`)."""
+    data = json.loads(Path(path).read_text())
+    if isinstance(data.get("users"), dict):
+        return UserTable({name: (d["role"], bytes.fromhex(d["salt"]), bytes.fromhex(d["scrypt"]))
+                          for name, d in data["users"].items()})  # fmt: skip
+    return load_credentials(path)
+
+
 class RoleUserManager:
     """Users mapped to roles; asyncua calls `get_user` on activation.
 
@@ -164,15 +216,17 @@ class RoleUserManager:
     gives its role (by the asset's class: `transfertwin.cps.node.PEER_ROLES`).
 
     Args:
-        creds: The people's users.
+        creds: The people's users: their credentials, or only their `UserTable`.
         trust: If given, a session is refused unless the client's application certificate
             (the secure channel's peer certificate) is trusted by it; needed for peers.
         peers: Asset id -> the role its certificate gets (empty: no peer identities).
     """
 
-    def __init__(self, creds: Credentials, trust: TrustList | None = None,
+    def __init__(self, creds: Credentials | UserTable, trust: TrustList | None = None,
                  peers: Mapping[str, str] | None = None) -> None:  # fmt: skip
-        self._users = {u: (p, role) for role, (u, p) in creds.users.items()}
+        self._table = creds if isinstance(creds, UserTable) else None
+        self._users = {} if self._table else {u: (p, r) for r, (u, p) in creds.users.items()}
+        self._checked: dict[tuple[str, bytes], str] = {}  # (user, SHA-256 of a password) ok
         self._trust = trust
         self._peers = dict(peers or {})
 
@@ -183,6 +237,9 @@ class RoleUserManager:
             return None
         if username is None:
             return self._peer(certificate)
+        if self._table is not None:
+            role = self._table_role(username, password or "")
+            return None if role is None else User(role=UserRole.User, name=role)
         if username not in self._users:
             return None
         expected, role = self._users[username]
@@ -191,6 +248,17 @@ class RoleUserManager:
             hashlib.sha256((password or "").encode()).digest(),
         )
         return User(role=UserRole.User, name=role) if ok else None
+
+    def _table_role(self, username: str, password: str) -> str | None:
+        """The role by the table, a password once verified remembered by its SHA-256 (the
+        console opens many sessions; scrypt costs ~50 ms each)."""
+        key = (username, hashlib.sha256(password.encode()).digest())
+        role = self._checked.get(key)
+        if role is None:
+            role = self._table.role_of(username, password)
+            if role is not None:
+                self._checked[key] = role
+        return role
 
     def _peer(self, der: bytes | None) -> User | None:
         if der is None or self._trust is None:

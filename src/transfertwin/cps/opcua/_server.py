@@ -41,6 +41,7 @@ from transfertwin.cps.opcua._security import (
     RoleRuleset,
     RoleUserManager,
     TrustList,
+    UserTable,
     ensure_certificate,
     free_port,
     parsed_private_key,
@@ -143,7 +144,8 @@ class ServerConfig:
         port: TCP port; 0 picks a free one.
         insecure: Serve NoSecurity without users (explicit opt-in only).
         cert_dir: Where application certificates are created on first start.
-        credentials: Users and passwords per role (required unless insecure).
+        credentials: The people's users: passwords per role, or only their hashes
+            (`UserTable`; required unless insecure).
         trust_dir: The trust list: client certificates accepted (None: ``cert_dir/trusted``);
             on a floor, the floor CA's certificate and CRL (`transfertwin.cps.opcua.FloorCA`).
         peer_roles: (asset id, role) of the peer assets that may open sessions with their
@@ -159,7 +161,7 @@ class ServerConfig:
     port: int = 0
     insecure: bool = False
     cert_dir: Path = Path("certs")
-    credentials: Credentials | None = None
+    credentials: Credentials | UserTable | None = None
     trust_dir: Path | None = None
     peer_roles: tuple[tuple[str, str], ...] = ()
     issuer: FloorCA | None = field(default=None, compare=False)

@@ -23,7 +23,7 @@ from transfertwin._errors import InputError
 from transfertwin.cli._paths import out_dir
 
 __all__ = ["add_access", "call_asset", "check_access", "endpoint_of", "floor_access",
-           "load_info", "run_client", "text_table", "workdir_of"]  # fmt: skip
+           "load_info", "remote_info", "run_client", "text_table", "workdir_of"]  # fmt: skip
 
 #: What an operator credential folder holds (`--credential`): the client's application
 #: certificate and key, and the operator's user name and password.
@@ -101,7 +101,7 @@ def floor_access(args: argparse.Namespace) -> tuple[str, dict, object]:
     if graph is None:
         wd = workdir_of(args.workdir, must_exist=True)
         return str(wd), *load_info(wd)
-    return graph, *_remote_info(graph, args.ca, args.credential)
+    return graph, *remote_info(graph, args.ca, args.credential)
 
 
 def check_access(args: argparse.Namespace) -> str | None:
@@ -117,7 +117,7 @@ def check_access(args: argparse.Namespace) -> str | None:
     return graph
 
 
-def _remote_info(graph: str, ca: str | None, credential: str | None) -> tuple[dict, object]:
+def remote_info(graph: str, ca: str | None, credential: str | None) -> tuple[dict, object]:
     """The floor as its graph lists it, reached with the CA `ca` and the operator
     credential folder `credential`."""
     from transfertwin.cps.opcua import load_credentials

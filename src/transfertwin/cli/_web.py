@@ -20,8 +20,12 @@ def cmd_web(args: argparse.Namespace) -> int:
     for db in args.db or []:
         if Path(db).suffix.lower() not in SQLITE_SUFFIXES:
             raise InputError(f"--db {db}: a study store ({', '.join(SQLITE_SUFFIXES)})")
+    if args.graph is not None and args.cps is not None:
+        raise InputError("--cps (a floor's work folder) or --graph (a floor elsewhere): "
+                         "choose one")  # fmt: skip
+    cps = _remote_console(args) if args.graph is not None else args.cps
     config = WebConfig(
-        cps=Path(args.cps) if args.cps else None,
+        cps=Path(cps) if cps else None,
         dbs=tuple(Path(db) for db in args.db or []),
         calibrations=tuple(Path(d) for d in args.calibration or []),
         host=args.host,
@@ -46,10 +50,49 @@ def cmd_web(args: argparse.Namespace) -> int:
     return 0
 
 
+def _remote_console(args: argparse.Namespace) -> Path:
+    """The console's folder for a floor reached from another host (``--graph``, ``--ca``,
+    ``--credential``): a ``cps.json`` as a floor's work folder has it, with the graph's
+    endpoint (the console learns the other assets from its ``Status``), this process's
+    client folder (the credential's certificate and key, the CA) and the credential's
+    users, reading with the operator role it holds; the console's orders list and audit
+    trail go there too. Removed at exit."""
+    import atexit
+    import json
+    import shutil
+    import tempfile
+
+    from transfertwin._errors import InputError
+    from transfertwin.cli._cps_client import remote_info
+
+    if args.ca is None or args.credential is None:
+        raise InputError("--graph needs --ca (the floor's CA certificate) and --credential "
+                         "(an operator credential folder)")  # fmt: skip
+    info, _ = remote_info(args.graph, args.ca, args.credential)
+    folder = Path(tempfile.mkdtemp(prefix="transfertwin-console-"))
+    atexit.register(shutil.rmtree, folder, True)
+    policy = "Basic256Sha256_SignAndEncrypt"
+    doc = {"floor": None, "assets": [{**a, "security_policy": policy} for a in info["assets"]],
+           "credentials_file": str((Path(args.credential) / "credentials.json").resolve()),
+           "cert_dir": info["cert_dir"], "insecure": False, "groups": [],
+           "reader_role": "operator", "graph": args.graph}  # fmt: skip
+    (folder / "cps.json").write_text(json.dumps(doc, indent=2) + "\n")
+    return folder
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     """Add `web` to the CLI."""
     p = sub.add_parser("web", help="web console: live CPS, orders, study progress and results")
     p.add_argument("--cps", metavar="WORKDIR", help="work folder of a running 'cps up'")
+    p.add_argument("--graph", metavar="URL",
+                   help="a floor elsewhere: its knowledge graph's endpoint "
+                        "(opc.tcp://HOST:PORT/transfertwin/KG), with --ca and --credential "
+                        "as 'cps status --graph' takes them")  # fmt: skip
+    p.add_argument("--ca", metavar="CA", help="with --graph: the floor's CA certificate (or a "
+                   "folder with it and its CRL)")  # fmt: skip
+    p.add_argument("--credential", metavar="DIR",
+                   help="with --graph: an operator credential folder (client-operator.der, "
+                        "client-operator.pem, credentials.json)")  # fmt: skip
     p.add_argument("--db", action="append", metavar="STUDY.sqlite",
                    help="study store to show (repeat for several)")  # fmt: skip
     p.add_argument("--calibration", action="append", metavar="DIR",

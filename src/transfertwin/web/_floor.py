@@ -43,6 +43,8 @@ class FloorInfo:
         insecure: NoSecurity (``--insecure``).
         stamp: (mtime ns, size, inode) of cps.json: changes when a CPS rewrites it.
         groups: Destination groups of the floor (name, units), orderable by name.
+        reader_role: The role the console reads the assets with: ``viewer``, or
+            ``operator`` where it holds an operator credential only (``web --graph``).
     """
 
     assets: tuple[dict[str, Any], ...]
@@ -51,6 +53,7 @@ class FloorInfo:
     insecure: bool
     stamp: tuple[int, int, int]
     groups: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    reader_role: str = "viewer"
 
 
 def read_floor_info(workdir: Path) -> FloorInfo | None:
@@ -69,7 +72,8 @@ def read_floor_info(workdir: Path) -> FloorInfo | None:
         cert_dir=Path(info["cert_dir"]),
         insecure=bool(info.get("insecure")),
         stamp=(st.st_mtime_ns, st.st_size, st.st_ino),
-        groups=tuple((str(g), tuple(u)) for g, u in info.get("groups", ())),
+        groups=tuple((str(g), tuple(u)) for g, u in info.get("groups") or ()),
+        reader_role=str(info.get("reader_role", "viewer")),
     )
 
 

@@ -42,5 +42,8 @@ def floor_layout(workdir: Path) -> dict[str, Any]:
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise InputError(f"{path}: unreadable ({exc})") from None
     floor_file = info.get("floor") if isinstance(info, dict) else None
+    if floor_file is None and isinstance(info, dict) and info.get("graph"):
+        raise LookupError("a floor reached by its knowledge graph (web --graph): its floor "
+                          "file is on its hosts, its layout is not known here")  # fmt: skip
     floor = load_floor(floor_file, check_cores=False) if floor_file else default_floor_spec()
     return layout_of(floor)

@@ -146,7 +146,7 @@ class CpsGateway(OrderDesk):
 
     async def _certificates(self) -> None:
         if not self.info.insecure:
-            for role in ("viewer", "operator"):  # once, before sessions race to make them
+            for role in {self.info.reader_role, "operator"}:  # before sessions race to make them
                 await ensure_certificate(self.info.cert_dir, f"client-{role}")
 
     def _start_floor_tasks(self) -> None:
@@ -226,7 +226,7 @@ class CpsGateway(OrderDesk):
         """Keep a viewer session with one asset; read its operational data each period."""
         while True:
             try:
-                async with self._session(aid, "viewer", 5.0, endpoint) as s:
+                async with self._session(aid, self.info.reader_role, 5.0, endpoint) as s:
                     nodes = await self._variables(s, "OperationalData")
                     self._sessions[aid] = s
                     while True:

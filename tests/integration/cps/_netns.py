@@ -86,6 +86,10 @@ class NamespaceNet:
         """`argv` run inside host `name`'s namespace."""
         return ["ip", "netns", "exec", self.namespace(name), *argv]
 
+    def bring_loopback_up(self, name: str) -> None:
+        """Bring host `name`'s loopback up (a host that serves itself, e.g. a console)."""
+        _ip("-n", self.namespace(name), "link", "set", "lo", "up")
+
     def loopback_up(self, name: str) -> bool:
         """Whether host `name`'s loopback is up."""
         out = _ip("-n", self.namespace(name), "-o", "link", "show", "lo").stdout

@@ -5,7 +5,8 @@ its own (a host's disk: nothing shared, nothing hard-linked) and started there w
 asset BUNDLE`, inside a namespace of its own whose only interface is on a bridge, at a
 198.18.0.x address the floor file binds it to, its loopback down. The operator, in another
 namespace, holds only the graph's endpoint, the CA certificate and an operator credential.
-Checked: every asset online at its address; an order delivered; no file shared between the
+Checked: every asset online at its address; an order delivered; the web console on the
+operator's host (``web --graph``) showing every asset live; no file shared between the
 hosts' folders; a rogue server posing as the graph captures no credential; a standby module
 joins with a certificate newly signed for it; a killed asset rejoins; a revoked asset goes
 offline; `cps down --graph` stops the floor over OPC UA; every namespace and interface the
@@ -225,6 +226,30 @@ def test_a_floor_across_hosts_runs_from_bundles_and_is_operated_from_elsewhere(n
     assert sorted(p.name for p in op.rglob("*")) == ["ca.der", "client-operator.der",
                                                      "client-operator.pem", "cred",
                                                      "credentials.json"]  # nothing else there
+
+    # the web console on the operator's host, from the same three things
+    net.bring_loopback_up("operator")  # the console listens on its own host's loopback
+    console = subprocess.Popen(
+        net.command("operator", [sys.executable, "-m", "transfertwin", "web", *remote,
+                                 "--port", "18765"]),
+        cwd=op, stdout=subprocess.PIPE, stderr=(logs / "console.log").open("ab"),
+        text=True)  # fmt: skip
+    net.procs.append(console)
+    assert console.stdout.readline().startswith("console: http://127.0.0.1:18765")
+    fetch = ("import json, urllib.request; print(json.dumps(json.load(urllib.request.urlopen("
+             "'http://127.0.0.1:18765/api/assets', timeout=10))))")  # fmt: skip
+    deadline = time.monotonic() + 60
+    while True:
+        got = subprocess.run(net.command("operator", [sys.executable, "-c", fetch]),
+                             capture_output=True, text=True, timeout=30)  # fmt: skip
+        seen = json.loads(got.stdout)["assets"] if got.returncode == 0 else []
+        live = {a["id"] for a in seen if a["reachable"] and a["status"] == "online"}
+        if set(running) <= live:
+            break
+        assert time.monotonic() < deadline, (got.stderr, seen, (logs / "console.log").read_text())
+        time.sleep(2.0)
+    console.send_signal(signal.SIGINT)
+    console.wait(30)
 
     # no file shared or hard-linked between the hosts' folders
     seen: dict[tuple[int, int], Path] = {}

@@ -73,6 +73,19 @@ def test_a_floor_bound_to_other_hosts_is_not_started_here(tmp_path, capfd, mode)
     assert (tmp_path / "w" / "assets" / "TU_A" / "asset.toml").is_file()
 
 
+@pytest.mark.parametrize(("args", "message"), [
+    (("--cps", "w", "--graph", GRAPH), "choose one"),
+    (("--graph", GRAPH), "--graph needs --ca"),
+    (("--graph", GRAPH, "--ca", "ca.der", "--credential", "cred"),
+     "the knowledge graph is not answering"),
+])  # fmt: skip
+def test_the_console_of_a_floor_elsewhere_is_checked_in_one_line(credential, capfd, monkeypatch,
+                                                                args, message):  # fmt: skip
+    monkeypatch.chdir(credential)
+    done = run_main(capfd, "web", *args)
+    assert done.returncode == 2 and message in done.stderr, (done.stdout, done.stderr)
+
+
 def test_an_asset_needs_its_bundle_or_file(capfd):
     done = run_main(capfd, "cps", "asset")
     assert done.returncode == 2 and "give the asset's bundle folder" in done.stderr

@@ -221,3 +221,43 @@ def test_the_cli_says_in_one_line_that_a_server_is_not_the_asset_meant(pki, tu_a
 
     with pytest.raises(InputError, match=r"is not TU_B of this floor \(BadCertificateUriInvalid\)"):
         run_client(tmp_path, lambda: _reach(tu_a.endpoint, "TU_B", pki))
+
+
+def test_an_asset_without_a_certificate_makes_its_request_and_starts_once_issued(
+        pki, tmp_path, capsys):  # fmt: skip
+    """Under a CA, an asset with no certificate writes its own key and signing request and
+    stops with a line naming them; `cps ca issue` signs it; then the asset serves."""
+    from transfertwin._errors import InputError
+    from transfertwin.cli import main
+
+    rep = build_representation(_DESCS["TU_B"])
+    cfg = pki.config(cert_dir=tmp_path / "tu_b", trust_dir=pki.trust_dir, issuer=None)
+    with pytest.raises(InputError, match=r"TU_B\.csr\.pem.*cps ca issue"):
+        _run(AssetServer("TU_B", rep.submodels, cfg).__aenter__())
+    request = tmp_path / "tu_b" / "TU_B.csr.pem"
+    key = (tmp_path / "tu_b" / "TU_B.pem").read_bytes()
+    assert main(["cps", "ca", "issue", str(request), "--ca", str(pki.ca.folder)]) == 0
+    assert "issued CN=TU_B" in capsys.readouterr().out
+    assert (tmp_path / "tu_b" / "TU_B.pem").read_bytes() == key  # its key never moved
+
+    async def serve() -> str:
+        async with AssetServer("TU_B", rep.submodels, cfg) as server:
+            return await _reach(server.endpoint, "TU_B", pki)
+
+    assert _run(serve()) == "TU_B"
+
+
+def test_a_certificate_not_valid_yet_stops_the_asset_instead_of_a_self_signed_one(
+        pki, tmp_path):  # fmt: skip
+    """A clock behind the CA's: the asset says so in one line and keeps the CA's
+    certificate (a self-signed replacement would be trusted by no peer)."""
+    from transfertwin._errors import InputError
+
+    folder = tmp_path / "tu_c"
+    soon = datetime.now(UTC) + timedelta(hours=1)
+    cert = install_certificate(folder, "TU_C", pki.ca.issue(new_request(folder, "TU_C"),
+                                                            not_before=soon))  # fmt: skip
+    before = cert.read_bytes()
+    with pytest.raises(InputError, match=r"not valid before .* set the clock"):
+        _run(ensure_certificate(folder, "TU_C"))
+    assert cert.read_bytes() == before

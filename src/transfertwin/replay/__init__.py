@@ -3,7 +3,15 @@ E^P's recording (a camera's, the barriers', the log's), and show it in 3-D (the 
 three.js view), or export it (glTF with animation, GIF, MP4).
 """
 
-from transfertwin.replay._gif import MAX_GIF_FRAMES, gif_frame_times, render_frames, write_gif
+from transfertwin.replay._gif import (
+    MAX_GIF_FRAMES,
+    caption_text,
+    gif_frame_times,
+    outcome_words,
+    render_frames,
+    travel_of,
+    write_gif,
+)
 from transfertwin.replay._gltf import glb_bytes, write_glb
 from transfertwin.replay._mp4 import write_mp4
 from transfertwin.replay._payload import (
@@ -55,11 +63,13 @@ __all__ = [
     "belt_travel",
     "calibration_source",
     "calibration_spec",
+    "caption_text",
     "compare_with_row",
     "compile_system",
     "gif_frame_times",
     "glb_bytes",
     "outcome_text",
+    "outcome_words",
     "plant_row",
     "plant_source",
     "record_experiment",
@@ -72,6 +82,7 @@ __all__ = [
     "status_text",
     "study_spec",
     "transfer_spec",
+    "travel_of",
     "write_gif",
     "write_glb",
     "write_mp4",

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from transfertwin.replay._gif import outcome_words
 from transfertwin.replay._record import (
     BARRIER_NAMES,
     BELT_NAMES,
@@ -80,6 +81,7 @@ def replay_payload(
                            f"θ = {spec.theta_deg}°, run {spec.run}, seed {spec.seed}"),
         "source": source or {},
         "result": row,
+        "outcome": outcome_words(replay),
         "spec": {"object": spec.object_ref, "face": spec.face, "conveyor": spec.conveyor,
                  "theta_deg": spec.theta_deg, "run": spec.run if virtual else None,
                  "seed": spec.seed if virtual else None,

@@ -26,7 +26,13 @@ from transfertwin.sim._names import (
     belt_geom,
     object_hull,
 )
-from transfertwin.sim._render import group_frames, render_strip, strip_camera, strip_pixels
+from transfertwin.sim._render import (
+    annotate_frame,
+    group_frames,
+    render_strip,
+    strip_camera,
+    strip_pixels,
+)
 from transfertwin.sim._scene import BARRIERS, BELTS, UNITS, UnitGeometry, build_spec, unit_layout
 from transfertwin.sim._system import (
     UNIT_LOAD_X_M,
@@ -62,6 +68,7 @@ __all__ = [
     "TrackingClock",
     "UnitGeometry",
     "VirtualTransferSystem",
+    "annotate_frame",
     "barrier_sensor",
     "belt_geom",
     "build_spec",

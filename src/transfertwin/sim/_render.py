@@ -27,6 +27,7 @@ from transfertwin.sim._scene import BARRIERS, UNITS
 from transfertwin.sim._system import VirtualTransferSystem
 
 __all__ = [
+    "annotate_frame",
     "group_frames",
     "pick_frames",
     "project_points",
@@ -210,6 +211,29 @@ def _annotate(
         text = "travel TM → TU" if travel > 0 else "travel TU → TM"
         _boxed_text(draw, (0.5 * w, y_arrow - 10), text, small, anchor="md")
     _boxed_text(draw, (6, 6), label, big)
+
+
+def annotate_frame(
+    frame: Image.Image,
+    scene: mujoco.MjvScene,
+    system: VirtualTransferSystem,
+    label: str,
+    travel: int,
+    sizes: tuple[int, int] = (13, 16),
+) -> None:
+    """Draw the strip's marks onto one frame rendered from `strip_camera`: TM and TU, L/R
+    on the belts, the light barriers, the travel arrow (`travel` +1: TM → TU, -1: TU → TM,
+    0: none) and `label` at the top left.
+
+    Args:
+        frame: The rendered image, drawn on in place.
+        scene: The renderer's scene after `update_scene` (its camera projects the marks).
+        system: The system the frame shows (TU docked as then).
+        label: Text at the top left.
+        travel: Direction the belts run.
+        sizes: Font sizes of the small and the big text (px).
+    """
+    _annotate(frame, scene, system, label, travel, (_font(sizes[0]), _font(sizes[1])))
 
 
 _LEGEND = (

@@ -148,3 +148,34 @@ def test_a_study_row_replays_with_its_stored_bits(tmp_path):
         study_spec(db, "o1", row["face"], row["conveyor"], row["theta_deg"], 2)
     with pytest.raises(InputError, match="not in the study"):
         study_spec(db, "o2", row["face"], row["conveyor"], row["theta_deg"], 0)
+
+
+def test_gif_captions_say_what_happens_in_words(success, gap_failure):
+    from transfertwin.replay import caption_text
+
+    captions = [caption_text(success, i, float(t)) for i, t in enumerate(success.t_s)]
+    text = " | ".join(captions)
+    for words in ("object placed, settling", "crossing TM → TU", "delivered to the TU",
+                  "crossing TU → TM"):  # fmt: skip
+        assert words in text, words
+    assert captions[-1].split(" · ")[1].startswith("delivered and brought back in")
+    assert "OTS" not in text and "non-terminal" not in text and "None" not in text
+    last = caption_text(gap_failure, len(gap_failure.t_s) - 1, gap_failure.duration_s)
+    assert "failed on the way there: fell below the belts" in last
+
+
+def test_gif_frames_label_tm_tu_and_the_direction_of_travel(success):
+    from transfertwin.replay import render_frames, travel_of
+
+    crossing = [i for i, c in enumerate(success.ots) if c == OTS_CODES["non_terminal"]]
+    i = crossing[len(crossing) // 4]
+    assert travel_of(success, i) == 1
+    (frame,) = render_frames(success, np.array([success.t_s[i]]), width=640, height=360)
+    px = np.asarray(frame).astype(int)
+    arrow = px[360 - 26 : 360 - 10, int(0.36 * 640) : int(0.64 * 640)]
+    red = (np.abs(arrow - [230, 60, 40]).sum(axis=2) < 40).sum()
+    assert red > 100, "no travel arrow at the bottom of the frame"
+    label = px[0:30, 0:300]
+    dark = (np.abs(label - [30, 30, 30]).sum(axis=2) < 10).sum()
+    white = (label.min(axis=2) > 230).sum()
+    assert dark > 1000 and white > 50, "no caption box at the top left"

@@ -13,8 +13,11 @@ const state = {
 };
 window.__replay = state;
 
-const OTS_NAMES = { '-2': 'no OTS (placing, settling)', '2': 'pre-transfer s(t0) ∈ S_pre',
-  '-1': "non-terminal S'", '1': 'success S+', '0': 'failure S−', '3': 'not a pre-transfer state' };
+// what a sample's OTS state means, in words first, the set second
+const OTS_NAMES = { '-2': 'no transfer (placing, settling)', '2': 'start state (s(t0) ∈ S_pre)',
+  '-1': "crossing (non-terminal, S')", '1': 'arrived (success, S+)', '0': 'failed (S−)',
+  '3': 'not a start state (not in S_pre)' };
+const WAY = { 1: 'TM → TU', '-1': 'TU → TM' };
 const OTS_COLOURS = { '-2': '#555b66', '2': '#6aa8ff', '-1': '#d8c35a', '1': '#5fd27a',
   '0': '#ff5a4f', '3': '#c58bff' };
 const STRIPE_M = 0.04;  // belt texture period along the belt (m)
@@ -192,6 +195,56 @@ function drawStrip(doc) {
   }
 }
 
+function textSprite(text, height = 0.05) {  // a label in the scene, `height` m high
+  const c = document.createElement('canvas');
+  c.width = 512; c.height = 96;
+  const sprite = new THREE.Sprite(new THREE.SpriteMaterial({
+    map: new THREE.CanvasTexture(c), depthTest: false }));
+  sprite.userData = { canvas: c, text: null };
+  sprite.renderOrder = 10;
+  setSpriteText(sprite, text, height);
+  return sprite;
+}
+
+function setSpriteText(sprite, text, height = 0.05) {
+  if (sprite.userData.text === text) return;
+  sprite.userData.text = text;
+  const c = sprite.userData.canvas;
+  const g = c.getContext('2d');
+  g.font = '64px sans-serif';
+  const w = Math.min(512, Math.ceil(g.measureText(text).width) + 32);
+  g.clearRect(0, 0, c.width, c.height);
+  g.fillStyle = 'rgba(20,22,28,0.85)'; g.fillRect(0, 0, w, 96);
+  g.fillStyle = '#fff'; g.textBaseline = 'middle'; g.fillText(text, 16, 50);
+  const tex = sprite.material.map;
+  tex.colorSpace = THREE.SRGBColorSpace;
+  tex.repeat.set(w / 512, 1);
+  tex.needsUpdate = true;
+  sprite.scale.set(height * w / 96, height, 1);
+}
+
+function buildLabels(doc, tuBody) {
+  // TM and TU beside their near (right) belt edge, and an arrow for the direction the belts
+  // run, as `transfertwin transfer --image` draws them
+  const tm = deckSpan(doc, 'tm_left_deck');
+  const tu = deckSpan(doc, 'tu_left_deck');
+  const side = -(doc.scene.belt_half_span_m + 0.07);
+  const group = new THREE.Group();
+  const tmLabel = textSprite('TM');
+  tmLabel.position.set((tm[0] + tm[1]) / 2, side, tm[2] + 0.02);
+  const tuLabel = textSprite('TU');
+  tuBody.updateMatrixWorld(true);
+  tuLabel.position.copy(new THREE.Vector3((tu[0] + tu[1]) / 2, side,
+    tu[2] - doc.scene.tu.pos[2] + 0.02).applyMatrix4(tuBody.matrixWorld));
+  const y = side - 0.09, z = tm[2] + 0.01;
+  const arrow = new THREE.ArrowHelper(new THREE.Vector3(1, 0, 0), new THREE.Vector3(-0.15, y, z),
+    0.3, 0xe63c28, 0.07, 0.045);
+  const travel = textSprite('belts stopped', 0.035);
+  travel.position.set(0, y - 0.05, z);
+  group.add(tmLabel, tuLabel, arrow, travel);
+  return { group, arrow, travel, y, z, tmEnd: [tm[0], 0, tm[2]], tuLabel, tmLabel };
+}
+
 function fmt(v, d = 2) { return v === null || v === undefined ? '–' : Number(v).toFixed(d); }
 
 function describe(doc) {
@@ -205,8 +258,9 @@ function describe(doc) {
       `transfer time ${fmt(r.transfer_time_s)} s, experiment ${r.experiment_id} at ` +
       `${r.transfer_unit}`;
   } else {
-    $('result').textContent = r.status !== 'ok' ? `${r.status}: ${r.message || ''}` :
-      `y1 = ${r.y1}, y2 = ${y2}, ${r.success ? 'success' : 'failure'}, t_end = ${fmt(r.t_end_s)} s`;
+    $('result').textContent = doc.outcome || (r.status !== 'ok' ? `${r.status}: ${r.message || ''}` :
+      `y1 = ${r.y1}, y2 = ${y2}, ${r.success ? 'success' : 'failure'}, t_end = ${fmt(r.t_end_s)} s`);
+    $('result').title = `status ${r.status}, y1 = ${r.y1}, y2 = ${y2}, success = ${r.success}`;
   }
   const d = s.docking_error_mm_deg;
   const tu = doc.scene.tu_pose;
@@ -285,6 +339,11 @@ async function main() {
   scene.add(gap.mesh);
   const obj = buildObject(doc);
   scene.add(obj.group);
+  const marks = buildLabels(doc, bodies.tu);
+  scene.add(marks.group);
+  const lastMarker = doc.markers.length ? doc.markers[doc.markers.length - 1] : null;
+  const ended = lastMarker && ['success', 'failure', 'invalid'].includes(lastMarker.kind)
+    ? lastMarker.t : Infinity;
   state.timing.sceneMs = performance.now();
 
   const camera = new THREE.PerspectiveCamera(40, 1, 0.01, 30);
@@ -292,8 +351,34 @@ async function main() {
   const controls = new OrbitControls(camera, canvas);
   controls.target.set(-0.05, 0, 0);
   controls.update();
+  // Frame both units, from the TM's far end to the TU's, whatever the canvas's aspect (until
+  // the user moves the camera): the view direction stays, the distance follows the width.
+  const tuFar = new THREE.Vector3(deckSpan(doc, 'tu_left_deck')[1], 0, 0)
+    .applyMatrix4(bodies.tu.matrixWorld).x;
+  const spanX = [marks.tmEnd[0], tuFar];
+  let userMoved = false;
+  controls.addEventListener('start', () => { userMoved = true; });
+  function frameUnits() {
+    if (userMoved) return;
+    const centreX = (spanX[0] + spanX[1]) / 2;
+    const half = (spanX[1] - spanX[0]) / 2 + 0.12;
+    const hfov = 2 * Math.atan(Math.tan(camera.fov * Math.PI / 360) * camera.aspect);
+    const d = Math.max(1.3, 1.15 * half / Math.tan(hfov / 2));
+    const dir = new THREE.Vector3(-0.2, -1.05, 0.75).normalize();
+    controls.target.set(centreX, 0, 0);
+    camera.position.copy(controls.target).addScaledVector(dir, d);
+    controls.update();
+  }
 
   const f = doc.frames;
+  // the direction the belts last ran by each sample (+1 TM → TU, -1 TU → TM, 0 not yet)
+  const lastWay = [];
+  f.belts.reduce((w, b) => {
+    const sum = b.reduce((x, v) => x + v, 0);
+    const now = Math.abs(sum) < 1e-9 ? w : sum > 0 ? 1 : -1;
+    lastWay.push(now);
+    return now;
+  }, 0);
   state.duration = f.t[f.t.length - 1];
   state.frames = f.t.length;
   state.markers = doc.markers;
@@ -356,6 +441,25 @@ async function main() {
     state.ots = code;
     $('ots').textContent = OTS_NAMES[code] || code;
     $('ots').style.color = OTS_COLOURS[code] || '';
+    const speed = f.belts[i].reduce((x, v) => x + v, 0);
+    const way = Math.abs(speed) < 1e-9 ? 0 : speed > 0 ? 1 : -1;
+    state.lastWay = lastWay[i];
+    state.travel = way;
+    marks.arrow.visible = way !== 0;
+    if (way) {
+      marks.arrow.setDirection(new THREE.Vector3(way, 0, 0));
+      marks.arrow.position.set(-0.15 * way, marks.y, marks.z);
+    }
+    setSpriteText(marks.travel, way ? `travel ${WAY[way]}` : 'belts stopped', 0.035);
+    const doing = { '-2': state.lastWay ? 'belts stopped' : 'object placed, settling',
+      '2': `start state: the transfer ${WAY[state.lastWay] || ''} begins`,
+      '-1': `crossing ${WAY[state.lastWay] || ''}`,
+      '1': state.lastWay === -1 ? 'brought back to the TM' : 'delivered to the TU',
+      '0': `failed ${WAY[state.lastWay] || ''}`, '3': 'not a start state: no transfer' };
+    const over = t >= ended - 1e-9 && doc.outcome;
+    state.caption = over ? doc.outcome : (doing[code] || '');
+    $('outcome').textContent = state.caption;
+    $('outcome').className = over ? (doc.result.success ? 'success' : 'failure') : '';
     obj.group.updateMatrixWorld(true);
     box.setFromObject(obj.visual).getCenter(centre);
     const local = centre.clone().applyMatrix4(tuInv);
@@ -383,6 +487,11 @@ async function main() {
     return [(v.x + 1) / 2 * canvas.clientWidth, (1 - v.y) / 2 * canvas.clientHeight];
   };
   state.setSpeed = (s) => { state.speed = s; $('speed').value = String(s); };
+  state.tmEnd = marks.tmEnd;  // the far end of the TM's belts (the panel must not hide it)
+  state.labelAt = (which) => {  // a label's position on the canvas, CSS pixels
+    const p = (which === 'TU' ? marks.tuLabel : marks.tmLabel).position;
+    return state.screenOf([p.x, p.y, p.z]);
+  };
 
   $('play').disabled = false;
   $('play').addEventListener('click', () => (state.playing ? pause() : play()));
@@ -406,6 +515,7 @@ async function main() {
       renderer.setSize(w, h, false);
       camera.aspect = w / Math.max(1, h);
       camera.updateProjectionMatrix();
+      frameUnits();
       drawStrip(doc);
     }
   }

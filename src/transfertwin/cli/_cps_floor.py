@@ -70,7 +70,7 @@ def _floor_to_run(args: argparse.Namespace):
 def _check_here(floor) -> None:
     """Refuse to start a floor whose file binds an asset (not on standby) to an address this
     host does not have: that asset starts on its own host, from its bundle."""
-    from transfertwin.cps._launcher import local_address
+    from transfertwin.cps import local_address
 
     standby = floor.standby()
     away = [(aid, floor.bind_address(aid)[0]) for aid, _ in floor.bind if aid not in standby]

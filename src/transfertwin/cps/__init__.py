@@ -123,6 +123,7 @@ __all__ = [
     "launch",
     "load_asset_config",
     "load_floor",
+    "local_address",
     "new_credentials",
     "physical_record",
     "physical_twin",

@@ -20,6 +20,7 @@ if TYPE_CHECKING:
         bundle_config,
         check_workdir,
         launch,
+        local_address,
         prepare_floor,
         start_asset,
         stop_floor,

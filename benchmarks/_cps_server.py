@@ -15,9 +15,10 @@ from transfertwin.cps.opcua import (
     ROLES,
     AssetServer,
     ServerConfig,
-    ensure_certificate,
+    init_ca,
+    install_certificate,
     new_credentials,
-    trust_certificate,
+    new_request,
 )
 
 PROP = ("OperationalData", "PossessedObjects")
@@ -56,12 +57,11 @@ class ChildServer:
         self.cert_dir = Path(self.tmp.name) / "certs"
         self.creds = new_credentials()
 
-        async def certs() -> None:
-            for role in ROLES:
-                cert, _ = await ensure_certificate(self.cert_dir, f"client-{role}")
-                trust_certificate(self.cert_dir / "trusted", cert)
-
-        asyncio.run(certs())
+        # a floor CA signs the server's and the clients' certificates; both sides trust it
+        ca = init_ca(Path(self.tmp.name) / "ca")
+        for name in ("TU_A", *(f"client-{role}" for role in ROLES)):
+            install_certificate(self.cert_dir, name, ca.issue(new_request(self.cert_dir, name)))
+        ca.install(self.cert_dir / "trusted")
         ctx = mp.get_context("spawn")
         self.conn, child = ctx.Pipe()
         self.proc = ctx.Process(target=_serve, args=(child, self.cert_dir, self.creds))

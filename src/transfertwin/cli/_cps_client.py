@@ -147,11 +147,14 @@ def remote_info(graph: str, ca: str | None, credential: str | None) -> tuple[dic
 
     try:
         status = json.loads(asyncio.run(call_asset(info, creds, "KG", "Status", timeout_s=10)))
-    except (OSError, TimeoutError, ConnectionError) as exc:
-        raise InputError(f"--graph {graph}: the knowledge graph is not answering "
-                         f"({type(exc).__name__})") from None
-    except ua.UaError as exc:  # not the floor's graph (its certificate), or refused us
-        raise InputError(f"--graph {graph}: {exc}") from None
+    except BaseException as exc:
+        shutil.rmtree(info["cert_dir"], ignore_errors=True)  # no floor here: nothing kept
+        if isinstance(exc, OSError | TimeoutError | ConnectionError):
+            raise InputError(f"--graph {graph}: the knowledge graph is not answering "
+                             f"({type(exc).__name__})") from None
+        if isinstance(exc, ua.UaError):  # not the floor's graph (its certificate), or refused us
+            raise InputError(f"--graph {graph}: {exc}") from None
+        raise
     info["assets"] += [{"id": a["id"], "kind": a["kind"], "class": a["class"],
                         "endpoint": a["address"], "standby": False}
                        for a in status["assets"] if a["id"] != "KG" and a.get("address")]

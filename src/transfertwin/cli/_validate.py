@@ -8,6 +8,7 @@ states have too few runs to see a difference it says so, and which n per side wo
 from __future__ import annotations
 
 import argparse
+import logging
 
 from transfertwin.cli._paths import out_dir
 
@@ -19,13 +20,25 @@ def cmd_validate(args: argparse.Namespace) -> int:
     from transfertwin.report import validate_and_report
 
     out = out_dir(args.out)
-    result = validate_and_report(args.virtual, args.physical, out, alpha=args.alpha)
+    quiet = logging.getLogger("transfertwin.study.validation")
+    level = quiet.level
+    if not logging.getLogger().isEnabledFor(logging.INFO):
+        quiet.setLevel(logging.ERROR)  # its warning is said below in a sentence
+    try:
+        result = validate_and_report(args.virtual, args.physical, out, alpha=args.alpha)
+    finally:
+        quiet.setLevel(level)
     n_sig = sum(c.significant for c in result.comparisons)
     print(
         f"{result.summary_line} ({len(result.comparisons)} states compared, {n_sig} significant "
         f"at alpha={result.alpha:g}; not compared: {len(result.virtual_only)} virtual-only, "
         f"{len(result.physical_only)} physical-only states)"
     )
+    if result.physical_only:
+        print(f"{len(result.physical_only)} physical states have no virtual results (objects "
+              "or angles the virtual study did not run) and were not compared; a real θ lines "
+              "up only with the same θ (`data calibration --theta-step` moves them onto a "
+              "study's grid)")  # fmt: skip
     if result.power_note:
         print(result.power_note)
     return 0

@@ -44,3 +44,22 @@ def test_transfer_prints_its_outcome_in_words(capsys) -> None:
     assert "failed on the way there: caught in the gap after 4.88 s" in out
     for code_word in ("status", "y1", "success", "None"):
         assert code_word not in out
+
+
+
+def test_real_angles_move_to_the_nearest_state_of_a_study_grid(tmp_path, capsys) -> None:
+    import csv
+
+    from transfertwin.cli._data import snap_theta
+    from transfertwin.ots import state_index
+
+    assert snap_theta(-11, [-30, 30, 60]) == -30 and snap_theta(170, [0, 180]) == 180
+    assert snap_theta(-170, [-150, 150]) == -150 and snap_theta(0, [-30, 30]) == -30
+    out = tmp_path / "real.csv"
+    assert main(["data", "calibration", "--out", str(out), "--theta-step", "30"]) == 0
+    assert "moved to the nearest state on a 30° grid" in capsys.readouterr().out
+    rows = list(csv.DictReader(out.open()))
+    assert len(rows) == 191 and all(int(r["theta_deg"]) % 30 == 0 for r in rows)
+    for r in rows:  # every moved row is an experiment state (Eq. 6.7)
+        state_index(r["face"], r["conveyor"], int(r["theta_deg"]))
+    assert main(["data", "calibration", "--out", str(out), "--theta-step", "7"]) == 2

@@ -401,37 +401,52 @@ def cmd_down(args: argparse.Namespace) -> int:
     online, the graph last (each announces its leave and ends its process), from any host.
     On a floor of this host (``--workdir``) what did not stop is sent SIGTERM by its pid
     file (the one-host fallback: an asset that does not answer), then killed after
-    ``--timeout``."""
-    from transfertwin.cps import asset_pids, stop_floor
+    ``--timeout``. With ``--asset``, that asset only."""
+    from transfertwin.cps import asset_pids
 
     check_access(args)
     wd = Path(args.workdir) if args.workdir is not None else None
     asked, refused = [], []
     if wd is None or (wd / "cps.json").is_file():
         _, info, creds = floor_access(args)
-        asked, refused = asyncio.run(_shutdown_floor(info, creds, args.timeout))
+        if args.asset is not None and args.asset not in {a["id"] for a in info["assets"]}:
+            raise InputError(f"--asset {args.asset}: no such asset on the floor")
+        asked, refused = asyncio.run(_shutdown_floor(info, creds, args.timeout, args.asset))
     if wd is None:
         print(f"stopped {len(asked)} assets over OPC UA"
               + (f"; not answering: {', '.join(refused)}" if refused else ""))  # fmt: skip
         return 0 if not refused else 1
+    def running() -> dict[str, int]:
+        # a process that also serves an asset not asked to stop (a single-process floor)
+        # is not signalled for one asset
+        pids = asset_pids(wd)
+        others = {p for a, p in pids.items() if args.asset not in (None, a)}
+        return {a: p for a, p in pids.items() if args.asset in (None, a) and p not in others}
+
     deadline = time.monotonic() + args.timeout
-    while asset_pids(wd) and time.monotonic() < deadline:
+    while running() and time.monotonic() < deadline:
         time.sleep(0.2)
-    pids = stop_floor(wd)  # the one-host fallback: by pid, what is still running
-    while asset_pids(wd) and time.monotonic() < deadline + args.timeout:
+    pids = running()  # the one-host fallback: by pid, what is still running
+    for pid in set(pids.values()):
+        with contextlib.suppress(OSError):
+            os.kill(pid, signal.SIGTERM)
+    while running() and time.monotonic() < deadline + args.timeout:
         time.sleep(0.2)
-    left = asset_pids(wd)
-    if left:  # what did not stop in time is killed (its state is on disk already)
-        stop_floor(wd, signal.SIGKILL)
+    left = running()
+    for pid in set(left.values()):  # what did not stop in time is killed (its state is on disk)
+        with contextlib.suppress(OSError):
+            os.kill(pid, signal.SIGKILL)
     print(f"stopped {len(asked) + len(pids) - len(left)} assets ({len(asked)} over OPC UA, "
           f"{len(pids) - len(left)} by signal)"
           f"{f'; killed {sorted(left)} (no exit within {args.timeout:g} s)' if left else ''}")
     return 0
 
 
-async def _shutdown_floor(info: dict, creds, timeout_s: float) -> tuple[list[str], list[str]]:
+async def _shutdown_floor(info: dict, creds, timeout_s: float,
+                         only: str | None = None) -> tuple[list[str], list[str]]:  # fmt: skip
     """``Shutdown`` every asset the graph lists online, then the graph once they have left
-    (or `timeout_s` passed); returns (the assets asked, those that did not answer)."""
+    (or `timeout_s` passed), or the asset `only`; returns (the assets asked, those that did
+    not answer)."""
     from transfertwin.cps.node import LIFECYCLE
 
     async def shut(aid: str) -> bool:
@@ -448,6 +463,13 @@ async def _shutdown_floor(info: dict, creds, timeout_s: float) -> tuple[list[str
             return set()
         return {a["id"] for a in doc["assets"] if a["online"] and a["id"] != "KG"}
 
+    if only is not None:
+        if not await shut(only):
+            return [], [only]
+        deadline = time.monotonic() + timeout_s
+        while only != "KG" and only in await online() and time.monotonic() < deadline:
+            await asyncio.sleep(0.3)  # it announces its leave at the graph
+        return [only], []
     running = sorted(await online())
     answers = await asyncio.gather(*(shut(a) for a in running))
     asked = [a for a, ok in zip(running, answers, strict=True) if ok]
@@ -567,6 +589,7 @@ def register(csub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_asset)
     p = csub.add_parser("down", help="stop every asset of a floor (Shutdown over OPC UA)")
     add_access(p)
+    p.add_argument("--asset", metavar="ID", help="stop this asset only")
     p.add_argument("--timeout", type=float, default=20.0,
                    help="seconds to wait for each to leave before killing it (default 20)")
     p.set_defaults(func=cmd_down)

@@ -91,9 +91,10 @@ def test_an_asset_needs_its_bundle_or_file(capfd):
     assert done.returncode == 2 and "give the asset's bundle folder" in done.stderr
 
 
-def test_shutdown_stops_a_node_of_a_floor_in_one_process_and_the_last_ends_it(tmp_path):
+def test_shutdown_stops_a_node_of_a_floor_in_one_process_and_the_last_ends_it(tmp_path, capfd):
     """Each asset's ``Lifecycle.Shutdown`` (what `cps down` calls, operator role): the node
-    answers, leaves (the graph says so) and stops; the floor ends with its last node."""
+    answers, leaves (the graph says so) and stops; the floor ends with its last node. `cps
+    down --asset` stops one asset so, and never signals the process the others share."""
     from transfertwin.cps import LocalFloor, load_floor
     from transfertwin.cps.node import LIFECYCLE
 
@@ -102,10 +103,11 @@ def test_shutdown_stops_a_node_of_a_floor_in_one_process_and_the_last_ends_it(tm
 
     async def main() -> None:
         async with LocalFloor(floor, tmp_path / "w", insecure=True, lease_s=2.0) as local:
-            async with local.client("o1") as o1:
-                assert await o1.call("Shutdown", submodel=LIFECYCLE) is True
-            while "o1" in local.nodes:
-                await asyncio.sleep(0.05)
+            down = await asyncio.to_thread(run_main, capfd, "cps", "down", "--workdir",
+                                           str(tmp_path / "w"), "--asset", "o1")  # fmt: skip
+            assert down.returncode == 0, down.stderr
+            assert "stopped 1 assets (1 over OPC UA, 0 by signal)" in down.stdout, down.stdout
+            assert "o1" not in local.nodes and "TU_A" in local.nodes  # the process goes on
             async with local.client("KG") as kg:
                 rows = {a["id"]: a for a in json.loads(await kg.call("Status"))["assets"]}
             assert not rows["o1"]["online"] and rows["o1"]["offline"]["reason"] == "left"

@@ -173,9 +173,9 @@ def drive(wd: Path, orders: list[tuple[str, str]], inflight: int, timeout_s: flo
                 if exc.status == "BadResourceUnavailable":  # no module now: try again later
                     pending.insert(nxt, (obj, dest))
                     retried += 1
-                    located += unload_idle(tms, units, pending, running)
                     break
                 refused.append({"object": obj, "destination": dest, "reason": exc.reason})
+        located += unload_idle(tms, units, pending, running)  # a module kept blocked
         done = len(orders) - len(pending) - len(running)
         print(f"\r  {done}/{len(orders)} orders ended ({time.monotonic() - t0:.0f} s)", end="",
               flush=True)  # fmt: skip

@@ -261,3 +261,30 @@ def test_a_certificate_not_valid_yet_stops_the_asset_instead_of_a_self_signed_on
     with pytest.raises(InputError, match=r"not valid before .* set the clock"):
         _run(ensure_certificate(folder, "TU_C"))
     assert cert.read_bytes() == before
+
+
+@pytest.mark.slow  # ~30-60 s: the demo floor in one process (CI: the CPS slow group)
+def test_a_revoked_asset_leaves_the_floor(tmp_path, cps_certs, capsys):
+    """`cps ca revoke o1` on a running floor: the graph drops o1's connection within its
+    re-read period, refuses its new sessions, and o1's lease lapses; the others stay."""
+    from transfertwin.cli import main
+    from transfertwin.cps import LocalFloor, default_floor_spec
+
+    async def scenario() -> float:
+        wd = cps_certs(tmp_path)
+        async with LocalFloor(default_floor_spec(), wd, time_scale=0.0, lease_s=2.0) as floor:
+            graph = floor.nodes["KG"].role
+            assert {"o1", "TU_A"} <= set(graph.leases)
+            assert main(["cps", "ca", "revoke", "o1", "--workdir", str(wd)]) == 0
+            t0 = asyncio.get_running_loop().time()
+            while "o1" in graph.leases:
+                assert asyncio.get_running_loop().time() - t0 < 30, "o1 still online"
+                await asyncio.sleep(0.1)
+            gone = asyncio.get_running_loop().time() - t0
+            await asyncio.sleep(3 * 2.0)  # and it stays off: no heartbeat gets through
+            assert "o1" not in graph.leases and "TU_A" in graph.leases
+            return gone
+
+    gone = asyncio.run(scenario())
+    assert "revoked 1 certificate(s) of o1" in capsys.readouterr().out
+    assert gone < 2.0 + 2.0 + 5.0  # the lease, the re-read period, a scheduling margin

@@ -8,7 +8,8 @@ package), ``/api/config``, ``/api/assets``, ``/api/assets/{id}/aas``, ``/api/liv
 simulated transfer), ``/api/transfer/live`` (SSE), ``/api/calibrations``,
 ``/api/calibrations/{name}``, ``/replay`` (the 3-D replay page) and ``/api/replay``
 (its JSON document, `transfertwin.web._replay`), ``/floor3d`` (the running floor in 3-D) and
-``/api/floor`` (its static layout, `transfertwin.web._floor3d`).
+``/api/floor`` (its static layout, `transfertwin.web._floor3d`), and the floor's AAS HTTP
+API under ``/aas-api/v3.0/`` (`transfertwin.web._aas_api`).
 
 Every error is a JSON ``{"error": message}`` with a 4xx status (5xx only for a fault of the
 console itself, without a traceback). Write actions need the token (header
@@ -48,6 +49,8 @@ from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
 from transfertwin._errors import InputError
+from transfertwin.web._aas_api import AAS_API_PREFIX, AasApi
+from transfertwin.web._aas_model import error_body
 from transfertwin.web._calibration import calibration_view
 from transfertwin.web._config import WebConfig
 from transfertwin.web._floor3d import floor_layout
@@ -165,6 +168,7 @@ def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = No
     replay_service = ReplayService({p.name: p for p in config.dbs}, replays, calibrations)
     live = LiveTransfer()
     state: dict[str, CpsGateway | None] = {"cps": None}
+    aas_api: dict[str, AasApi] = {}
     token = config.session_token
 
     def matches(candidate: object) -> bool:
@@ -420,6 +424,31 @@ def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = No
         return Response(data, media_type=media, headers={
             "Content-Disposition": f'attachment; filename="{stem}.{fmt}"'})  # fmt: skip
 
+    async def aas_http(request: Request) -> Response:
+        """The AAS HTTP API (`transfertwin.web._aas_api`): read-only, the console's reads'
+        authentication, errors as Part 2's Result."""
+
+        def fail(status: int, text: str, **headers: str) -> Response:
+            return JSONResponse(error_body(status, text), status, headers=headers or None)
+
+        try:
+            check_read(request)
+        except HTTPException as exc:
+            return fail(exc.status_code, str(exc.detail))
+        if request.method != "GET":
+            return fail(405, "the AAS API of the floor is read-only (GET)", Allow="GET")
+        if "api" not in aas_api:
+            return fail(404, "no CPS: start the console with --cps WORKDIR")
+        query: dict[str, list[str]] = {}
+        for key, value in request.query_params.multi_items():
+            query.setdefault(key, []).append(value)
+        try:
+            answer = await aas_api["api"].answer(request.path_params["path"], query)
+        except Exception as exc:
+            log.warning("internal error in %s: %s", request.url.path, exc, exc_info=True)
+            return fail(500, f"internal error ({type(exc).__name__})")
+        return JSONResponse(answer.body, answer.status)
+
     @_api
     async def not_found(request: Request) -> Response:
         raise HTTPException(404, f"no such page: {request.url.path[:80]}")
@@ -430,10 +459,12 @@ def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = No
             gw = CpsGateway(config.cps, config.live_period_s)
             await gw.start()
             state["cps"] = gw
+            aas_api["api"] = AasApi(gw)
         try:
             yield
         finally:
             await run_in_threadpool(live.stop)
+            aas_api.clear()
             if state["cps"] is not None:
                 await state["cps"].stop()
                 state["cps"] = None
@@ -461,6 +492,11 @@ def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = No
         Route("/floor3d", page_of("floor3d.html")),
         Route("/api/floor", api_floor),
         Route("/api/replay", api_replay),
+        Route(
+            AAS_API_PREFIX + "/{path:path}",
+            aas_http,
+            methods=["GET", "POST", "PUT", "PATCH", "DELETE"],
+        ),
         Route("/{path:path}", not_found),
     ]
     hosts = ["*"] if config.reads_need_token else sorted(

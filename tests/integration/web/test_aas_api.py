@@ -1,0 +1,59 @@
+"""The floor's AAS HTTP API as the console serves it (`transfertwin web --cps`), checked by
+the IDTA's own test engine (`aas-test-engines`) for every profile it claims, with values
+read live from the assets' OPC UA servers (slow: a floor, a console, ~1 min)."""
+
+from __future__ import annotations
+
+import json
+import urllib.request
+
+import pytest
+from aas_test_engines import api, config, http
+
+from tests.integration.web.conftest import wait_for
+from transfertwin.web._aas_model import PROFILES, b64url
+
+pytestmark = pytest.mark.slow
+
+PREFIX = "/aas-api/v3.0"
+ID = "https://transfertwin.dev/ids"
+
+
+def _get(url: str):
+    with urllib.request.urlopen(url, timeout=30) as res:
+        return json.loads(res.read())
+
+
+def _failures(result, path=()) -> list[str]:
+    """The failed checks of a test engine result, each as the chain of its steps."""
+    here = (*path, result.message.strip()[:120])
+    failed = [s for s in result.sub_results if not s.ok()]
+    if not result.ok() and not failed:
+        return [" > ".join(here)]
+    return [line for s in failed for line in _failures(s, here)]
+
+
+def test_the_idta_test_engine_passes_every_claimed_profile_with_live_values(
+    cps_workdir, console_factory
+):
+    console = console_factory("--cps", str(cps_workdir))
+
+    def online():
+        assets = _get(f"{console.base}/api/assets")["assets"]
+        return all(a["reachable"] for a in assets) and assets
+
+    assets = wait_for(online, 120, "every asset online")
+    base = console.base + PREFIX
+    assert _get(f"{base}/description")["profiles"] == list(PROFILES)
+    for suite in PROFILES:
+        result, _ = api.execute_tests(http.HttpClient(base), config.CheckApiConfig(suite=suite))
+        assert _failures(result) == [], suite
+
+    shells = _get(f"{base}/shells")["result"]
+    assert sorted(s["idShort"] for s in shells) == sorted(a["id"] for a in assets)
+    # values come from the servers: the graph's triple count (0 in its description), the
+    # endpoint each asset serves at
+    kg = _get(f"{base}/submodels/{b64url(ID + '/sm/KG/OperationalData')}/$value")
+    assert kg["Triples"] > 0
+    ident = _get(f"{base}/submodels/{b64url(ID + '/sm/TU_A/Identification')}/$value")
+    assert ident["Endpoint"] == next(a["endpoint"] for a in assets if a["id"] == "TU_A")

@@ -10,6 +10,7 @@ import contextlib
 import json
 import logging
 import os
+import re
 import signal
 import sys
 import threading
@@ -508,7 +509,7 @@ def floor_document(where: str, info: dict, creds, *, with_objects: bool = True) 
                     "address": a["endpoint"], "pid": None, "online": False, "state": why,
                     "offline": {"reason": why, "detail": "no heartbeat since the graph "
                                 "started", "since": None, "since_s": None}})  # fmt: skip
-        doc["assets"].sort(key=lambda a: a["id"])
+        doc["assets"].sort(key=lambda a: natural_key(a["id"]))
         if with_objects:
             try:
                 ledger = json.loads(await call_asset(info, creds, "TMS", "Ledger", timeout_s=5))
@@ -522,11 +523,18 @@ def floor_document(where: str, info: dict, creds, *, with_objects: bool = True) 
                         if (u := ledger["unknown"].get(o)) else
                         {"location": at, "unknown": False,
                          "moving": ledger["moving"].get(o)})
-                    for o, at in ledger["locations"].items()
+                    for o, at in sorted(ledger["locations"].items(),
+                                        key=lambda item: natural_key(item[0]))
                 }  # fmt: skip
         return doc
 
     return asyncio.run(ask())
+
+
+def natural_key(name: str) -> tuple:
+    """Sort key of an id that orders its numbers by value: o1, o2, …, o10; TM_2 before
+    TM_10."""
+    return tuple(int(part) if part.isdigit() else part for part in re.split(r"(\d+)", name))
 
 
 def print_floor_status(doc: dict) -> None:

@@ -63,3 +63,10 @@ def test_real_angles_move_to_the_nearest_state_of_a_study_grid(tmp_path, capsys)
     for r in rows:  # every moved row is an experiment state (Eq. 6.7)
         state_index(r["face"], r["conveyor"], int(r["theta_deg"]))
     assert main(["data", "calibration", "--out", str(out), "--theta-step", "7"]) == 2
+
+
+def test_cps_status_sorts_ids_by_their_numbers() -> None:
+    from transfertwin.cli._cps_floor import natural_key
+
+    ids = ["o10", "o2", "TM_10", "o1", "TM_2", "KG"]
+    assert sorted(ids, key=natural_key) == ["KG", "TM_2", "TM_10", "o1", "o2", "o10"]

@@ -23,7 +23,7 @@ from basyx.aas import model
 from transfertwin._errors import InputError
 from transfertwin.cps import build_representation
 from transfertwin.cps.floor import load_floor
-from transfertwin.web._aas_model import AasApiError, AasRepository, Answer, error_body
+from transfertwin.web._aas_model import AasApiError, AasRepository, Answer, b64url, error_body
 from transfertwin.web._gateway import CpsGateway
 
 __all__ = ["AAS_API_PREFIX", "AasApi", "repository_of"]
@@ -112,6 +112,15 @@ class AasApi:
                               for sm_id in (r.key[-1].value for r in shell.submodel)}  # fmt: skip
             self._repo, self._stamp, self._read = repo, gw.info.stamp, {}
         return self._repo
+
+    def shell_path(self, aid: str) -> str | None:
+        """The API's path of asset `aid`'s shell (None where the API serves none)."""
+        try:
+            repo = self.repository()
+        except AasApiError:
+            return None
+        shell = next((s for s in repo.shells.values() if s.id_short == aid), None)
+        return None if shell is None else f"{AAS_API_PREFIX}/shells/{b64url(shell.id)}"
 
     async def answer(self, path: str, query: Mapping[str, Sequence[str]]) -> Answer:
         """The answer to ``GET <prefix>/<path>``, its Property values read live first."""

@@ -306,9 +306,11 @@ def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = No
     @_api
     async def api_aas(request: Request) -> Response:
         check_read(request)
-        submodels = await gateway().aas(request.path_params["aid"])
+        aid = request.path_params["aid"]
+        submodels = await gateway().aas(aid)
         read = datetime.now(UTC).isoformat(timespec="seconds")
-        return JSONResponse({"submodels": submodels, "read_utc": read})
+        shell = aas_api["api"].shell_path(aid) if "api" in aas_api else None
+        return JSONResponse({"submodels": submodels, "read_utc": read, "aas_api": shell})
 
     @_api
     async def api_live(request: Request) -> Response:

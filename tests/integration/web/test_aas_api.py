@@ -55,5 +55,9 @@ def test_the_idta_test_engine_passes_every_claimed_profile_with_live_values(
     # endpoint each asset serves at
     kg = _get(f"{base}/submodels/{b64url(ID + '/sm/KG/OperationalData')}/$value")
     assert kg["Triples"] > 0
+    # the console's AAS panel names the shell's address in the API
+    panel = _get(f"{console.base}/api/assets/TU_A/aas")
+    assert panel["aas_api"] == f"{PREFIX}/shells/{b64url(ID + '/aas/TU_A')}"
+    assert _get(console.base + panel["aas_api"])["idShort"] == "TU_A"
     ident = _get(f"{base}/submodels/{b64url(ID + '/sm/TU_A/Identification')}/$value")
     assert ident["Endpoint"] == next(a["endpoint"] for a in assets if a["id"] == "TU_A")

@@ -124,6 +124,10 @@ async function showAas(id) {
     $("aas").dataset.state = "online";
     $("aas-read").textContent = "read over OPC UA at " + new Date(data.read_utc).toLocaleTimeString() +
       " (wall clock); read again every 3 s";
+    // the same shell for any AAS client: the floor's AAS HTTP API (IDTA-01002 Part 2)
+    const apiUrl = data.aas_api ? location.origin + data.aas_api : null;
+    $("aas-api").replaceChildren(...(apiUrl ? ["AAS HTTP API (IDTA Part 2, read-only): ",
+      el("a", { href: apiUrl, text: apiUrl })] : []));
     for (const sm of data.submodels) {
       const table = el("table", {}, el("tr", {}, el("th", { text: "element" }), el("th", { text: "kind" }), el("th", { text: "value" })));
       for (const e of sm.elements) {

@@ -49,6 +49,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import dataclasses
 import json
 import random
 import subprocess
@@ -191,8 +192,6 @@ def drive(wd: Path, orders: list[tuple[str, str]], inflight: int, timeout_s: flo
 def cold_floor(floor, n: int, seed: int):
     """The floor with `n` new cores (o1, o2, …) on its stations, in a seeded order, round
     robin: the cold start's stream of objects no prediction has seen."""
-    import dataclasses
-
     from transfertwin.objects import builtin_ids
 
     ids = list(builtin_ids())[:n]
@@ -357,14 +356,14 @@ def run_arm(args, floor, name: str, policy: str, floor_file: str, study: Path | 
     return r
 
 
-#: The arms: (name, policy, [operation] table, campaign first).
+#: The arms: (name, policy, [operation] settings, campaign first).
 ARMS = (
-    ("nearest-idle", "nearest-idle", "", False),
-    ("learning-alone", "predictive", "twin = false", False),
-    ("twin-only", "predictive", "learn = false", False),
-    ("predictive", "predictive", "", False),
-    ("calibrated-only", "predictive", "learn = false", True),
-    ("calibrated", "predictive", "", True),
+    ("nearest-idle", "nearest-idle", {}, False),
+    ("learning-alone", "predictive", {"twin": False}, False),
+    ("twin-only", "predictive", {"learn": False}, False),
+    ("predictive", "predictive", {}, False),
+    ("calibrated-only", "predictive", {"learn": False}, True),
+    ("calibrated", "predictive", {}, True),
 )
 #: The differences reported: (arm, baseline).
 DIFFERENCES = (
@@ -497,11 +496,12 @@ def main() -> int:
             print(f"study of {len(floor.objects)} cores x 28 states x {args.runs} runs, both "
                   f"legs -> {study}")  # fmt: skip
             make_study(floor, study, args.runs, args.seed)
-    text = floor_toml(floor)
 
-    def variant(name: str, table: str) -> str:
+    def variant(name: str, settings: dict) -> str:
+        """The floor file of an arm: the floor with its [operation] settings."""
+        op = dataclasses.replace(floor.operation, **settings)
         path = wd / f"floor-{name}.toml"
-        path.write_text(text + (f"\n[operation]\n{table}\n" if table else ""))
+        path.write_text(floor_toml(dataclasses.replace(floor, operation=op)))
         return str(path)
 
     rng = np.random.default_rng(args.seed)
@@ -517,7 +517,7 @@ def main() -> int:
             out[name] = r
         if args.camera and ps == seeds[0] and args.regime == "steady":
             c = run_arm(args, floor, "predictive+camera", "predictive",
-                        variant("camera", 'sensor = "camera"'), study, wd / f"seed-{ps}",
+                        variant("camera", {"sensor": "camera"}), study, wd / f"seed-{ps}",
                         orders, rng, ps)  # fmt: skip
             if c is not None:
                 c.pop("boot")

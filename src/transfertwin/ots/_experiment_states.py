@@ -205,7 +205,7 @@ def state_index(face: str, conveyor: str, theta_deg: int) -> int:
     """
     key = (parse_face(face), parse_conveyor(conveyor), check_theta_deg(theta_deg))
     if key not in _index():
-        raise InputError(f"Eq. 6.7: {key} is not an experiment pre-transfer state")
+        raise InputError(f"{key} is not a pre-transfer state of the experiments (Eq. 6.7)")
     return _index()[key]
 
 

@@ -154,8 +154,9 @@ def test_states_with_one_physical_run_are_reported_without_power(tmp_path: Path,
     assert run("validate", "--virtual", str(virtual), "--physical", str(REAL_CSV),
                "--out", str(out)) == 0  # fmt: skip
     lines = capsys.readouterr().out.strip().splitlines()
-    assert len(lines) == 2
-    note = lines[1]
+    assert len(lines) == 3
+    assert lines[1].startswith("183 physical states have no virtual results")  # no WARNING line
+    note = lines[2]
     assert note.startswith("6/8 compared states have too few runs to see a difference: "
                            "physical n = 1 per state, virtual n = 20")  # fmt: skip
     assert "does not mean 'no difference'" in note

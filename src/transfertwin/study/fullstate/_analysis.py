@@ -194,7 +194,7 @@ def select_from_series(series: Sequence[SeriesStats]) -> Selection:
         InputError: If no series is given.
     """
     if not series:
-        raise InputError("Alg. 2: no series with run states to select from")
+        raise InputError("no series with run states to select from (Alg. 2)")
     smoothed = [s.smoothed() for s in series]
     best, worst = best_global(smoothed), worst_global(smoothed)
     return Selection(series[0].object_id, _selected(series, best), _selected(series, worst))
@@ -208,7 +208,7 @@ def select(state_stats: Iterable[StateStat], object_id: str, *, window: int = 21
     """
     series = series_table(state_stats, object_id, window=window)
     if not series:
-        raise InputError(f"Alg. 2: object {object_id!r} has no state with an 'ok' experiment")
+        raise InputError(f"object {object_id!r} has no state with an 'ok' experiment (Alg. 2)")
     return select_from_series(series)
 
 

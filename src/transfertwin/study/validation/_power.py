@@ -131,7 +131,7 @@ def power_summary(
         raise InputError("Sec. 6.7: no compared state to assess")
     if not 0.0 < detectable <= 1.0:
         raise InputError(
-            f"Sec. 6.7: the detectable difference must lie in (0, 1], got {detectable}"
+            f"the detectable difference must lie in (0, 1], got {detectable} (Sec. 6.7)"
         )
     alpha = comparisons[0].alpha
     n_det, n_obs, under = [], [], []

@@ -249,8 +249,8 @@ def validate(
     comparisons = _compare_stats(v_stats, p_stats, alpha)
     if not comparisons:
         raise InputError(
-            f"Sec. 6.7: no pre-transfer state was run on both sides "
-            f"({len(v_run)} virtual, {len(p_run)} physical states)"
+            f"no pre-transfer state was run on both sides ({len(v_run)} virtual, "
+            f"{len(p_run)} physical states; Sec. 6.7)"
         )
     result = ValidationResult(
         tuple(comparisons),

@@ -1,5 +1,6 @@
-"""`transfertwin cps orders|kpis`: a floor's order queue and its KPIs, as the TMS keeps
-them (docs/architecture.md, "Operation")."""
+"""`transfertwin cps orders|kpis|query`: a floor's order queue and its KPIs, as the TMS
+keeps them (docs/architecture.md, "Operation"), and a read-only SPARQL query to its
+knowledge graph."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import time
 from transfertwin._errors import InputError
 from transfertwin.cli._cps_client import add_access, call_asset, floor_access, text_table
 
-__all__ = ["cmd_kpis", "cmd_orders", "register"]
+__all__ = ["cmd_kpis", "cmd_orders", "cmd_query", "register"]
 
 
 def _ask(args: argparse.Namespace, op: str) -> object:
@@ -67,8 +68,36 @@ def cmd_kpis(args: argparse.Namespace) -> int:
     return 0
 
 
+def _first_line(text: str) -> str:
+    return (text.strip().splitlines() or [""])[0][:300]
+
+
+def cmd_query(args: argparse.Namespace) -> int:
+    """Ask the knowledge graph a SPARQL SELECT query (its ``Query`` operation; prefixes
+    tt, rdf, rdfs predeclared). The graph answers SELECT only: an update, a CONSTRUCT or a
+    query it cannot parse is refused with its reason (exit 2)."""
+    from transfertwin.cps.opcua import OperationRefused
+
+    where, info, creds = floor_access(args)
+    try:
+        text = asyncio.run(call_asset(info, creds, "KG", "Query", args.sparql, timeout_s=10))
+    except OperationRefused as exc:
+        raise InputError(f"the knowledge graph refused the query: "
+                         f"{_first_line(exc.reason)}") from None  # fmt: skip
+    except (OSError, TimeoutError, ConnectionError) as exc:
+        raise InputError(f"{where}: the knowledge graph is not answering "
+                         f"({type(exc).__name__})") from None  # fmt: skip
+    rows = json.loads(text)
+    if args.json:
+        print(json.dumps(rows, indent=2))
+        return 0
+    cols = tuple(dict.fromkeys(k for row in rows for k in row))
+    print(text_table(rows, cols) if rows else "no solutions")
+    return 0
+
+
 def register(csub: argparse._SubParsersAction) -> None:
-    """Add `cps orders` and `cps kpis`."""
+    """Add `cps orders`, `cps kpis` and `cps query`."""
     for name, func, text in (("orders", cmd_orders, "the order queue with each order's state"),
                              ("kpis", cmd_kpis, "operations per hour, success share, lead "
                                                 "time, utilisation, failures by reason")):
@@ -76,3 +105,11 @@ def register(csub: argparse._SubParsersAction) -> None:
         add_access(p)
         p.add_argument("--json", action="store_true", help="one JSON document")
         p.set_defaults(func=func)
+    p = csub.add_parser("query", help="ask the knowledge graph a SPARQL SELECT query "
+                        "(read-only; prefixes tt, rdf, rdfs predeclared)")  # fmt: skip
+    p.add_argument("sparql", metavar="SPARQL",
+                   help="e.g. 'SELECT ?id WHERE { ?a tt:assetId ?id }'")  # fmt: skip
+    add_access(p)
+    p.add_argument("--json", action="store_true",
+                   help="the solutions as JSON: one object per row, variable -> value")  # fmt: skip
+    p.set_defaults(func=cmd_query)

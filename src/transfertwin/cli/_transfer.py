@@ -181,16 +181,11 @@ def cmd_objects_export(args: argparse.Namespace) -> int:
 
 
 def demo_row(r: ExperimentResult) -> list[str]:
-    """A demo table row; an outcome that was not determined (y2 after a failed first
-    transfer, anything of a result that is not 'ok') shows as '-', never 'None'."""
+    """A demo table row: the state and the outcome in words (`outcome_text`: never a code
+    or 'None')."""
+    from transfertwin.replay import outcome_text
 
-    def cell(value: object) -> str:
-        missing = value is None or (isinstance(value, float) and math.isnan(value))
-        return "-" if missing else str(value)
-
-    t_end = "-" if r.t_end_s is None or math.isnan(r.t_end_s) else f"{r.t_end_s:.2f}"
-    return [r.face, r.conveyor, str(r.theta_deg), r.status, cell(r.y1), cell(r.y2),
-            cell(r.success), t_end]  # fmt: skip
+    return [r.face, r.conveyor, str(r.theta_deg), outcome_text(r.row())]
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
@@ -205,7 +200,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
             out, object_ref=args.object, step_deg=args.theta_step, on_progress=on_progress
         )
     table = Table(title=f"{args.object}: E^V with the docking error of real experiment 0")
-    for col in ("face", "conveyor", "theta_deg", "status", "y1", "y2", "success", "t_end_s"):
+    for col in ("face", "conveyor", "θ (°)", "outcome"):
         table.add_column(col)
     for r in results:
         table.add_row(*demo_row(r))

@@ -23,10 +23,13 @@ def result(y1: int | None, y2: int | None, success: int | None, status: str = "o
                             4.2 if status == "ok" else math.nan, status)  # fmt: skip
 
 
-def test_demo_rows_show_a_dash_where_an_outcome_was_not_determined() -> None:
-    assert demo_row(result(0, None, 0)) == ["front", "both", "30", "ok", "0", "-", "0", "4.20"]
-    assert demo_row(result(None, None, None, "unstable"))[4:] == ["-", "-", "-", "-"]
-    assert demo_row(result(1, 1, 1))[4:7] == ["1", "1", "1"]
+def test_demo_rows_say_the_outcome_in_words() -> None:
+    assert demo_row(result(0, None, 0)) == [
+        "front", "both", "30", "failed on the way there: stopped on a belt, short of the goal"
+    ]  # fmt: skip
+    assert demo_row(result(None, None, None, "unstable"))[3].startswith("not determined")
+    assert demo_row(result(1, 1, 1))[3] == "delivered and brought back in 4.20 s"
+    assert not any("None" in cell for cell in demo_row(result(0, None, 0)))
 
 
 def test_a_sweep_trial_names_its_setting_and_metric() -> None:

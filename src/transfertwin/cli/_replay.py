@@ -117,8 +117,9 @@ def cmd_replay(args: argparse.Namespace) -> int:
     if isinstance(found, CalibrationRow):
         name = Path(args.calibration).resolve().name
         source = calibration_source(name, args.row, found, replay.result)
-        print(f"calibration row {args.row}, run {found.spec.run}: real {found.real_success}, "
-              f"predicted {found.predicted}, replayed {source['replayed']} ({found.note})",
+        print(f"calibration row {args.row}, run {found.spec.run}: really "
+              f"{_word(found.real_success)}, the calibration's run {_word(found.predicted)}, "
+              f"this replay {_word(source['replayed'])} ({found.note})",
               file=sys.stderr)  # fmt: skip
     elif found is not None:
         check = compare_with_row(replay.result, found.row) if found.row else None
@@ -133,6 +134,11 @@ def cmd_replay(args: argparse.Namespace) -> int:
           flush=True)  # fmt: skip
     doc = replay_payload(replay, source=source)
     return _write(args, outputs, doc, replay)
+
+
+def _word(success: object) -> str:
+    """A 0/1 outcome in words: 'delivered', 'failed', or 'not known' (None)."""
+    return {1: "delivered", 0: "failed"}.get(success, "not known")  # type: ignore[call-overload]
 
 
 def replay_line(replay, same: bool = False) -> str:

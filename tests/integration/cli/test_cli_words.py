@@ -70,3 +70,9 @@ def test_cps_status_sorts_ids_by_their_numbers() -> None:
 
     ids = ["o10", "o2", "TM_10", "o1", "TM_2", "KG"]
     assert sorted(ids, key=natural_key) == ["KG", "TM_2", "TM_10", "o1", "o2", "o10"]
+
+
+def test_a_calibration_rows_outcomes_read_as_words() -> None:
+    from transfertwin.cli._replay import _word
+
+    assert [_word(1), _word(0), _word(None)] == ["delivered", "failed", "not known"]

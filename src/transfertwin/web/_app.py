@@ -2,6 +2,7 @@
 
 Routes: ``/`` (the page), ``/static/*`` (its JS/CSS, plotly.js from the installed `plotly`
 package), ``/api/config``, ``/api/assets``, ``/api/assets/{id}/aas``, ``/api/live`` (SSE),
+``/api/query?q=SPARQL`` (the knowledge graph's answer to a SELECT query),
 ``/api/orders`` (GET, POST), ``/api/orders/{id}``, ``/api/studies``,
 ``/api/studies/{name}/map``, ``/api/studies/{name}/analysis?object=ID``,
 ``/api/studies/{name}/results.{csv|parquet}``, ``/api/transfer`` (GET; POST starts a
@@ -313,6 +314,12 @@ def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = No
         return JSONResponse({"submodels": submodels, "read_utc": read, "aas_api": shell})
 
     @_api
+    async def api_query(request: Request) -> Response:
+        check_read(request)
+        rows = await gateway().query(request.query_params.get("q", ""))
+        return JSONResponse({"rows": rows})
+
+    @_api
     async def api_live(request: Request) -> Response:
         check_read(request)
         gw = gateway()
@@ -480,6 +487,7 @@ def create_app(config: WebConfig, replays: dict[str, dict[str, Any]] | None = No
         Route("/api/assets", api_assets),
         Route("/api/assets/{aid}/aas", api_aas),
         Route("/api/live", api_live),
+        Route("/api/query", api_query),
         Route("/api/orders", api_orders, methods=["GET", "POST"]),
         Route("/api/orders/{oid}", api_order),
         Route("/api/studies", api_studies),

@@ -33,6 +33,7 @@ from transfertwin.cps.opcua import (
     NAMESPACE,
     AssetClient,
     Credentials,
+    OperationRefused,
     connect,
     ensure_certificate,
     node_id,
@@ -77,6 +78,8 @@ SELECT ?id ?cap WHERE {
 """
 
 _ID = re.compile(r"^[A-Za-z0-9_]{1,64}$")
+#: The longest query the console passes to the knowledge graph.
+QUERY_MAX_CHARS = 4000
 _KINDS = ("PhysicalAsset", "LogicalAsset", "VirtualModel")
 _TYPE_LABEL = {"TypeA": "A", "TypeB": "B", "TypeC": "C", "TypeD": "D", "TypeE": "E",
                "TypeDE": "D/E"}  # fmt: skip
@@ -303,6 +306,17 @@ class CpsGateway(OrderDesk):
             return json.loads(await self._kg.call("Query", sparql))
         async with self._session("KG", "operator") as kg:
             return json.loads(await kg.call("Query", sparql))
+
+    async def query(self, sparql: str) -> list[dict[str, Any]]:
+        """The knowledge graph's answer to a SPARQL SELECT query (its ``Query``; it refuses
+        anything else); InputError with the graph's reason when it refuses."""
+        if not isinstance(sparql, str) or not sparql.strip() or len(sparql) > QUERY_MAX_CHARS:
+            raise InputError(f"a query must be 1..{QUERY_MAX_CHARS} characters of SPARQL")
+        try:
+            return await self._query(sparql)
+        except OperationRefused as exc:
+            first = (exc.reason.strip().splitlines() or [""])[0][:300]
+            raise InputError(f"the knowledge graph refused the query: {first}") from None
 
     # -- reads ----------------------------------------------------------------------------
     @staticmethod

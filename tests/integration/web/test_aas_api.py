@@ -1,10 +1,13 @@
 """The floor's AAS HTTP API as the console serves it (`transfertwin web --cps`), checked by
 the IDTA's own test engine (`aas-test-engines`) for every profile it claims, with values
-read live from the assets' OPC UA servers (slow: a floor, a console, ~1 min)."""
+read live from the assets' OPC UA servers; and the console's query box asking the knowledge
+graph (slow: a floor, a console, ~1.5 min)."""
 
 from __future__ import annotations
 
 import json
+import urllib.error
+import urllib.parse
 import urllib.request
 
 import pytest
@@ -59,5 +62,13 @@ def test_the_idta_test_engine_passes_every_claimed_profile_with_live_values(
     panel = _get(f"{console.base}/api/assets/TU_A/aas")
     assert panel["aas_api"] == f"{PREFIX}/shells/{b64url(ID + '/aas/TU_A')}"
     assert _get(console.base + panel["aas_api"])["idShort"] == "TU_A"
+    # the console's query box asks the graph: rows, an update refused with the reason
+    q = urllib.parse.quote("SELECT ?id WHERE { ?a a tt:TransferUnit ; tt:assetId ?id }")
+    rows = _get(f"{console.base}/api/query?q={q}")["rows"]
+    assert {r["id"] for r in rows} == {"TU_A", "TU_B", "TU_C", "TU_D"}
+    with pytest.raises(urllib.error.HTTPError) as refused:
+        _get(f"{console.base}/api/query?q={urllib.parse.quote('DELETE WHERE { ?s ?p ?o }')}")
+    assert refused.value.code == 422
+    assert "the graph is read-only" in json.loads(refused.value.read())["error"]
     ident = _get(f"{base}/submodels/{b64url(ID + '/sm/TU_A/Identification')}/$value")
     assert ident["Endpoint"] == next(a["endpoint"] for a in assets if a["id"] == "TU_A")

@@ -147,6 +147,22 @@ async function showAas(id) {
   }
 }
 
+// the query box: a read-only SPARQL SELECT to the knowledge graph, its rows as a table
+$("query-form").addEventListener("submit", async (ev) => {
+  ev.preventDefault();
+  const out = $("query-result");
+  out.replaceChildren(el("p", { class: "muted", text: "asking the knowledge graph ..." }));
+  try {
+    const data = await api("/api/query?q=" + encodeURIComponent($("query-text").value));
+    const cols = [...new Set(data.rows.flatMap((r) => Object.keys(r)))];
+    const table = el("table", { id: "query-table" }, el("tr", {}, ...cols.map((c) => el("th", { text: c }))));
+    for (const r of data.rows) table.append(el("tr", {}, ...cols.map((c) => el("td", { text: r[c] ?? "" }))));
+    out.replaceChildren(el("p", { class: "muted", text: data.rows.length + " solution(s)" }), table);
+  } catch (e) {
+    out.replaceChildren(el("p", { class: "error", text: e.message }));
+  }
+});
+
 let events = 0;
 function connectLive() {
   const source = new EventSource("/api/live");

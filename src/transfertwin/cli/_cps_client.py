@@ -65,11 +65,11 @@ def endpoint_of(info: dict, asset_id: str) -> str:
 
 
 async def call_asset(info: dict, creds, aid: str, op: str, *args, timeout_s: float = 10.0,
-                     submodel: str = "ControlInterface"):  # fmt: skip
-    """Call method `op` of asset `aid` as an operator; its answer."""
+                     submodel: str = "ControlInterface", role: str = "operator"):  # fmt: skip
+    """Call method `op` of asset `aid` as an operator (or `role`); its answer."""
     from transfertwin.cps.opcua import connect
 
-    async with connect(endpoint_of(info, aid), aid, credentials=creds, role="operator",
+    async with connect(endpoint_of(info, aid), aid, credentials=creds, role=role,
                        cert_dir=Path(info["cert_dir"]), insecure=info["insecure"],
                        timeout_s=timeout_s) as s:  # fmt: skip
         return await s.call(op, *args, submodel=submodel)

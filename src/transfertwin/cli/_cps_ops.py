@@ -73,14 +73,17 @@ def _first_line(text: str) -> str:
 
 
 def cmd_query(args: argparse.Namespace) -> int:
-    """Ask the knowledge graph a SPARQL SELECT query (its ``Query`` operation; prefixes
-    tt, rdf, rdfs predeclared). The graph answers SELECT only: an update, a CONSTRUCT or a
-    query it cannot parse is refused with its reason (exit 2)."""
+    """Ask the knowledge graph a SPARQL SELECT query (its ``Query`` operation, which a
+    viewer may call; prefixes tt, rdf, rdfs predeclared). The graph answers SELECT only:
+    an update, a CONSTRUCT or a query it cannot parse is refused with its reason (exit 2)."""
     from transfertwin.cps.opcua import OperationRefused
 
     where, info, creds = floor_access(args)
+    # the least role that may: a viewer (an operator credential from another host)
+    role = "viewer" if creds is not None and "viewer" in creds.users else "operator"
     try:
-        text = asyncio.run(call_asset(info, creds, "KG", "Query", args.sparql, timeout_s=10))
+        text = asyncio.run(call_asset(info, creds, "KG", "Query", args.sparql, timeout_s=10,
+                                      role=role))  # fmt: skip
     except OperationRefused as exc:
         raise InputError(f"the knowledge graph refused the query: "
                          f"{_first_line(exc.reason)}") from None  # fmt: skip

@@ -2,7 +2,8 @@
 
 Secure by default: Basic256Sha256 SignAndEncrypt with a self-signed application certificate
 created on first start, username/password users with roles, no anonymous access. A *viewer*
-may read, browse and subscribe; an *operator* may also write and call methods (order).
+may read, browse, subscribe and call the knowledge graph's read-only Query; an *operator*
+may also write and call methods (order).
 NoSecurity is only used when a caller passes ``insecure=True`` explicitly.
 
 Trust list: a server accepts a session only from a client whose application certificate is
@@ -36,6 +37,7 @@ from asyncua.crypto.permission_rules import PermissionRuleset, User, UserRole
 from asyncua.crypto.truststore import TrustStore
 from asyncua.crypto.uacrypto import check_certificate
 from asyncua.crypto.validator import CertificateValidator, CertificateValidatorOptions
+from asyncua.ua.ua_binary import struct_from_binary
 from cryptography import x509
 from cryptography.hazmat.primitives.asymmetric.types import PrivateKeyTypes
 from cryptography.hazmat.primitives.serialization import Encoding, load_pem_private_key
@@ -100,12 +102,31 @@ _WRITE_TYPES = {
 }
 
 
+#: Methods a viewer may call too: they only read (the knowledge graph's SELECT-only Query).
+VIEWER_METHODS = frozenset({"ControlInterface.Query"})
+
+
+def _calls_only_viewer_methods(body: object) -> bool:
+    """Whether a CallRequest's body (a binary buffer, read from a copy) calls nothing but
+    `VIEWER_METHODS`."""
+    try:
+        params = struct_from_binary(ua.CallParameters, body.copy())  # type: ignore[attr-defined]
+    except Exception:  # not a call body asyncua can read: not granted
+        return False
+    ids = [m.MethodId.Identifier for m in params.MethodsToCall or ()]
+    return bool(ids) and all(
+        isinstance(i, str) and i.split(".", 1)[-1] in VIEWER_METHODS for i in ids
+    )
+
+
 class RoleRuleset(PermissionRuleset):
-    """Viewers read; operators also write and call; nobody changes the address space."""
+    """Viewers read (and call `VIEWER_METHODS`); operators also write and call; nobody
+    changes the address space."""
 
     def __init__(self) -> None:
         self._read = {ua.NodeId(i) for i in _READ_TYPES}
         self._write = {ua.NodeId(i) for i in _WRITE_TYPES}
+        self._call = ua.NodeId(ua.ObjectIds.CallRequest_Encoding_DefaultBinary)
 
     def check_validity(self, user: User, action_type_id: ua.NodeId, body: object) -> bool:
         """Whether `user` may send a request of type `action_type_id`."""
@@ -123,6 +144,8 @@ class RoleRuleset(PermissionRuleset):
             }
         if action_type_id in self._read:
             return True
+        if action_type_id == self._call and user.name == "viewer":
+            return _calls_only_viewer_methods(body)
         return action_type_id in self._write and user.name == "operator"
 
 

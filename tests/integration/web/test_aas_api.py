@@ -13,7 +13,7 @@ import urllib.request
 import pytest
 from aas_test_engines import api, config, http
 
-from tests.integration.web.conftest import wait_for
+from tests.integration.web.conftest import save_screenshot, wait_for
 from transfertwin.web._aas_model import PROFILES, b64url
 
 pytestmark = pytest.mark.slow
@@ -72,3 +72,26 @@ def test_the_idta_test_engine_passes_every_claimed_profile_with_live_values(
     assert "the graph is read-only" in json.loads(refused.value.read())["error"]
     ident = _get(f"{base}/submodels/{b64url(ID + '/sm/TU_A/Identification')}/$value")
     assert ident["Endpoint"] == next(a["endpoint"] for a in assets if a["id"] == "TU_A")
+
+
+def test_browser_shows_the_api_address_and_answers_a_query(
+    cps_workdir, console_factory, page, tmp_path
+):
+    from playwright.sync_api import expect
+
+    console = console_factory("--cps", str(cps_workdir))
+    page.goto(console.url)
+    page.wait_for_selector("#asset-TU_A td.c-reachable.on", timeout=120_000)
+    page.click("#asset-TU_A")
+    link = page.locator("#aas-api a")
+    expect(link).to_have_text(
+        f"{console.base}{PREFIX}/shells/{b64url(ID + '/aas/TU_A')}", timeout=30_000
+    )
+    page.fill("#query-text", "SELECT ?id WHERE { ?a a tt:TransferUnit ; tt:assetId ?id }")
+    page.click("#query-form button")
+    expect(page.locator("#query-table tr")).to_have_count(5, timeout=30_000)  # header + 4
+    assert page.inner_text("#query-table tr:nth-child(2) td") in {"TU_A", "TU_B", "TU_C", "TU_D"}
+    page.fill("#query-text", "DELETE WHERE { ?s ?p ?o }")
+    page.click("#query-form button")
+    expect(page.locator("#query-result .error")).to_contain_text("the graph is read-only")
+    save_screenshot(page, tmp_path, "web-console-query")

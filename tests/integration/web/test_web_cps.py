@@ -125,7 +125,7 @@ def test_browser_sees_assets_and_places_an_order(cps_workdir, console_factory, p
     expect(page.locator("#assets td.c-reachable.on")).to_have_count(14, timeout=120_000)
     assert "token" not in page.url  # the token left the address bar
     live = page.inner_text("#asset-TU_A .c-live")
-    assert "BeltSpeedLeft=" in live
+    assert "BeltSpeedLeft: " in live and "Json" not in live
     page.click("#asset-TU_A")
     page.wait_for_selector("#aas details[data-submodel='OperationalData']")
     save_screenshot(page, tmp_path, "web-console-assets")

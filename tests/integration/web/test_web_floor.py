@@ -149,7 +149,7 @@ def test_item7_browser_shows_a_unit_going_offline_and_back(floor, console_factor
     page.goto(console.url)
     unit = page.locator("#asset-TU_B td.c-reachable")
     expect(unit).to_have_class("c-reachable on", timeout=90_000)
-    expect(page.locator("#asset-TU_B td.c-live")).to_contain_text("BeltSpeedLeft=")
+    expect(page.locator("#asset-TU_B td.c-live")).to_contain_text("BeltSpeedLeft: ")
 
     pid = json.loads(tt("cps", "status", "--workdir", str(floor), "--json").stdout)
     pid = next(a["pid"] for a in pid["assets"] if a["id"] == "TU_B")

@@ -91,16 +91,20 @@ def cmd_transfer(args: argparse.Namespace) -> int:
 TRAVEL = {"there": 1, "back": -1}
 
 
-def _outcome(y: int | None, t_end_s: float) -> str:
+def _leg(y: int | None, t_end_s: float) -> str:
+    """One transfer's outcome in words: 'delivered in 3.58 s', 'failed after 2.00 s'."""
     if y is None:
         return "not determined"
-    word = "success" if y == 1 else "failure"
-    return f"y = {y}, {word}, t_end = {t_end_s:.2f} s"
+    when = "" if math.isnan(t_end_s) else (f" in {t_end_s:.2f} s" if y == 1 else
+                                           f" after {t_end_s:.2f} s")  # fmt: skip
+    return ("delivered" if y == 1 else "failed") + when
 
 
 def strip_title(result: ExperimentResult) -> list[str]:
     """Header lines of a strip image: the state, the docking error, and each transfer's
     outcome in words (a transfer that was not attempted says so; never 'None')."""
+    from transfertwin.replay import outcome_text, status_text
+
     x, y, t = result.dock_err_x_mm, result.dock_err_y_mm, result.dock_err_theta_deg
     lines = [
         f"{result.object_id}: face {result.face}, conveyor {result.conveyor}, "
@@ -108,15 +112,14 @@ def strip_title(result: ExperimentResult) -> list[str]:
         f"y = {y:.2f} mm, θ = {t:.2f}°"
     ]
     if result.status != "ok":
-        lines.append(f"status {result.status}: {result.message or 'no outcome'}")
+        lines.append(status_text(result.status, result.message))
         return lines
-    there = "TM → TU: " + _outcome(result.y1, result.t_end_1_s)
+    there = "TM → TU: " + _leg(result.y1, result.t_end_1_s)
     if result.y2 is None:
-        back = "TU → TM: not attempted (y1 = 0)"
+        back = "TU → TM: not attempted (the transfer there failed)"
     else:
-        back = "TU → TM: " + _outcome(result.y2, result.t_end_2_s)
-    overall = "success" if result.success else "failure"
-    lines.append(f"{there};  {back};  overall {overall}, t_end = {result.t_end_s:.2f} s")
+        back = "TU → TM: " + _leg(result.y2, result.t_end_2_s)
+    lines.append(f"{there};  {back};  {outcome_text(result.row())}")
     return lines
 
 

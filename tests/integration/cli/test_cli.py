@@ -123,16 +123,17 @@ def test_strip_title_names_each_transfer_and_never_says_none():
     )  # fmt: skip
     text = " | ".join(strip_title(failed))
     assert "None" not in text and "nan" not in text
-    assert "TU → TM: not attempted (y1 = 0)" in text and "TM → TU: y = 0, failure" in text
+    assert "TU → TM: not attempted (the transfer there failed)" in text
+    assert "TM → TU: failed after 2.00 s" in text
     assert "conveyor left" in text and "θ = 10°" in text and "x = -8.55 mm" in text
     ok = ExperimentResult(
         **base, y1=1, y2=1, success=1, t_end_s=6.37, status="ok", t_end_1_s=3.575,
         t_end_2_s=2.795,
     )  # fmt: skip
-    assert "overall success, t_end = 6.37 s" in " ".join(strip_title(ok))
+    assert "delivered and brought back in 6.37 s" in " ".join(strip_title(ok))
     bad = ExperimentResult(
         **base, y1=None, y2=None, success=None, t_end_s=_math.nan, status="invalid",
         message="settled state is not a pre-transfer state (Eq. 6.1)",
     )  # fmt: skip
     text = " ".join(strip_title(bad))
-    assert "None" not in text and "status invalid: settled state" in text
+    assert "None" not in text and "not run: the object did not settle" in text

@@ -88,14 +88,17 @@ class AasApi:
     def __init__(self, gateway: CpsGateway) -> None:
         self.gateway = gateway
         self._repo: AasRepository | None = None
-        self._stamp: tuple[int, int, int] | None = None
+        self._stamp: tuple[object, ...] | None = None
         self._asset_of: dict[str, str] = {}  # submodel id -> asset id
         self._read: dict[str, float] = {}  # asset id -> monotonic time of its last read
 
     def repository(self) -> AasRepository:
-        """The repository of the floor now running (built again when cps.json changes)."""
+        """The repository of the floor now running (built again when cps.json changes or an
+        asset joins, leaves the floor or moves)."""
         gw = self.gateway
-        if self._repo is None or self._stamp != gw.info.stamp:
+        endpoints = {a["id"]: a["endpoint"] for a in gw.assets() if a.get("endpoint")}
+        stamp = (gw.info.stamp, tuple(sorted(endpoints.items())))
+        if self._repo is None or self._stamp != stamp:
             try:
                 info = json.loads((gw.workdir / "cps.json").read_text())
             except (OSError, ValueError):
@@ -103,14 +106,13 @@ class AasApi:
             if not info.get("floor"):
                 raise AasApiError(404, "this console reaches a floor without its floor file "
                                        "(web --graph): it serves no AAS API")  # fmt: skip
-            endpoints = {a["id"]: a["endpoint"] for a in gw.assets() if a.get("endpoint")}
             try:
                 repo = repository_of(Path(info["floor"]), endpoints)
             except InputError as exc:
                 raise AasApiError(404, f"the floor's AAS cannot be built: {exc}") from None
             self._asset_of = {sm_id: shell.id_short for shell in repo.shells.values()
                               for sm_id in (r.key[-1].value for r in shell.submodel)}  # fmt: skip
-            self._repo, self._stamp, self._read = repo, gw.info.stamp, {}
+            self._repo, self._stamp, self._read = repo, stamp, {}
         return self._repo
 
     def shell_path(self, aid: str) -> str | None:

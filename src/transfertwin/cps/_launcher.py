@@ -121,7 +121,6 @@ def prepare_floor(
     if floor.uses_plant():
         seed_file = write_plant_seed(workdir / PLANT_SEED_FILE, plant_seed,
                                      plant_kind).resolve()
-        _rotate(workdir / PLANT_LOG)  # this start's E^P rows in a table of their own
     write_atomic(workdir / "floor.toml", floor_toml(floor))
     study = floor.operation.study
     # an asset's copy of the floor names no file of another host (the study is the EM's)
@@ -147,6 +146,8 @@ def prepare_floor(
         hal = HalConfig(kind, plant_seed_file=own_seed, endpoint=gateway,
                         insecure=insecure)  # fmt: skip
         own_study = None
+        if floor.uses_plant() and d.asset_class == "experiment_manager":
+            _rotate(home / PLANT_LOG)  # this start's E^P rows in a table of their own
         if study is not None and d.asset_class == "experiment_manager":
             own_study = _copy_private(Path(study), home / "study.sqlite")
         configs[aid] = AssetConfig(

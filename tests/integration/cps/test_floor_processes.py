@@ -272,8 +272,9 @@ def test_trust_is_per_asset_process(floor, tmp_path, capfd):
     mine = tmp_path / "client"
 
     async def read(aid: str) -> object:
+        # the client checks the servers against the floor's CA; the servers check it
         async with connect(endpoint[aid], aid, credentials=creds, cert_dir=mine,
-                           timeout_s=10) as s:  # fmt: skip
+                           trust_dir=Path(info["trust_dir"]), timeout_s=10) as s:  # fmt: skip
             return await s.read("OperationalData", "PossessedObjects")
 
     def refused(aid: str) -> bool:

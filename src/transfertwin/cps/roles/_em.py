@@ -283,6 +283,8 @@ class ExperimentRole(Role):
         floor's ``plant_experiments.csv`` and answered in the shape of an E^V record."""
         if isinstance(seed, bool) or int(seed) < 0:
             raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+        if self.node.endpoint_of(unit) is None:  # joined since the last gossip: ask the graph
+            await self.node.graph_status()
         await self.set("State", "running")
         try:
             async with self.node.open_session(unit, 120.0) as session:  # a cycle takes long

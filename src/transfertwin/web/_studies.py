@@ -127,6 +127,14 @@ def _selected(st: SelectedState) -> dict[str, object]:
             "k": st.k, "low": _num(st.ci_low), "high": _num(st.ci_high)}  # fmt: skip
 
 
+def _advice(result: AnalysisResult, object_id: str) -> str:
+    """What to do with the core, decided face, conveyor, θ in turn as far as the data
+    decide (`decide_placement`; the report's and `analyze`'s words)."""
+    from transfertwin.study.fullstate import decide_placement, placement_headline
+
+    return placement_headline(decide_placement(result.states, object_id))
+
+
 def analysis_view(result: AnalysisResult | None, object_id: str | None) -> dict[str, object]:
     """Per-state shares of one core and every core's best/worst state (pure, JSON-ready).
 
@@ -137,8 +145,9 @@ def analysis_view(result: AnalysisResult | None, object_id: str | None) -> dict[
     Returns:
         ``{"objects": [...], "object": id, "states": [point, ...], "selection": [...]}``:
         a point has face, conveyor, theta_deg, n, k, share and the 95 % Clopper–Pearson
-        low/high (states with n = 0 are left out); a selection entry has object_id and
-        best/worst with the state, its series, ȳ^MA (Eq. 6.27), share, n, k, low, high.
+        low/high (states with n = 0 are left out); a selection entry has object_id, the
+        advice (what to do, decided as far as the data decide) and best/worst with the
+        state, its series, ȳ^MA (Eq. 6.27), share, n, k, low, high.
     """
     if result is None:
         return {"objects": [], "object": None, "states": [], "selection": [],
@@ -153,8 +162,9 @@ def analysis_view(result: AnalysisResult | None, object_id: str | None) -> dict[
          "share": _num(s.y_mean), "low": _num(s.ci_low), "high": _num(s.ci_high)}
         for s in result.states if s.object_id == object_id and s.n > 0
     ]  # fmt: skip
-    selection = [{"object_id": sel.object_id, "best": _selected(sel.best),
-                  "worst": _selected(sel.worst)} for sel in result.selections]  # fmt: skip
+    selection = [{"object_id": sel.object_id, "advice": _advice(result, sel.object_id),
+                  "best": _selected(sel.best), "worst": _selected(sel.worst)}
+                 for sel in result.selections]  # fmt: skip
     return {"objects": objects, "object": object_id, "states": states, "selection": selection,
             "skipped": list(result.skipped_objects)}  # fmt: skip
 

@@ -31,6 +31,7 @@ def test_browser_shows_the_polar_map_and_hover_values(tiny_study, console_factor
     page.wait_for_selector("#bw-o1 td.best")
     assert "front / both / θ = " in page.inner_text("#bw-o1 td.best")
     assert "n = 1" in page.inner_text("#bw-o1")
+    assert page.inner_text("#bw-o1 td.advice").startswith("Put it")  # what to do, in words
     page.wait_for_selector("#ci-plot .scatterlayer path.point")
     assert page.locator("#ci-plot .scatterlayer path.point").count() == 6  # one per state
     best = page.locator("#bestworst-plot .scatterlayer path.point").first

@@ -121,6 +121,11 @@ def test_states_and_best_worst_agree_with_the_rows(client, tiny_study):
     (sel,) = a["selection"]
     shares = [s["share"] for s in a["states"]]
     assert sel["best"]["share"] == max(shares) and sel["worst"]["share"] == min(shares)
+    # what to do, in the report's words: decided level by level as far as the data decide
+    from transfertwin.study.fullstate import decide_placement, placement_headline, state_table
+
+    expected = placement_headline(decide_placement(state_table(ok), "o1"))
+    assert sel["advice"] == expected and sel["advice"].startswith("Put it")
     assert client.get("/api/studies/tiny.sqlite/analysis").json() == a  # default: first core
 
 

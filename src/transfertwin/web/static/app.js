@@ -405,7 +405,8 @@ async function drawAnalysis() {
     yaxis: { title: { text: "success share" }, range: [-0.03, 1.03], tickformat: ".0%" },
     legend: { orientation: "h", y: -0.2 } }, { displaylogo: false, responsive: true });
   $("bestworst").querySelector("tbody").replaceChildren(...sel.map((s) => el("tr", { id: "bw-" + s.object_id },
-    el("td", { text: s.object_id }), el("td", { class: "best", text: stateText(s.best) }),
+    el("td", { text: s.object_id }), el("td", { class: "advice", text: s.advice }),
+    el("td", { class: "best", text: stateText(s.best) }),
     el("td", { text: ciText(s.best) }), el("td", { class: "worst", text: stateText(s.worst) }),
     el("td", { text: ciText(s.worst) }),
     el("td", {}, ...["best", "worst"].map((w) => el("a", { class: "replay-link", href:

@@ -102,7 +102,7 @@ def _check_codes(values: np.ndarray, allowed: type[IntEnum], what: str) -> None:
     if not np.all(valid):
         bad = values[~valid].flat[0]
         codes = ", ".join(f"{int(m)} ({m.name})" for m in allowed)
-        raise InputError(f"Eq. 5.4: {what} code must be one of {codes}, got {bad}")
+        raise InputError(f"{what} code must be one of {codes}, got {bad} (Eq. 5.4)")
 
 
 def conveyor_of(y: ArrayLike, s_y: ArrayLike, *, belt_gap_half_width: float = 0.005) -> np.ndarray:
@@ -127,9 +127,9 @@ def conveyor_of(y: ArrayLike, s_y: ArrayLike, *, belt_gap_half_width: float = 0.
     """
     y_arr, s_arr = np.broadcast_arrays(np.asarray(y, dtype=float), np.asarray(s_y, dtype=float))
     if not (np.all(np.isfinite(y_arr)) and np.all(np.isfinite(s_arr))):
-        raise InputError("Eq. 5.6: y and s_y must be finite")
+        raise InputError("y and s_y must be finite (Eq. 5.6)")
     if np.any(s_arr < 0.0) or not belt_gap_half_width >= 0.0:
-        raise InputError("Eq. 5.6: s_y and belt_gap_half_width must be >= 0")
+        raise InputError("s_y and belt_gap_half_width must be >= 0 (Eq. 5.6)")
     on_left = y_arr + s_arr > belt_gap_half_width
     on_right = y_arr - s_arr < -belt_gap_half_width
     codes = np.full(y_arr.shape, int(Conveyor.BOTH), dtype=np.int64)
@@ -187,13 +187,13 @@ def make_states(
     try:
         arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in columns.values()))
     except ValueError as exc:
-        raise InputError(f"Eq. 5.4: state columns do not broadcast: {exc}") from None
+        raise InputError(f"state columns do not broadcast: {exc} (Eq. 5.4)") from None
     if arrays[0].ndim > 1:
-        raise InputError(f"Eq. 5.4: columns must be scalars or 1-D, got shape {arrays[0].shape}")
+        raise InputError(f"columns must be scalars or 1-D, got shape {arrays[0].shape} (Eq. 5.4)")
     states = np.stack([np.atleast_1d(arr) for arr in arrays], axis=1)
     _check_codes(states[:, Col.A], Asset, "asset a")
     _check_codes(states[:, Col.F], Face, "face f")
     _check_codes(states[:, Col.C], Conveyor, "conveyor c")
     if np.any(states[:, [Col.SX, Col.SY, Col.SZ]] < 0.0):
-        raise InputError("Eq. 5.4: half extents s_x, s_y, s_z must be >= 0")
+        raise InputError("half extents s_x, s_y, s_z must be >= 0 (Eq. 5.4)")
     return states

@@ -261,7 +261,7 @@ def experiment_pre_transfer_set(
     """
     base = pre_transfer_set(th)
     if not (math.isfinite(x_min) and x_min < base.x_max):
-        raise InputError(f"Eq. 6.1: x_min must be finite and below {base.x_max} m, got {x_min}")
+        raise InputError(f"x_min must be finite and below {base.x_max} m, got {x_min} (Eq. 6.1)")
     return BeltPreTransferSet(
         base.asset, x_min, base.x_max, base.y_min, base.y_max, base.t0, base.t0_tol
     )

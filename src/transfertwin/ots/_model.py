@@ -130,10 +130,10 @@ def ots_outcome(state: ArrayLike, success: StateSet, failure: StateSet) -> Outco
     """
     batch, single = as_state_batch(state)
     if not single:
-        raise InputError(f"Eq. 5.11: expected one state (d,), got shape {batch.shape}")
+        raise InputError(f"expected one state (d,), got shape {batch.shape} (Eq. 5.11)")
     code = int(outcome_codes(batch, success, failure)[0])
     if code == NON_TERMINAL:
-        raise InputError("Eq. 5.11: the state is non-terminal (in neither S+ nor S-)")
+        raise InputError("the state is non-terminal (in neither S+ nor S-) (Eq. 5.11)")
     return Outcome(code)
 
 
@@ -181,9 +181,9 @@ def _apply(u: Transition, state: np.ndarray) -> np.ndarray:
     try:
         new = np.array(u(state.copy()), dtype=float)
     except (TypeError, ValueError) as exc:
-        raise InputError(f"Eq. 4.10: u must return a numeric state: {exc}") from None
+        raise InputError(f"u must return a numeric state: {exc} (Eq. 4.10)") from None
     if new.shape != state.shape:
-        raise InputError(f"Eq. 4.10: u must return shape {state.shape}, got {new.shape}")
+        raise InputError(f"u must return shape {state.shape}, got {new.shape} (Eq. 4.10)")
     return new
 
 
@@ -237,7 +237,7 @@ class TransferProcess:
     ) -> None:
         batch, single = as_state_batch(s0)
         if not single:
-            raise InputError(f"Eq. 4.8: s0 must be one state (d,), got shape {batch.shape}")
+            raise InputError(f"s0 must be one state (d,), got shape {batch.shape} (Eq. 4.8)")
         state = batch[0].copy()
         d = state.shape[0]
         if time_index is not None and not -d <= time_index < d:
@@ -245,7 +245,7 @@ class TransferProcess:
         self.t0 = float(state[time_index]) if time_index is not None else 0.0
         _check_clock(dt, self.t0, t_max, max_steps)
         if not contains_state(pre, state):
-            raise InputError("Eq. 4.8: s0 is not a pre-transfer state (not in S_pre)")
+            raise InputError("s0 is not a pre-transfer state (not in S_pre) (Eq. 4.8)")
         n_max = max(1, math.ceil((t_max - self.t0) / dt - 1e-9))
         self.n_max = min(n_max, max_steps) if max_steps is not None else n_max
         self.dt, self.time_index = dt, time_index

@@ -71,10 +71,10 @@ def servo_angle(rig: ServoRig, x_m: float, z_m: float) -> tuple[float, float]:
     big_x, big_z = x_m - x_s, z_m - z_s
     r = math.hypot(big_x, big_z)
     if r <= abs(e_x):
-        raise InputError(f"Eq. 5.14: ({x_m:.3f}, {z_m:.3f}) m is too close to the servo axis")
+        raise InputError(f"({x_m:.3f}, {z_m:.3f}) m is too close to the servo axis (Eq. 5.14)")
     alpha = math.atan2(big_z, big_x) + math.acos(e_x / r)
     alpha = math.remainder(alpha, 2.0 * math.pi)  # into [-π, π]
     d_z = big_x * math.sin(alpha) - big_z * math.cos(alpha) - e_z
     if d_z <= 0.0:
-        raise InputError(f"Eq. 5.14: ({x_m:.3f}, {z_m:.3f}) m lies behind the camera")
+        raise InputError(f"({x_m:.3f}, {z_m:.3f}) m lies behind the camera (Eq. 5.14)")
     return alpha, d_z

@@ -44,7 +44,7 @@ def test_a_plan_names_its_states_runs_and_executor():
     ({"theta_step": 30}, "not both"),
     ({"states": [["front", "left", 7.5]]}, "each state"),
     ({"states": [["side", "left", 0]]}, "face"),
-    ({"states": [["back", "right", 90]]}, "not an experiment pre-transfer state"),
+    ({"states": [["back", "right", 90]]}, "not a pre-transfer state of the experiments"),
     ({"objects": ["o99"]}, "unknown object"),
     ({"executor": "slurm"}, "local or ray"),
     ({"address": "auto"}, "needs executor ray"),

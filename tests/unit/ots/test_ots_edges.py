@@ -116,7 +116,7 @@ def test_eq_6_1_experiment_set_keeps_the_thresholds_time_tolerance() -> None:
     inside = make_states(x=-0.25, y=0.0, s_x=0.0625, s_y=0.0625, t=0.25)
     assert bool(pre.contains(inside)) and pre.contains_one(inside[0])
     assert not bool(pre.contains(make_states(x=-0.25, y=0.0, s_x=0.0625, s_y=0.0625, t=0.3)))
-    message = r"^Eq\. 6\.1: x_min must be finite and below -0\.0625 m, got -0\.0625$"
+    message = r"^x_min must be finite and below -0\.0625 m, got -0\.0625 \(Eq\. 6\.1\)$"
     with pytest.raises(InputError, match=message):
         experiment_pre_transfer_set(TH, x_min=-0.0625)  # x_min == x_max
 
@@ -132,10 +132,10 @@ def test_eq_5_4_make_states_defaults_and_float_dtype() -> None:
 @pytest.mark.parametrize(
     ("kw", "message"),
     [
-        ({"a": 3}, r"^Eq\. 5\.4: asset a code must be one of 0 \(TM\), 1 \(TU\), got 3\.0$"),
-        ({"f": 2}, r"^Eq\. 5\.4: face f code must be one of 0 \(FRONT\), 1 \(BACK\), got 2\.0$"),
-        ({"c": 7}, r"^Eq\. 5\.4: conveyor c code must be one of 0 \(LEFT\), 1 \(RIGHT\), "
-                   r"2 \(BOTH\), got 7\.0$"),
+        ({"a": 3}, r"^asset a code must be one of 0 \(TM\), 1 \(TU\), got 3\.0 \(Eq\. 5\.4\)$"),
+        ({"f": 2}, r"^face f code must be one of 0 \(FRONT\), 1 \(BACK\), got 2\.0 \(Eq\. 5\.4\)$"),
+        ({"c": 7}, r"^conveyor c code must be one of 0 \(LEFT\), 1 \(RIGHT\), "
+                   r"2 \(BOTH\), got 7\.0 \(Eq\. 5\.4\)$"),
     ],
 )  # fmt: skip
 def test_eq_5_4_unknown_codes_name_the_column_the_codes_and_the_value(kw, message) -> None:

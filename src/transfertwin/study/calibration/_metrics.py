@@ -142,7 +142,7 @@ class ConfusionMatrix:
             InputError: If beta is not a finite positive number.
         """
         if isinstance(beta, bool) or not isinstance(beta, Real) or not 0 < beta < math.inf:
-            raise InputError(f"Eq. A.4: beta must be a finite positive number, got {beta!r}")
+            raise InputError(f"beta must be a finite positive number, got {beta!r} (Eq. A.4)")
         b2 = float(beta) ** 2
         return _ratio((1 + b2) * self.tp, (1 + b2) * self.tp + b2 * self.fn + self.fp)
 

@@ -68,11 +68,11 @@ def _as_fraction(value: object) -> Fraction:
     if isinstance(value, Fraction):
         return value
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, Real):
-        raise InputError(f"Eq. 6.27: series values must be finite numbers, got {value!r}")
+        raise InputError(f"series values must be finite numbers, got {value!r} (Eq. 6.27)")
     if isinstance(value, Integral):
         return Fraction(int(value))
     if not math.isfinite(float(value)):
-        raise InputError(f"Eq. 6.27: series values must be finite numbers, got {value!r}")
+        raise InputError(f"series values must be finite numbers, got {value!r} (Eq. 6.27)")
     return Fraction(float(value))
 
 
@@ -93,11 +93,11 @@ class CircularSeries:
         theta = tuple(check_theta_deg(t) for t in self.theta_deg)
         values = tuple(_as_fraction(v) for v in self.values)
         if not theta:
-            raise InputError("Eq. 6.25: a series needs at least one angle")
+            raise InputError("a series needs at least one angle (Eq. 6.25)")
         if len(theta) != len(values):
-            raise InputError(f"Eq. 6.25: {len(theta)} angles but {len(values)} values")
+            raise InputError(f"{len(theta)} angles but {len(values)} values (Eq. 6.25)")
         if any(b <= a for a, b in itertools.pairwise(theta)):
-            raise InputError("Eq. 6.25: series angles must be strictly ascending")
+            raise InputError("series angles must be strictly ascending (Eq. 6.25)")
         object.__setattr__(self, "theta_deg", theta)
         object.__setattr__(self, "values", values)
 
@@ -142,7 +142,7 @@ class _WindowSums:
 def _check_window(window: int) -> int:
     ok = isinstance(window, Integral) and not isinstance(window, bool)
     if not ok or window < 1 or window % 2 == 0 or window > 2 * FULL_CIRCLE_HALF_WINDOW + 1:
-        raise InputError(f"Eq. 6.27: window must be an odd integer in 1..361, got {window!r}")
+        raise InputError(f"window must be an odd integer in 1..361, got {window!r} (Eq. 6.27)")
     return int(window)
 
 
@@ -174,7 +174,7 @@ def circular_moving_average(values: Sequence[float] | np.ndarray, window: int = 
     """
     arr = np.asarray(values, dtype=float)
     if arr.shape != (_N,):
-        raise InputError(f"Eq. 6.27: expected 360 values for θ = -179..180, got {arr.shape}")
+        raise InputError(f"expected 360 values for θ = -179..180, got {arr.shape} (Eq. 6.27)")
     present = ~np.isnan(arr)
     if not present.any():
         return arr.copy()
@@ -251,7 +251,7 @@ def _global(
     series: Sequence[CircularSeries], local: Callable[[CircularSeries], LocalChoice], sign: int
 ) -> GlobalChoice:
     if not series:
-        raise InputError("Alg. 2/3: at least one series is needed")
+        raise InputError("at least one series is needed (Alg. 2/3)")
     winner: GlobalChoice | None = None
     for idx, s in enumerate(series):
         cand = local(s)

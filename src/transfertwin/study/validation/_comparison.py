@@ -68,7 +68,7 @@ def newcombe_difference(
     for k, n in ((k1, n1), (k2, n2)):
         clopper_pearson(k, n, alpha)  # validates counts and alpha
         if n == 0:
-            raise InputError("Sec. 6.7: the Newcombe interval needs n >= 1 on both sides")
+            raise InputError("the Newcombe interval needs n >= 1 on both sides (Sec. 6.7)")
     low, high = confint_proportions_2indep(
         k1, n1, k2, n2, method="newcomb", compare="diff", alpha=alpha
     )

@@ -59,9 +59,9 @@ def n_to_exclude_zero(p1: float, p2: float, alpha: float = 0.05) -> int | None:
     """
     for p in (p1, p2):
         if not (isinstance(p, (int, float)) and 0.0 <= p <= 1.0):
-            raise InputError(f"Sec. 6.7: a success share must lie in [0, 1], got {p!r}")
+            raise InputError(f"a success share must lie in [0, 1], got {p!r} (Sec. 6.7)")
     if not (isinstance(alpha, (int, float)) and 0.0 < alpha < 1.0):
-        raise InputError(f"Sec. 6.7: alpha must lie in (0, 1), got {alpha!r}")
+        raise InputError(f"alpha must lie in (0, 1), got {alpha!r} (Sec. 6.7)")
     if p1 == p2 or not _excludes_zero(p1, p2, N_MAX, alpha):
         return None
     low, high = 0, 1  # invariant: high excludes 0, low does not (n = 0 never does)
@@ -128,7 +128,7 @@ def power_summary(
         InputError: If there is no comparison or ``detectable`` is not in (0, 1].
     """
     if not comparisons:
-        raise InputError("Sec. 6.7: no compared state to assess")
+        raise InputError("no compared state to assess (Sec. 6.7)")
     if not 0.0 < detectable <= 1.0:
         raise InputError(
             f"the detectable difference must lie in (0, 1], got {detectable} (Sec. 6.7)"

@@ -30,8 +30,10 @@ from transfertwin.cps.apps import docking_model
 
 __all__ = [
     "DEFAULT_STATE",
+    "LEARNING_ALONE_FIRST",
     "ON_THE_FLY_THETA_STEP",
     "StatePrediction",
+    "learning_alone_states",
     "rank_states",
     "study_predictions",
     "twin_words",
@@ -42,6 +44,21 @@ __all__ = [
 DEFAULT_STATE = {"face": "front", "conveyor": "both", "theta_deg": 0}
 #: θ grid of on-the-fly experiments: 28 states per object (the quick study's grid).
 ON_THE_FLY_THETA_STEP = 30
+#: What learning alone loads an object in first: the default state, as nearest-idle does.
+LEARNING_ALONE_FIRST = DEFAULT_STATE
+
+
+def learning_alone_states() -> list[dict[str, object]]:
+    """The states learning alone ranks (``[operation] twin = false``): the default state
+    first (an object's first order is loaded as nearest-idle loads it), then every state
+    of the `ON_THE_FLY_THETA_STEP` grid, each without a twin's prediction (`uninformed`)."""
+    from transfertwin.cps.dispatch._learn import uninformed
+    from transfertwin.ots import experiment_states, filter_theta_step
+
+    grid = [{"face": s.face, "conveyor": s.conveyor, "theta_deg": s.theta_deg}
+            for s in filter_theta_step(experiment_states(), ON_THE_FLY_THETA_STEP)]  # fmt: skip
+    first = dict(LEARNING_ALONE_FIRST)
+    return uninformed([first, *(s for s in grid if s != first)])
 
 
 @dataclass(frozen=True)

@@ -29,20 +29,17 @@ from typing import TYPE_CHECKING, Any
 
 from transfertwin.cps.aas import object_properties
 from transfertwin.cps.dispatch import (
-    DEFAULT_STATE,
-    ON_THE_FLY_THETA_STEP,
     Bid,
     OrderBook,
     choose,
     fallback,
+    learning_alone_states,
     order_view,
     rerank,
     twin_words,
-    uninformed,
 )
 from transfertwin.cps.node import Role
 from transfertwin.cps.opcua import OperationRefused
-from transfertwin.ots import experiment_states, filter_theta_step
 
 if TYPE_CHECKING:
     from transfertwin.cps.node import AssetNode
@@ -82,7 +79,7 @@ class TmsRole(Role):
                 log.info("TMS: resuming %s (%s)", op_id, op["phase"])
                 if op.get("module"):
                     self._claimed[op["module"]] = op_id
-                self.node.spawn(self._execute(op_id))
+                self.node.spawn(self._run(op_id))
         await self.set("Policy", self.policy)
         await self._counters()
         self.node.spawn(self._publisher())
@@ -104,7 +101,7 @@ class TmsRole(Role):
         """Check and queue an order (`OrderBook.accept`), then run it."""
         op_id = self.book.accept(obj, destination, source, await self._modules())
         await self._counters()
-        self.node.spawn(self._execute(op_id))
+        self.node.spawn(self._run(op_id))
         return op_id
 
     async def _orders(self) -> str:
@@ -230,10 +227,7 @@ class TmsRole(Role):
         if self.node.floor.operation.twin:
             preds = await self._predictions(op["object"], op["operation"])
         else:  # learning alone: every state of the grid, ranked by the floor's transfers
-            grid = filter_theta_step(experiment_states(), ON_THE_FLY_THETA_STEP)
-            default = tuple(DEFAULT_STATE.values())  # first: the cold start's state
-            preds = uninformed(sorted(grid, key=lambda s: (s.face, s.conveyor,
-                                                           s.theta_deg) != default))
+            preds = learning_alone_states()
         if not preds:
             return {"policy": self.policy, "state": None,
                     "note": "no prediction for this object: default state"}  # fmt: skip
@@ -287,6 +281,22 @@ class TmsRole(Role):
             if answer:
                 return json.loads(answer)
             await asyncio.sleep(1.0)
+
+    async def _run(self, op_id: str) -> None:
+        """`_execute`; an order it could not run ends as a fault of the floor with the error
+        as its reason (in its history, the log and the KPIs), never left queued."""
+        try:
+            await self._execute(op_id)
+        except asyncio.CancelledError:
+            raise
+        except Exception as exc:
+            log.exception("TMS: %s could not run", op_id)
+            op = self.ops[op_id]
+            if op["state"] != "finished":
+                op["history"].append([time.time(), f"error: {type(exc).__name__}: {exc}"])
+                self._finish(op_id, {"status": f"error: {type(exc).__name__}: {exc}",
+                                     "failed_step": op.get("phase"), "fault": True})  # fmt: skip
+                await self._counters()
 
     async def _execute(self, op_id: str) -> None:
 

@@ -1,17 +1,18 @@
-"""Pool the small rehearsals of plant seeds 2-4 per plant kind (36 held-out rows each).
+"""Pool the small rehearsals of several plant seeds per plant kind (12 held-out rows each).
 
 One decision per held-out row (``p >= t``, t as each rehearsal recorded it), the oracle's
 majority from ``oracle_rows.csv``; paired percentile-bootstrap intervals over the pooled rows
 (`f05_intervals`, 2000 resamples, seed 0); the operations' orders pooled with a Newcombe
-interval. Run from the repository root:
+interval. Run from the repository root (seeds 2,3,4 unless given, e.g. 1,2,3,4):
 
-    .venv/bin/python benchmarks/results/2026-11-28-fidelity-seeds/pool.py
+    .venv/bin/python benchmarks/results/2026-11-28-fidelity-seeds/pool.py [SEEDS]
 """
 
 from __future__ import annotations
 
 import csv
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -71,5 +72,6 @@ def pool(kind: str, seeds: tuple[int, ...]) -> None:
 
 
 if __name__ == "__main__":
+    seeds = tuple(int(s) for s in sys.argv[1].split(",")) if len(sys.argv) > 1 else (2, 3, 4)
     for kind in ("in-class", "mismatch"):
-        pool(kind, (2, 3, 4))
+        pool(kind, seeds)

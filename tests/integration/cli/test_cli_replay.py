@@ -17,7 +17,8 @@ def test_replay_writes_its_document_and_glb(tmp_path, capsys):
     code = main([*R, "--gap-mm", "80", "--seed", "3", "--json", str(doc), "--glb", str(glb)])
     out = capsys.readouterr().out
     assert code == 0, out
-    assert "o1, front face, both conveyors, θ = 90°, run 0, seed 3: failed on the way there: " in out
+    head = "o1, front face, both conveyors, θ = 90°, run 0, seed 3: failed on the way there: "
+    assert head in out
     assert "None" not in out and "y1" not in out and "simulated time" in out
     data = json.loads(doc.read_text())
     assert data["version"] == 1 and data["markers"][-1]["kind"] == "failure"

@@ -36,3 +36,12 @@ def test_a_warm_pool_gives_the_rows_of_the_studys_own_workers_and_stays_up() -> 
     assert {json.loads(r)["status"] for rows in first for r in rows} == {"ok"}
     with pytest.raises(InputError, match="at least 1"):
         WarmPool(0)
+
+
+def test_a_pool_that_was_shut_down_is_started_anew() -> None:
+    """A pool whose processes were shut down (or broke) under it takes the next study on
+    new ones instead of failing with 'cannot schedule new futures after shutdown'."""
+    plan = StudyPlan(("o23",), 180, 1, 5, docking_model("copula"), leg="pick-up")
+    with WarmPool(1) as pool:
+        pool._pool.shutdown(wait=True)
+        assert _rows(plan, executor=pool) == _rows(plan)

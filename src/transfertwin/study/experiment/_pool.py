@@ -52,6 +52,11 @@ def stream(
         raise
 
 
+def _unusable(pool: ProcessPoolExecutor) -> bool:
+    """Whether `pool` takes no more work: broken by a dead worker, or shut down."""
+    return bool(getattr(pool, "_broken", False) or getattr(pool, "_shutdown_thread", False))
+
+
 class WarmPool:
     """`workers` spawned processes kept between studies; an `Executor` of `run_study`
     (each result its own batch). Start it once (`start`: the processes are spawned and
@@ -71,7 +76,11 @@ class WarmPool:
         return f"WarmPool(workers={self.workers}, started={self._pool is not None})"
 
     def start(self) -> WarmPool:
-        """Spawn the processes and wait until each has imported the engine."""
+        """Spawn the processes and wait until each has imported the engine; a pool that
+        broke (a worker died) or was shut down is replaced by a new one."""
+        if self._pool is not None and _unusable(self._pool):
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = None
         if self._pool is None:
             self._pool = ProcessPoolExecutor(
                 self.workers, mp_context=mp.get_context("spawn"),

@@ -19,7 +19,9 @@ from tests.integration.cps._cli import small_study, tt, two_module_floor
 #: A floor of 6 processes on the plant and two orders (~90 s): slow, run by .ci/run.
 pytestmark = pytest.mark.slow
 
-FLOOR = two_module_floor("hand-over", {"o6": "TU_A"}) + """
+# the TMS's predictions come through the Experiment Manager (it answers from the study)
+FLOOR = two_module_floor("hand-over", {"o6": "TU_A"}).replace(
+    'logical = ["KG", "TMS"]', 'logical = ["KG", "TMS", "EM"]') + """
 [operation]
 policy = "predictive"
 study = "study.sqlite"

@@ -55,7 +55,13 @@ def test_a_floor_of_remote_machines_runs_an_order_after_cps_up_and_cps_trust(tmp
             trusted = run_main(capfd, "cps", "trust", str(cert), "--workdir", str(wd),
                                "--asset", aid, "--gateway")  # fmt: skip
             assert trusted.returncode == 0, trusted.stderr
-            trust_certificate(gw / "trusted", wd / "assets" / aid / "certs" / "client-operator.der")
+            # the asset makes its gateway client certificate on its first try to connect
+            own = wd / "assets" / aid / "certs" / "client-operator.der"
+            t0 = time.monotonic()
+            while not own.is_file():
+                assert time.monotonic() - t0 < 30, f"{aid} made no gateway client certificate"
+                time.sleep(0.2)
+            trust_certificate(gw / "trusted", own)
         t0 = time.monotonic()  # the units say the refusal once and keep trying: no restart
         while not _connected(wd):
             assert time.monotonic() - t0 < 30, "the assets did not reach their gateway"

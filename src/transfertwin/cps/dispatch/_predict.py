@@ -30,7 +30,6 @@ from transfertwin.cps.apps import docking_model
 
 __all__ = [
     "DEFAULT_STATE",
-    "LEARNING_ALONE_FIRST",
     "ON_THE_FLY_THETA_STEP",
     "StatePrediction",
     "learning_alone_states",
@@ -44,8 +43,6 @@ __all__ = [
 DEFAULT_STATE = {"face": "front", "conveyor": "both", "theta_deg": 0}
 #: θ grid of on-the-fly experiments: 28 states per object (the quick study's grid).
 ON_THE_FLY_THETA_STEP = 30
-#: What learning alone loads an object in first: the default state, as nearest-idle does.
-LEARNING_ALONE_FIRST = DEFAULT_STATE
 
 
 def learning_alone_states() -> list[dict[str, object]]:
@@ -57,7 +54,7 @@ def learning_alone_states() -> list[dict[str, object]]:
 
     grid = [{"face": s.face, "conveyor": s.conveyor, "theta_deg": s.theta_deg}
             for s in filter_theta_step(experiment_states(), ON_THE_FLY_THETA_STEP)]  # fmt: skip
-    first = dict(LEARNING_ALONE_FIRST)
+    first = dict(DEFAULT_STATE)
     return uninformed([first, *(s for s in grid if s != first)])
 
 

@@ -30,6 +30,7 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 
@@ -75,7 +76,12 @@ from transfertwin.study.docking import (
     ResampledDockingErrors,
     marginal_family,
 )
-from transfertwin.study.experiment import ExperimentSpec, experiment_seeds, run_rows
+from transfertwin.study.experiment import (
+    ExperimentSpec,
+    delivery_docking_seed,
+    experiment_seeds,
+    run_rows,
+)
 from transfertwin.study.fullstate import analyze
 from transfertwin.study.validation import compare
 
@@ -133,15 +139,20 @@ def _state_grid(step: int) -> list[tuple[str, str, int]]:
 
 def _virtual_specs(
     object_map: Mapping[str, str], states: Sequence[tuple[str, str, str, int]], runs: int,
-    docking, scene: SceneConfig, seed: int,
+    docking, scene: SceneConfig, seed: int, leg: str = "round-trip",
 ) -> list[ExperimentSpec]:  # fmt: skip
+    """The E^V of `states`, `runs` each; an 'operation' leg docks at its destination with a
+    docking error of its own (`delivery_docking_seed`, as `StudyPlan` draws it)."""
     specs = []
     for i, (oid, face, conveyor, theta) in enumerate(states):
         for run in range(runs):
             exp_seed, dock_seed = experiment_seeds(seed, oid, i, run)
+            delivery = None
+            if leg == "operation":
+                delivery = docking.sample(delivery_docking_seed(seed, oid, i, run))
             specs.append(ExperimentSpec(
                 object_map[oid], face, conveyor, theta, docking_error=docking.sample(dock_seed),
-                scene=scene, run=run, seed=exp_seed,
+                scene=scene, run=run, seed=exp_seed, leg=leg, delivery_docking_error=delivery,
             ))  # fmt: skip
     return specs
 
@@ -151,12 +162,13 @@ class _Run:
     """What one rehearsal shares between its twin variants."""
 
     cfg: RehearsalConfig
-    plant: EmulatedPlant
+    plant: Plant
     plant_rows: list[dict[str, object]]
     train: list[Mapping[str, object]]
     test: list[Mapping[str, object]]
     stage: Stage
     progress: Progress
+    leg: str = "round-trip"
     virtual: int = 0
     plant_validation: int = 0
 
@@ -248,7 +260,7 @@ def _twin(run: _Run, measures: frozenset[str], out: Path) -> dict[str, object]:
     run.stage("full-state prediction")
     docking = _docking_model(run.plant_rows)
     grid = [(o, *s) for o in cfg.objects for s in _state_grid(cfg.theta_step)]
-    specs = _virtual_specs(object_map, grid, cfg.runs, docking, scene, cfg.seed)
+    specs = _virtual_specs(object_map, grid, cfg.runs, docking, scene, cfg.seed, run.leg)
     full_rows = _collect(run_rows(specs, cfg.workers), len(specs), run.progress)
     run.virtual += len(specs)
     analysis = analyze(full_rows)
@@ -298,7 +310,8 @@ def _twin(run: _Run, measures: frozenset[str], out: Path) -> dict[str, object]:
     vcols = ["object_id", "face", "conveyor", "theta_deg", "run", "seed", "status", "success",
              *DOCKING_ERROR_COLUMNS, "message"]  # fmt: skip
     write_atomic(out / "virtual_validation.csv", _csv_text(virtual_val, vcols))
-    write_atomic(out / "fullstate.csv", _csv_text(full_rows, vcols))
+    legs = ["y1", "y2"] if run.leg != "round-trip" else []  # the legs it predicts
+    write_atomic(out / "fullstate.csv", _csv_text(full_rows, [*vcols, *legs]))
     return {
         "counter_measures": [m for m in COUNTER_MEASURES if m in measures],
         "f05_after": after["f05"],
@@ -333,14 +346,36 @@ def _thresholds(run: _Run, main: Mapping[str, object]) -> tuple[tuple[float, flo
     return (tb, ta), f"chosen on the {len(y)} training rows (best F0.5 there)"
 
 
+class Plant(Protocol):
+    """What a rehearsal asks of the physical side: E^P (`EmulatedPlant.run`'s rows,
+    `PLANT_COLUMNS`) and, for the mass counter-measure, a scale (`EmulatedPlant.weigh`)."""
+
+    def run(self, requests: Sequence[PlantRequest], *, workers: int = 1,
+            on_progress: Progress | None = None) -> list[dict[str, object]]: ...  # fmt: skip
+
+    def weigh(self, object_id: str): ...
+
+
 def rehearse(
     config: RehearsalConfig,
     out: Path,
     *,
     on_stage: Stage | None = None,
     on_progress: Progress | None = None,
+    plant: Plant | None = None,
+    measures: Sequence[str] = COUNTER_MEASURES,
+    leg: str = "round-trip",
 ) -> dict[str, object]:
     """Run one rehearsal and write its outputs into `out` (created if needed).
+
+    `plant` is the physical side (None: the `EmulatedPlant` of ``config.plant_seed`` and
+    ``config.plant_kind``, whose seed goes to ``plant.secret``; given, e.g. a floor's
+    physical units, its rows are all the rehearsal knows of it, and ``config``'s plant
+    fields are unused). `measures` are the counter-measures the twin uses (a plant with no
+    scale: without 'mass'). `leg` is what the full-state prediction simulates (`LEGS`:
+    'operation' predicts both legs of a floor's transport operation, its y1 and y2 in
+    ``fullstate.csv``); calibration and validation replay the plant's experiments, which
+    go there and back ('round-trip').
 
     Writes ``rehearsal.json``, ``plant_calibration.csv``, ``plant_validation.csv``,
     ``virtual_validation.csv``, ``fullstate.csv`` and ``objects/<id>.proxy.json``, and the
@@ -354,9 +389,15 @@ def rehearse(
     stage = on_stage or (lambda name: None)
     progress = on_progress or (lambda done, total: None)
     cfg, t0 = config, time.perf_counter()
-    plant = EmulatedPlant(cfg.plant_seed, kind=cfg.plant_kind, mismatch_off=cfg.mismatch_off)
+    bad = sorted(set(measures) - set(COUNTER_MEASURES))
+    if bad:
+        raise InputError(f"unknown counter-measure(s) {', '.join(bad)}")
+    if plant is not None and cfg.operations:
+        raise InputError("operations need the emulated plant (its operate), not a given plant")
     out.mkdir(parents=True, exist_ok=True)
-    write_plant_seed(out / PLANT_SEED_FILE, cfg.plant_seed)
+    if plant is None:
+        plant = EmulatedPlant(cfg.plant_seed, kind=cfg.plant_kind, mismatch_off=cfg.mismatch_off)
+        write_plant_seed(out / PLANT_SEED_FILE, cfg.plant_seed)
 
     test_rows: list[dict[str, object]] = []
     if cfg.test_experiments:  # first, so that every K of a curve gets the same ones
@@ -371,14 +412,14 @@ def rehearse(
     else:
         train, test = holdout_split(plant_rows, cfg.holdout, cfg.seed)
     y_test = [int(r["success"]) for r in test]
-    run = _Run(cfg, plant, plant_rows, train, test, stage, progress)
+    run = _Run(cfg, plant, plant_rows, train, test, stage, progress, leg)
 
     stage("twin before calibration: replay of the held-out experiments")
     before_result = run.replay(test, cfg.scene)
     before = held_out_scores(before_result)
     before_pred = run_predictions(before_result)
 
-    measures = frozenset(COUNTER_MEASURES)
+    measures = frozenset(measures)
     main = _twin(run, measures, out)
     ablations: dict[str, dict[str, object]] = {}
     for m in cfg.ablate:
@@ -434,6 +475,7 @@ def rehearse(
         "ablations": ablations,
         "operations": operations,
         "config": config_record(cfg),
+        **({"fullstate_leg": leg} if leg != "round-trip" else {}),
         "seconds": round(time.perf_counter() - t0, 1),
         "note": (
             "f05_* are mean per-run F0.5 of the twin's replay of held-out plant experiments "

@@ -62,7 +62,7 @@ EXPECTED_ELEMENTS = {
         ],
         "Capabilities": [],
         "OperationalData": ["PossessedBy", "Face", "Conveyor", "Theta", "LastTransfer",
-                            "TransferHistoryJson"],
+                            "TransferHistoryJson", "PredictionsJson"],
     },
     "TMS": {
         "Identification": ["AssetId", "AssetClass", "AssetKind", "Provenance"],
@@ -80,9 +80,9 @@ EXPECTED_ELEMENTS = {
         "Capabilities": ["Experiment", "ExperimentRelations"],
         "OperationalData": ["State", "ExperimentsDone", "StudyState", "StudyPlan",
                             "StudyStore", "StudyDone", "StudyPlanned", "StudyProgress",
-                            "StudyRate", "StudyEtaS"],
+                            "StudyRate", "StudyEtaS", "CampaignProgress"],
         "ControlInterface": ["RunExperiment", "Predict", "StartStudy", "StopStudy",
-                             "StudyStatus"],
+                             "StudyStatus", "StartCampaign", "StopCampaign", "CampaignStatus"],
     },
     "PropS": {
         "Identification": ["AssetId", "AssetClass", "AssetKind", "Provenance"],
@@ -261,7 +261,8 @@ def test_externally_synced_properties_follow_table_3_1() -> None:
     reps = {a: build_representation(DEMO[a]) for a in ("TU_A", "TM_1", "o1", "PropS")}
     assert externally_synced(reps["TU_A"]) == {"PossessedObjects", "DockedTransportModule"}
     assert externally_synced(reps["o1"]) == {"PossessedBy", "Face", "Conveyor", "Theta",
-                                             "LastTransfer", "TransferHistoryJson"}  # fmt: skip
+                                             "LastTransfer", "TransferHistoryJson",
+                                             "PredictionsJson"}  # fmt: skip
     assert externally_synced(reps["TM_1"]) == frozenset()
     assert externally_synced(reps["PropS"]) == frozenset()
 

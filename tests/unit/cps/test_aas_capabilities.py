@@ -80,7 +80,8 @@ def test_what_realises_each_capability() -> None:
     assert targets("TU_A", "Transfer") == ["SetBeltSpeed"]
     assert targets("TU_A", "Sense") == ["BarrierNearInterrupted", "BarrierFarInterrupted"]
     assert targets("TMS", "Allocate") == ["SubmitTransportOperation", "OrderTo"]
-    assert targets("EM", "Experiment") == ["RunExperiment", "Predict", "StartStudy"]
+    assert targets("EM", "Experiment") == ["RunExperiment", "Predict", "StartStudy",
+                                           "StartCampaign"]
     assert targets("KG", "Knowledge") == ["Query"]
 
 

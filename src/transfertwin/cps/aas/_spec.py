@@ -160,6 +160,15 @@ OPERATIONAL_DATA: Mapping[str, tuple[PropertySpec, ...]] = MappingProxyType(
                 description="Its finished transfers, oldest first, as JSON (operation, "
                 "source, target, module, outcome, face, conveyor, theta_deg, times).",
             ),
+            PropertySpec(
+                "PredictionsJson",
+                _S,
+                "{}",
+                description="The calibrated twin's prediction of each pre-transfer state "
+                "(success share of both legs, its 95 % interval), the best and the worst "
+                "state and the calibration campaign they come from, as JSON; '{}' before "
+                "any campaign.",
+            ),
         ),
         "transport_module_system": (
             _state(),
@@ -224,6 +233,13 @@ OPERATIONAL_DATA: Mapping[str, tuple[PropertySpec, ...]] = MappingProxyType(
             PropertySpec("StudyRate", _D, 0.0, "1/s", description="Experiments per second."),
             PropertySpec(
                 "StudyEtaS", _D, -1.0, "s", description="Seconds left at that rate; -1 unknown."
+            ),
+            PropertySpec(
+                "CampaignProgress",
+                _S,
+                "",
+                description="The calibration campaign's state, stage and done/total of the "
+                "stage, '' before any.",
             ),
         ),
         "props": (
@@ -393,6 +409,26 @@ CONTROL_INTERFACE: Mapping[str, tuple[OperationSpec, ...]] = MappingProxyType(
                 (Arg("status_json", _S),),
                 "State, progress, rate, ETA and store of the last study.",
             ),
+            OperationSpec(
+                "StartCampaign",
+                (Arg("request_json", _S),),
+                (Arg("status_json", _S),),
+                "Start a calibration campaign on the floor's physical units from a JSON "
+                "request (K experiments, runs, seed, ...); '' or the same request resumes it.",
+            ),
+            OperationSpec(
+                "StopCampaign",
+                (),
+                (Arg("status_json", _S),),
+                "Stop the running campaign after the experiments in flight (resumable).",
+            ),
+            OperationSpec(
+                "CampaignStatus",
+                (),
+                (Arg("status_json", _S),),
+                "State, stage, progress, plant experiments and floor time of the last "
+                "campaign, and its summary once finished.",
+            ),
         ),
         "props": (
             OperationSpec(
@@ -559,7 +595,7 @@ CAPABILITY_SPECS: Mapping[str, Mapping[str, CapabilitySpec]] = MappingProxyType(
         "experiment_manager": MappingProxyType(
             {
                 "experiment": CapabilitySpec(
-                    _ops("RunExperiment", "Predict", "StartStudy"),
+                    _ops("RunExperiment", "Predict", "StartStudy", "StartCampaign"),
                     (
                         PropertySpec(
                             "PredictRunsMax",

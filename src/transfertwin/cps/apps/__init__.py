@@ -2,7 +2,7 @@
 PropS fuses (`PoseGraph`), the transport operation flow (Fig. 5.9a) and the hand-over
 policy, the module's drive on the shop floor (`FloorRobot`), the camera's check of what it
 sees, the simulated environment, the docking-error model, and studies run by the
-Experiment Manager (`StudyJob`).
+Experiment Manager (`StudyJob`) and its calibration campaigns on the floor (`CampaignJob`).
 
 The names load on first use (PEP 562): an asset process imports only what its role needs
 (a unit or an object needs neither the simulation nor the navigation stack).
@@ -14,6 +14,14 @@ from transfertwin._lazy import lazy_exports
 
 if TYPE_CHECKING:
     from transfertwin.cps.apps._camera import ScanVerdict, height_key, scan_check
+    from transfertwin.cps.apps._campaign import (
+        CAMPAIGN_MEASURES,
+        CampaignJob,
+        CampaignRequest,
+        CampaignStoppedError,
+        FloorPlant,
+        campaign_predictions,
+    )
     from transfertwin.cps.apps._docking import docking_model
     from transfertwin.cps.apps._environment import Environment, ScaledClock
     from transfertwin.cps.apps._floor import HOME_POSE, FloorRobot, LegResult
@@ -54,12 +62,17 @@ if TYPE_CHECKING:
     )
 
 __all__ = [
+    "CAMPAIGN_MEASURES",
+    "CampaignJob",
+    "CampaignRequest",
+    "CampaignStoppedError",
     "DELIVERY_RETRIES",
     "HOME_POSE",
     "PICKUP_RETRIES",
     "STEPS",
     "STUDY_INDEX",
     "Environment",
+    "FloorPlant",
     "FloorRobot",
     "HandOverRetries",
     "Leg",
@@ -76,6 +89,7 @@ __all__ = [
     "StudyJob",
     "StudyRequest",
     "TransportSkills",
+    "campaign_predictions",
     "docking_model",
     "form_ots",
     "fuse_poses",

@@ -1,7 +1,10 @@
 """The Experiment Manager on its node: single experiments against a unit (``RunExperiment``:
-E^V, or E^P on a plant's physical unit) and studies on request (``StartStudy``,
+E^V, or E^P on a plant's physical unit), studies on request (``StartStudy``,
 ``StopStudy``, ``StudyStatus``; docs/architecture.md, "Studies through the Experiment
-Manager").
+Manager"), calibration campaigns on the floor's physical units (``StartCampaign``,
+``StopCampaign``, ``CampaignStatus``; "Calibration campaigns") and the twin's predictions
+(``Predict``: the latest finished campaign's, else the floor's study's, else virtual
+experiments now).
 
 A study runs as a job of this node (`StudyJob`: a thread that runs the study in a process
 of its own); its progress and ETA are the ``Study*`` OperationalData properties. What the
@@ -21,7 +24,14 @@ from typing import Any
 
 from transfertwin._errors import InputError
 from transfertwin.cps.aas import AssetKind
-from transfertwin.cps.apps import StudyJob, StudyRequest, record_store, study_opcua_values
+from transfertwin.cps.apps import (
+    CampaignJob,
+    CampaignRequest,
+    StudyJob,
+    StudyRequest,
+    record_store,
+    study_opcua_values,
+)
 from transfertwin.cps.dispatch import study_predictions, virtual_predictions
 from transfertwin.cps.hal import load_scene
 from transfertwin.cps.node import Role
@@ -52,14 +62,22 @@ class ExperimentRole(Role):
         self._start_lock = asyncio.Lock()
         self._pool = None  # the warm worker processes of `Predict` (`WarmPool`)
         self._warming: asyncio.Task | None = None
+        self.campaign: CampaignJob | None = None  # the last campaign started here
+        self._campaign_task: asyncio.Task | None = None
+        self._published_preds: tuple[str, dict[str, Any]] | None = None  # (id, predictions)
 
     def initial(self) -> dict[str, Any]:
-        return {"study": None}  # {"request": text, "store": path, "want": running|stopped}
+        # study: {"request": text, "store": path, "want": running|stopped|finished|failed}
+        # campaign: {"request": text, "id": id, "want": …}; published: the last finished
+        # campaign's id, whose predictions `Predict` answers with
+        return {"study": None, "campaign": None, "published": None}
 
     def handlers(self) -> dict[str, Any]:
         return {"RunExperiment": self._run, "StartStudy": self._start_study,
                 "StopStudy": self._stop_study, "StudyStatus": self._study_status,
-                "Predict": self._predict}  # fmt: skip
+                "Predict": self._predict, "StartCampaign": self._start_campaign,
+                "StopCampaign": self._stop_campaign,
+                "CampaignStatus": self._campaign_status}  # fmt: skip
 
     async def _predict(self, obj: str, runs: int, seed: int) -> str:
         """The twin's ranked states for `obj`: from the floor's study store when it has
@@ -71,6 +89,8 @@ class ExperimentRole(Role):
             raise ValueError(f"{obj!r} is not an object of this floor")
         if not 1 <= int(runs) <= 100:
             raise ValueError(f"runs must be 1..100, got {runs}")
+        if (found := await self._from_campaign(obj)) is not None:
+            return found
         if (found := await self._from_study(obj)) is not None:
             return found
         jobs = self.__dict__.setdefault("_predicting", {})
@@ -104,6 +124,23 @@ class ExperimentRole(Role):
                         store.name, obj)  # fmt: skip
             return None
         return json.dumps([p.as_dict() for p in found])
+
+    async def _from_campaign(self, obj: str) -> str | None:
+        """`obj`'s ranked states from the latest finished campaign (its
+        ``predictions.json``), or None (no campaign, or it did not predict `obj`)."""
+        published = self.state.data.get("published")
+        if not published:
+            return None
+        if self._published_preds is None or self._published_preds[0] != published:
+            path = self._campaign_dir(published) / "predictions.json"
+            try:
+                doc = json.loads(await asyncio.to_thread(path.read_text))
+            except (OSError, json.JSONDecodeError) as exc:
+                log.warning("EM: predictions of campaign %s not readable: %s", published, exc)
+                return None
+            self._published_preds = (published, doc["predictions"])
+        found = self._published_preds[1].get(obj)
+        return json.dumps(found) if found else None
 
     async def _predict_now(self, obj: str, runs: int, seed: int) -> str:
 
@@ -142,6 +179,15 @@ class ExperimentRole(Role):
             # first order's request (a floor that never asks starts none)
             task = self._loop.create_task(self._warm_pool())
             task.add_done_callback(lambda t: t.cancelled() or t.exception())
+        campaign = self.state.data.get("campaign")
+        if campaign and campaign.get("want") == "running":  # running when we went down
+            log.info("EM: resuming campaign %s", campaign["id"])
+            try:
+                await self._launch_campaign(campaign["request"])
+            except (InputError, ValueError) as exc:
+                log.warning("EM: the campaign cannot resume: %s", exc)
+                campaign["want"] = "failed"
+                self.state.save()
         study = self.state.data.get("study")
         if study and study.get("want") == "running":  # it was running when we went down
             log.info("EM: resuming the study into %s", study["store"])
@@ -156,12 +202,132 @@ class ExperimentRole(Role):
         if self.job is not None:  # (the node has cancelled the task that awaited it)
             self.job.stop()  # the persisted wish stays 'running': it resumes on restart
             await asyncio.to_thread(self.job.wait, 10.0)
+        if self.campaign is not None:  # likewise: journaled, resumed on restart
+            self.campaign.stop()
+            await asyncio.to_thread(self.campaign.wait, 10.0)
         if self._pool is not None:
             await asyncio.to_thread(self._pool.close)
 
     async def live(self) -> dict[str, Any]:
         running = self._task is not None and not self._task.done()
+        if self._campaign_task is not None and not self._campaign_task.done():
+            return {"state": "running_campaign"}
         return {"state": "running_study" if running else "idle"}
+
+    # -- calibration campaigns ------------------------------------------------------------
+    def _campaign_dir(self, campaign_id: str) -> Path:
+        return (self.node.cfg.state_dir / "campaigns" / campaign_id).resolve()
+
+    def _physical_units(self) -> list[str]:
+        return sorted(d.asset_id for d in self.node.descriptors.values()
+                      if d.kind is AssetKind.PHYSICAL and d.asset_class == "transfer_unit")  # fmt: skip
+
+    async def _start_campaign(self, request_json: str) -> str:
+        """Start (or resume) a campaign from its JSON request; '' resumes the last one."""
+        running = self._campaign_task is not None and not self._campaign_task.done()
+        saved = self.state.data.get("campaign")
+        if not request_json.strip():
+            if saved is None:
+                raise ValueError("no campaign to resume: give a request")
+            request_json = saved["request"]
+        try:
+            request = CampaignRequest.parse(request_json, [o for o, _ in self.node.floor.objects])
+        except InputError as exc:
+            raise ValueError(str(exc)) from None
+        if running:
+            if self.campaign.request.campaign_id == request.campaign_id:
+                return json.dumps(self.campaign.status())
+            raise ValueError(f"campaign {self.campaign.request.campaign_id} is running: "
+                             "stop it first")  # fmt: skip
+        if self._task is not None and not self._task.done():
+            raise ValueError("a study is running: a campaign waits until it ends")
+        await self._launch_campaign(request_json, request)
+        return json.dumps(self.campaign.status())
+
+    async def _launch_campaign(self, text: str, request: CampaignRequest | None = None) -> None:
+        if request is None:
+            request = CampaignRequest.parse(text, [o for o, _ in self.node.floor.objects])
+        units = self._physical_units()
+        loop = asyncio.get_running_loop()
+
+        def run_one(unit: str, obj: str, face: str, conveyor: str, theta: int) -> dict:
+            future = asyncio.run_coroutine_threadsafe(
+                self._cycle(unit, obj, face, conveyor, theta), loop)  # fmt: skip
+            return future.result(timeout=600)
+
+        job = CampaignJob(request, self._campaign_dir(request.campaign_id), run_one, units,
+                          on_update=self._campaign_published)  # fmt: skip
+        self.state.data["campaign"] = {"request": text, "id": request.campaign_id,
+                                       "want": "running"}  # fmt: skip
+        self.state.save()
+        self.campaign = job
+        self._campaign_task = self.node.spawn(self._run_campaign(job))
+
+    async def _run_campaign(self, job: CampaignJob) -> None:
+        final = await asyncio.to_thread(job.run)
+        saved = self.state.data.get("campaign")
+        if saved is not None and self.campaign is job and final["state"] != "stopped":
+            saved["want"] = final["state"]
+            if final["state"] == "finished":
+                self.state.data["published"] = job.request.campaign_id
+                await self._publish_predictions(job)
+            self.state.save()
+        log.info("EM: campaign %s %s (%d E^P, %.0f s of floor time)%s", final["campaign"],
+                 final["state"], final["plant_experiments"], final["floor_s"],
+                 f": {final['error']}" if final["error"] else "")  # fmt: skip
+
+    async def _publish_predictions(self, job: CampaignJob) -> None:
+        """Each object's predictions into its AAS (``PredictionsJson``), best effort: an
+        object that is away gets them from `Predict` all the same."""
+        path = job.folder / "predictions.json"
+        doc = json.loads(await asyncio.to_thread(path.read_text))
+        for obj, preds in doc["predictions"].items():
+            value = json.dumps({"campaign": doc["campaign"], "leg": doc["leg"],
+                                "best": preds[0] if preds else None,
+                                "worst": preds[-1] if preds else None,
+                                "states": preds})  # fmt: skip
+            try:
+                await asyncio.wait_for(self.node.peers.write(obj, "PredictionsJson", value), 5)
+            except Exception as exc:
+                log.info("EM: %s's AAS not updated with the campaign's predictions: %s",
+                         obj, exc)  # fmt: skip
+
+    def _campaign_published(self, status: dict[str, Any]) -> None:
+        """From the campaign's thread: its progress into ``State``'s neighbours."""
+        if self._loop is not None and not self._loop.is_closed():
+            line = f"{status['state']}: {status['stage']} {status['done']}/{status['total']}"
+            asyncio.run_coroutine_threadsafe(self._set_quiet("CampaignProgress", line),
+                                             self._loop)  # fmt: skip
+
+    async def _set_quiet(self, prop: str, value: Any) -> None:
+        with contextlib.suppress(Exception):  # a server going down mid-update
+            await self.set(prop, value)
+
+    async def _stop_campaign(self) -> str:
+        if self.campaign is None:
+            raise ValueError("no campaign has been started")
+        saved = self.state.data.get("campaign")
+        if self._campaign_task is not None and not self._campaign_task.done():
+            if saved is not None:
+                saved["want"] = "stopped"
+                self.state.save()
+            self.campaign.stop()
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(asyncio.shield(self._campaign_task), STOP_WAIT_S)
+        return json.dumps(self.campaign.status())
+
+    async def _campaign_status(self) -> str:
+        if self.campaign is not None:
+            return json.dumps(self.campaign.status())
+        saved = self.state.data.get("campaign")
+        if saved is None:
+            return json.dumps({"state": "none", "campaign": None})
+        path = self._campaign_dir(saved["id"]) / "campaign.json"
+        try:  # the last status it wrote, before this process started
+            st = json.loads(await asyncio.to_thread(path.read_text))
+        except (OSError, json.JSONDecodeError):
+            st = {"campaign": saved["id"]}
+        return json.dumps({**st, "state": saved["want"]})
 
     # -- studies --------------------------------------------------------------------------
     def _default_store(self, plan_hash: str) -> Path:
@@ -283,6 +449,13 @@ class ExperimentRole(Role):
         floor's ``plant_experiments.csv`` and answered in the shape of an E^V record."""
         if isinstance(seed, bool) or int(seed) < 0:
             raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+        row = await self._cycle(unit, obj, face, conveyor, theta_deg)
+        return json.dumps(physical_record(row, int(seed)))
+
+    async def _cycle(self, unit: str, obj: str, face: str, conveyor: str,
+                     theta_deg: int) -> dict[str, Any]:  # fmt: skip
+        """One E^P: the physical unit's ``RunTransfer``; its log row (appended to the
+        floor's ``plant_experiments.csv``)."""
         if self.node.endpoint_of(unit) is None:  # joined since the last gossip: ask the graph
             await self.node.graph_status()
         await self.set("State", "running")
@@ -296,7 +469,7 @@ class ExperimentRole(Role):
         log.info("EM: E^P %s on %s: %s %s %s %d: success %s", row["experiment_id"], unit,
                  obj, face, conveyor, int(theta_deg), row["success"])  # fmt: skip
         await self.set("ExperimentsDone", int(await self.get("ExperimentsDone")) + 1)
-        return json.dumps(physical_record(row, int(seed)))
+        return row
 
 
 def _parse(plan_json: str):  # -> StudyRequest

@@ -1,0 +1,118 @@
+"""A calibration campaign (`CampaignJob`) over physical units backed by an emulated plant:
+stopped mid-way, resumed from its journal without running an E^P twice, finished with the
+rehearsal's outputs and each object's predictions of both legs."""
+
+from __future__ import annotations
+
+import json
+import threading
+
+import pytest
+
+from transfertwin._errors import InputError
+from transfertwin.cps.apps import CampaignJob, CampaignRequest
+from transfertwin.plant import EmulatedPlant, PlantRequest
+from transfertwin.rehearsal import REHEARSAL_KEYS
+
+UNITS = ("TU_A_P", "TU_B_P")
+REQUEST = json.dumps({"objects": ["o1", "o23"], "experiments": 6, "runs": 1,
+                      "validation_runs": 1, "theta_step": 180, "depths_mm": [16],
+                      "seed": 3})  # fmt: skip
+
+
+class Units:
+    """`run_one` of the campaign: each E^P one cycle of an emulated plant at the unit's
+    station (what a physical unit's ``RunTransfer`` runs); counts what it ran."""
+
+    def __init__(self, plant: EmulatedPlant) -> None:
+        self.plant = plant
+        self.ran: list[tuple[str, str, str, str, int]] = []
+        self.lock = threading.Lock()
+        self.after: tuple[int, object] | None = None  # (n, callback): called after the nth
+
+    def __call__(self, unit: str, obj: str, face: str, conveyor: str, theta: int) -> dict:
+        station = unit.removesuffix("_P")
+        with self.lock:  # one plant, one simulation at a time (as `PhysicalPlant.cycle`)
+            (row,) = self.plant.operate([PlantRequest(obj, face, conveyor, theta, station)])
+            self.ran.append((unit, obj, face, conveyor, theta))
+            if self.after is not None and len(self.ran) == self.after[0]:
+                self.after[1]()
+        return row
+
+
+def test_a_campaign_stops_resumes_from_its_journal_and_publishes_predictions(tmp_path) -> None:
+    request = CampaignRequest.parse(REQUEST, ["o1", "o2", "o23"])
+    folder = tmp_path / request.campaign_id
+    first = Units(EmulatedPlant(5))
+    job = CampaignJob(request, folder, first, UNITS)
+    first.after = (3, job.stop)
+    assert job.run()["state"] == "stopped"
+    journal = (folder / "plant_journal.jsonl").read_text().splitlines()
+    assert len(journal) == len(first.ran) >= 3
+    assert {json.loads(line)["unit"] for line in journal} <= set(UNITS)
+
+    second = Units(EmulatedPlant(5))
+    job = CampaignJob(request, folder, second, UNITS)
+    assert job.status()["plant_experiments"] == len(journal)
+    final = job.run()
+    assert final["state"] == "finished", final["error"]
+    entries = [json.loads(line) for line in (folder / "plant_journal.jsonl").read_text()
+               .splitlines()]  # fmt: skip
+    keys = [e["key"] for e in entries]
+    assert len(keys) == len(set(keys)) == len(journal) + len(second.ran)  # none run twice
+    assert final["plant_experiments"] == len(entries)
+    assert final["floor_s"] > 0
+
+    doc = json.loads((folder / "rehearsal.json").read_text())
+    assert set(REHEARSAL_KEYS) <= set(doc)
+    assert doc["fullstate_leg"] == "operation"
+    assert doc["counter_measures"] == ["stability", "compliance"]
+    assert doc["training"] + doc["held_out"] == 6
+    assert "plant_seed" not in doc["config"]
+    assert not (folder / "plant.secret").exists()  # the floor's plant is not the rehearsal's
+    preds = json.loads((folder / "predictions.json").read_text())
+    assert preds["campaign"] == request.campaign_id and preds["leg"] == "operation"
+    for obj in ("o1", "o23"):
+        states = preds["predictions"][obj]
+        assert states, obj
+        shares = [s["share"] for s in states]
+        assert shares == sorted(shares, reverse=True)
+        for s in states:
+            assert s["leg"] == "operation" and 0 <= s["k"] <= s["k_pickup"] <= s["n"]
+            assert s["ci_low"] <= s["share"] <= s["ci_high"]
+            assert s["source"] == f"campaign {request.campaign_id}"
+    assert final["summary"]["f05_before"] == doc["f05_before"]
+
+
+def test_a_journal_of_another_campaign_is_refused(tmp_path) -> None:
+    request = CampaignRequest.parse(REQUEST, ["o1", "o23"])
+    entry = {"key": "0:0", "unit": "TU_A_P", "request": ["o1", "back", "left", 90],
+             "row": {}}  # fmt: skip
+    (tmp_path / "plant_journal.jsonl").write_text(json.dumps(entry) + "\n")
+    job = CampaignJob(request, tmp_path, Units(EmulatedPlant(5)), UNITS)
+    final = job.run()
+    assert final["state"] == "failed"
+    assert "belongs to another campaign" in final["error"]
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("[1]", "a JSON object"),
+        ('{"objects": ["o9"]}', "not objects of this floor"),
+        ('{"experiments": 2}', "'experiments' must be an integer in 3..10000"),
+        ('{"workers": 1}', "'workers' must be an integer in 2..256"),
+        ('{"theta_step": 7}', "--theta-step must divide 360"),
+        ('{"budget": 3}', "unknown key(s) budget"),
+    ],
+)
+def test_bad_requests_say_what_is_wrong(text: str, message: str) -> None:
+    with pytest.raises(InputError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        CampaignRequest.parse(text, ["o1", "o23"])
+
+
+def test_the_same_request_is_the_same_campaign() -> None:
+    a = CampaignRequest.parse(REQUEST, ["o1", "o23"])
+    b = CampaignRequest.parse(json.dumps(json.loads(REQUEST), indent=3), ["o1", "o23"])
+    c = CampaignRequest.parse(REQUEST.replace('"seed": 3', '"seed": 4'), ["o1", "o23"])
+    assert a.campaign_id == b.campaign_id != c.campaign_id

@@ -10,6 +10,7 @@ from pathlib import Path
 
 from transfertwin._errors import InputError
 from transfertwin.cli._cps_ca import register_ca
+from transfertwin.cli._cps_campaign import register as register_campaign
 from transfertwin.cli._cps_client import (
     add_access,
     endpoint_of,
@@ -318,4 +319,5 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_export)
     register_floor(csub)
     register_study(csub)
+    register_campaign(csub)
     register_ca(csub)

@@ -63,14 +63,14 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CAMPAIGN_MEASURES",
-    "CampaignJob",
-    "CampaignRequest",
-    "CampaignStoppedError",
     "DELIVERY_RETRIES",
     "HOME_POSE",
     "PICKUP_RETRIES",
     "STEPS",
     "STUDY_INDEX",
+    "CampaignJob",
+    "CampaignRequest",
+    "CampaignStoppedError",
     "Environment",
     "FloorPlant",
     "FloorRobot",

@@ -219,8 +219,11 @@ class ExperimentRole(Role):
         return (self.node.cfg.state_dir / "campaigns" / campaign_id).resolve()
 
     def _physical_units(self) -> list[str]:
-        return sorted(d.asset_id for d in self.node.descriptors.values()
-                      if d.kind is AssetKind.PHYSICAL and d.asset_class == "transfer_unit")  # fmt: skip
+        return sorted(
+            d.asset_id
+            for d in self.node.descriptors.values()
+            if d.kind is AssetKind.PHYSICAL and d.asset_class == "transfer_unit"
+        )
 
     async def _start_campaign(self, request_json: str) -> str:
         """Start (or resume) a campaign from its JSON request; '' resumes the last one."""
@@ -241,6 +244,9 @@ class ExperimentRole(Role):
                              "stop it first")  # fmt: skip
         if self._task is not None and not self._task.done():
             raise ValueError("a study is running: a campaign waits until it ends")
+        if saved is not None and saved["id"] == request.campaign_id and \
+                saved["want"] == "finished":  # fmt: skip
+            return await self._campaign_status()  # done: its outputs stand (a new seed reruns)
         await self._launch_campaign(request_json, request)
         return json.dumps(self.campaign.status())
 

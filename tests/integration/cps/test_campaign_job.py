@@ -11,6 +11,7 @@ import pytest
 
 from transfertwin._errors import InputError
 from transfertwin.cps.apps import CampaignJob, CampaignRequest
+from transfertwin.cps.dispatch import campaign_predictions
 from transfertwin.plant import EmulatedPlant, PlantRequest
 from transfertwin.rehearsal import REHEARSAL_KEYS
 
@@ -44,7 +45,7 @@ def test_a_campaign_stops_resumes_from_its_journal_and_publishes_predictions(tmp
     request = CampaignRequest.parse(REQUEST, ["o1", "o2", "o23"])
     folder = tmp_path / request.campaign_id
     first = Units(EmulatedPlant(5))
-    job = CampaignJob(request, folder, first, UNITS)
+    job = CampaignJob(request, folder, first, UNITS, campaign_predictions)
     first.after = (3, job.stop)
     assert job.run()["state"] == "stopped"
     journal = (folder / "plant_journal.jsonl").read_text().splitlines()
@@ -52,7 +53,7 @@ def test_a_campaign_stops_resumes_from_its_journal_and_publishes_predictions(tmp
     assert {json.loads(line)["unit"] for line in journal} <= set(UNITS)
 
     second = Units(EmulatedPlant(5))
-    job = CampaignJob(request, folder, second, UNITS)
+    job = CampaignJob(request, folder, second, UNITS, campaign_predictions)
     assert job.status()["plant_experiments"] == len(journal)
     final = job.run()
     assert final["state"] == "finished", final["error"]
@@ -89,7 +90,7 @@ def test_a_journal_of_another_campaign_is_refused(tmp_path) -> None:
     entry = {"key": "0:0", "unit": "TU_A_P", "request": ["o1", "back", "left", 90],
              "row": {}}  # fmt: skip
     (tmp_path / "plant_journal.jsonl").write_text(json.dumps(entry) + "\n")
-    job = CampaignJob(request, tmp_path, Units(EmulatedPlant(5)), UNITS)
+    job = CampaignJob(request, tmp_path, Units(EmulatedPlant(5)), UNITS, campaign_predictions)
     final = job.run()
     assert final["state"] == "failed"
     assert "belongs to another campaign" in final["error"]

@@ -8,7 +8,8 @@ its full-state prediction of every object on a θ grid — the floor's whole ope
 legs — with docking errors from a copula fitted to the units' logged errors, and the
 validation of each object's best and worst state against V more E^P (Newcombe, Sec. 6.7).
 Its folder holds what ``transfertwin rehearse`` writes, and ``predictions.json``: each
-object's states ranked as the TMS ranks them (`campaign_predictions`).
+object's states ranked as the TMS ranks them (the job's `predict`, e.g.
+`transfertwin.cps.dispatch.campaign_predictions`).
 
 Every E^P is journaled (``plant_journal.jsonl``) the moment it returns: a campaign that is
 stopped, or whose process died, resumes from its request; the E^P it had are read back
@@ -18,7 +19,6 @@ seeds: the same bits).
 
 from __future__ import annotations
 
-import csv
 import hashlib
 import json
 import math
@@ -39,7 +39,6 @@ __all__ = [
     "CampaignRequest",
     "CampaignStoppedError",
     "FloorPlant",
-    "campaign_predictions",
 ]
 
 #: The journal of a campaign's E^P, one JSON line each (``key``, ``unit``, ``row``).
@@ -171,6 +170,10 @@ class CampaignRequest:
 RunOne = Callable[[str, str, str, str, int], dict[str, Any]]
 
 
+#: Each object's ranked states from a campaign's folder (`CampaignJob`'s `predict`).
+Predict = Callable[[Path, Sequence[str], str], dict[str, list[dict[str, Any]]]]
+
+
 class FloorPlant:
     """The floor's physical transfer units as a rehearsal's plant (`rehearse`'s `Plant`).
 
@@ -268,28 +271,6 @@ class FloorPlant:
         return [r for r in rows if r is not None]
 
 
-def _typed(row: Mapping[str, str]) -> dict[str, Any]:
-    """A ``fullstate.csv`` row with the types the ranking reads."""
-    out: dict[str, Any] = dict(row)
-    out["theta_deg"] = int(row["theta_deg"])
-    for key in ("success", "y1", "y2", "run"):
-        value = row.get(key)
-        out[key] = int(float(value)) if value not in (None, "", "None") else None
-    return out
-
-
-def campaign_predictions(folder: Path, objects: Sequence[str], campaign_id: str,
-                         leg: str = "operation") -> dict[str, list[dict[str, Any]]]:  # fmt: skip
-    """Each object's states as the calibrated twin predicts them (its ``fullstate.csv``),
-    ranked best first as the TMS ranks them (`rank_states`), as `StatePrediction.as_dict`."""
-    from transfertwin.cps.dispatch import rank_states
-
-    with (folder / "fullstate.csv").open(newline="") as f:
-        rows = [_typed(r) for r in csv.DictReader(f)]
-    source = f"campaign {campaign_id}"
-    return {o: [p.as_dict() for p in rank_states(rows, o, source, leg)] for o in objects}
-
-
 class CampaignJob:
     """One campaign into its folder; `run` blocks (call it in a thread), `stop` asks it to
     end after the E^P in flight, `status` is safe from any thread.
@@ -297,14 +278,19 @@ class CampaignJob:
     Args:
         request: What to run.
         folder: The campaign's folder (created).
-        plant: The floor's physical units (`FloorPlant`, journaling into `folder`).
+        run_one: One E^P on a physical unit (`RunOne`).
+        units: The floor's physical transfer units (a `FloorPlant` over them journals
+            into `folder`).
+        predict: (folder, objects, campaign id) → each object's ranked states from the
+            campaign's ``fullstate.csv`` (``predictions.json``).
         on_update: Called with `status()` after every change (in the job's thread).
     """
 
     def __init__(self, request: CampaignRequest, folder: Path, run_one: RunOne,
-                 units: Sequence[str],
+                 units: Sequence[str], predict: Predict,
                  on_update: Callable[[dict[str, Any]], None] | None = None) -> None:  # fmt: skip
         self.request = request
+        self._predict = predict
         self.folder = Path(folder)
         self.folder.mkdir(parents=True, exist_ok=True)
         self._stop = threading.Event()
@@ -362,8 +348,7 @@ class CampaignJob:
             doc = rehearse(self.request.config(), self.folder, on_stage=stage,
                            on_progress=progress, plant=self.plant,
                            measures=CAMPAIGN_MEASURES, leg="operation")  # fmt: skip
-            preds = campaign_predictions(self.folder, self.request.objects,
-                                         self.request.campaign_id)  # fmt: skip
+            preds = self._predict(self.folder, self.request.objects, self.request.campaign_id)
             write_atomic(self.folder / PREDICTIONS, json.dumps(
                 {"campaign": self.request.campaign_id, "leg": "operation",
                  "predictions": preds}, indent=1) + "\n")  # fmt: skip

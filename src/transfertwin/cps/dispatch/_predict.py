@@ -22,9 +22,10 @@ of two equal shares), then the study's state order, so it is deterministic.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Any
 
 from transfertwin.cps.apps import docking_model
 
@@ -32,6 +33,7 @@ __all__ = [
     "DEFAULT_STATE",
     "ON_THE_FLY_THETA_STEP",
     "StatePrediction",
+    "campaign_predictions",
     "learning_alone_states",
     "rank_states",
     "study_predictions",
@@ -125,6 +127,28 @@ def study_predictions(store: str | Path, obj: str) -> list[StatePrediction]:
         return rank_states(db.rows(), obj, f"study {Path(store).name}", leg)
     finally:
         db.close()
+
+
+def _typed(row: Mapping[str, str]) -> dict[str, Any]:
+    """A ``fullstate.csv`` row with the types the ranking reads."""
+    out: dict[str, Any] = dict(row)
+    out["theta_deg"] = int(row["theta_deg"])
+    for key in ("success", "y1", "y2", "run"):
+        value = row.get(key)
+        out[key] = int(float(value)) if value not in (None, "", "None") else None
+    return out
+
+
+def campaign_predictions(folder: Path, objects: Sequence[str], campaign_id: str,
+                         leg: str = "operation") -> dict[str, list[dict[str, Any]]]:  # fmt: skip
+    """Each object's states as the calibrated twin predicts them (its ``fullstate.csv``),
+    ranked best first as the TMS ranks them (`rank_states`), as `StatePrediction.as_dict`."""
+    import csv
+
+    with (Path(folder) / "fullstate.csv").open(newline="") as f:
+        rows = [_typed(r) for r in csv.DictReader(f)]
+    source = f"campaign {campaign_id}"
+    return {o: [p.as_dict() for p in rank_states(rows, o, source, leg)] for o in objects}
 
 
 def virtual_predictions(obj: str, runs: int, seed: int, scene=None, workers: int = 1,

@@ -32,7 +32,11 @@ from transfertwin.cps.apps import (
     record_store,
     study_opcua_values,
 )
-from transfertwin.cps.dispatch import study_predictions, virtual_predictions
+from transfertwin.cps.dispatch import (
+    campaign_predictions,
+    study_predictions,
+    virtual_predictions,
+)
 from transfertwin.cps.hal import load_scene
 from transfertwin.cps.node import Role
 from transfertwin.cps.opcua import OpcUaUnitHAL
@@ -262,7 +266,7 @@ class ExperimentRole(Role):
             return future.result(timeout=600)
 
         job = CampaignJob(request, self._campaign_dir(request.campaign_id), run_one, units,
-                          on_update=self._campaign_published)  # fmt: skip
+                          campaign_predictions, on_update=self._campaign_published)  # fmt: skip
         self.state.data["campaign"] = {"request": text, "id": request.campaign_id,
                                        "want": "running"}  # fmt: skip
         self.state.save()

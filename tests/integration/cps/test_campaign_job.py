@@ -13,7 +13,7 @@ from transfertwin._errors import InputError
 from transfertwin.cps.apps import CampaignJob, CampaignRequest
 from transfertwin.cps.dispatch import campaign_predictions
 from transfertwin.plant import EmulatedPlant, PlantRequest
-from transfertwin.rehearsal import REHEARSAL_KEYS
+from transfertwin.rehearsal import REHEARSAL_KEYS, calibration_design
 
 UNITS = ("TU_A_P", "TU_B_P")
 REQUEST = json.dumps({"objects": ["o1", "o23"], "experiments": 6, "runs": 1,
@@ -117,3 +117,24 @@ def test_the_same_request_is_the_same_campaign() -> None:
     b = CampaignRequest.parse(json.dumps(json.loads(REQUEST), indent=3), ["o1", "o23"])
     c = CampaignRequest.parse(REQUEST.replace('"seed": 3', '"seed": 4'), ["o1", "o23"])
     assert a.campaign_id == b.campaign_id != c.campaign_id
+
+
+def test_a_unit_that_cannot_run_e_p_is_left_out_and_the_others_run_its_share(tmp_path) -> None:
+    from transfertwin.cps.apps import FloorPlant, UnitUnavailableError
+
+    units = Units(EmulatedPlant(5))
+
+    def run_one(unit: str, *args) -> dict:
+        if unit == "TU_E_P":  # a unit of a station the plant does not have
+            raise UnitUnavailableError(unit, "the plant has no station for TU_E_P")
+        return units(unit, *args)
+
+    plant = FloorPlant(run_one, ("TU_E_P", "TU_A_P", "TU_B_P"), tmp_path / "j.jsonl")
+    requests = calibration_design(["o1"], 5, seed=0)
+    rows = plant.run(requests)
+    assert [r["theta_deg"] for r in rows] == [r.theta_deg for r in requests]
+    assert plant.units == ("TU_A_P", "TU_B_P") and "TU_E_P" in plant.left_out
+    assert {u for u, *_ in units.ran} == {"TU_A_P", "TU_B_P"} and len(units.ran) == 5
+    dead = FloorPlant(run_one, ("TU_E_P",), tmp_path / "k.jsonl")
+    with pytest.raises(InputError, match="no physical unit of the floor can run E\\^P"):
+        dead.run(requests[:1])

@@ -20,7 +20,7 @@ if TYPE_CHECKING:
         CampaignRequest,
         CampaignStoppedError,
         FloorPlant,
-        campaign_predictions,
+        UnitUnavailableError,
     )
     from transfertwin.cps.apps._docking import docking_model
     from transfertwin.cps.apps._environment import Environment, ScaledClock
@@ -89,7 +89,7 @@ __all__ = [
     "StudyJob",
     "StudyRequest",
     "TransportSkills",
-    "campaign_predictions",
+    "UnitUnavailableError",
     "docking_model",
     "form_ots",
     "fuse_poses",

@@ -39,6 +39,7 @@ __all__ = [
     "CampaignRequest",
     "CampaignStoppedError",
     "FloorPlant",
+    "UnitUnavailableError",
 ]
 
 #: The journal of a campaign's E^P, one JSON line each (``key``, ``unit``, ``row``).
@@ -58,6 +59,15 @@ _KEYS = {"objects", "experiments", "runs", "validation_runs", "theta_step", "see
 
 class CampaignStoppedError(Exception):
     """Raised inside the campaign's thread when it was asked to stop."""
+
+
+class UnitUnavailableError(Exception):
+    """A physical unit cannot run E^P at all (e.g. the plant has no station for it): the
+    campaign goes on without it. `run_one` raises it; its argument is the reason."""
+
+    def __init__(self, unit: str, reason: str) -> None:
+        super().__init__(f"{unit}: {reason}")
+        self.unit = unit
 
 
 def _int(d: Mapping[str, Any], key: str, default: int, low: int, high: int) -> int:
@@ -178,10 +188,11 @@ class FloorPlant:
     """The floor's physical transfer units as a rehearsal's plant (`rehearse`'s `Plant`).
 
     Request i of a call runs on unit i mod U (the units in id order), each unit's requests
-    one after another, the units side by side. Each row is journaled as it returns, keyed
-    by (call number, index): a resumed campaign makes the same calls (its design and its
-    validation states follow from its seeds and the journaled rows) and gets the journaled
-    rows back instead of running them again.
+    one after another, the units side by side; a unit that cannot run E^P
+    (`UnitUnavailableError`) is left out and what it had not run goes to the others. Each
+    row is journaled as it returns, keyed by (call number, index): a resumed campaign makes
+    the same calls (its design and its validation states follow from its seeds and the
+    journaled rows) and gets the journaled rows back instead of running them again.
     """
 
     def __init__(self, run_one: RunOne, units: Sequence[str], journal: Path,
@@ -204,6 +215,7 @@ class FloorPlant:
                     continue
                 self._done[entry["key"]] = entry
         self.ran = 0  # E^P run by this object (not read back)
+        self.left_out: dict[str, str] = {}  # units that cannot run E^P, and why
 
     @property
     def rows(self) -> list[dict[str, Any]]:
@@ -228,7 +240,6 @@ class FloorPlant:
         call, report = self._calls, on_progress or (lambda done, total: None)
         self._calls += 1
         rows: list[dict[str, Any] | None] = [None] * len(requests)
-        queues: dict[str, list[int]] = {u: [] for u in self.units}
         for i, req in enumerate(requests):
             entry = self._done.get(f"{call}:{i}")
             if entry is not None:
@@ -238,13 +249,11 @@ class FloorPlant:
                                      f"{asked}, the campaign now asks {req}: the journal "
                                      "belongs to another campaign")  # fmt: skip
                 rows[i] = entry["row"]
-            else:
-                queues[self.units[i % len(self.units)]].append(i)
         done = [sum(r is not None for r in rows)]
         report(done[0], len(requests))
 
-        def unit_worker(unit: str) -> None:
-            for i in queues[unit]:
+        def unit_worker(unit: str, queue: list[int]) -> None:
+            for i in queue:
                 if self._stop():
                     raise CampaignStoppedError
                 req = requests[i]
@@ -263,11 +272,25 @@ class FloorPlant:
                     done[0] += 1
                 report(done[0], len(requests))
 
-        busy = [u for u in self.units if queues[u]]
-        if busy:
+        while any(r is None for r in rows):
+            units = self.units
+            queues: dict[str, list[int]] = {u: [] for u in units}
+            for i in (i for i, r in enumerate(rows) if r is None):
+                queues[units[i % len(units)]].append(i)
+            busy = [u for u in units if queues[u]]
+            lost: list[UnitUnavailableError] = []
             with ThreadPoolExecutor(len(busy), thread_name_prefix="ep") as pool:
-                for fut in [pool.submit(unit_worker, u) for u in busy]:
-                    fut.result()
+                for fut in [pool.submit(unit_worker, u, queues[u]) for u in busy]:
+                    try:
+                        fut.result()
+                    except UnitUnavailableError as exc:
+                        lost.append(exc)
+            for exc in lost:
+                self.units = tuple(u for u in self.units if u != exc.unit)
+                self.left_out[exc.unit] = str(exc)
+            if not self.units:
+                raise InputError("no physical unit of the floor can run E^P: "
+                                 + "; ".join(self.left_out.values()))  # fmt: skip
         return [r for r in rows if r is not None]
 
 
@@ -303,6 +326,7 @@ class CampaignJob:
             "state": "starting", "campaign": request.campaign_id, "folder": str(self.folder),
             "stage": "", "done": 0, "total": 0, "plant_experiments": len(self.plant.rows),
             "floor_s": round(self.plant.floor_s, 1), "units": list(self.plant.units),
+            "units_left_out": {},
             "objects": list(request.objects), "experiments": request.experiments,
             "elapsed_s": 0.0, "error": None, "summary": None,
         }  # fmt: skip
@@ -314,6 +338,8 @@ class CampaignJob:
     def _update(self, **changes: Any) -> None:
         with self._lock:
             self._status.update(changes, elapsed_s=round(time.monotonic() - self._t0, 1),
+                                units=list(self.plant.units),
+                                units_left_out=dict(self.plant.left_out),
                                 plant_experiments=len(self.plant.rows),
                                 floor_s=round(self.plant.floor_s, 1))  # fmt: skip
             status = dict(self._status)

@@ -29,6 +29,7 @@ from transfertwin.cps.apps import (
     CampaignRequest,
     StudyJob,
     StudyRequest,
+    UnitUnavailableError,
     record_store,
     study_opcua_values,
 )
@@ -39,7 +40,7 @@ from transfertwin.cps.dispatch import (
 )
 from transfertwin.cps.hal import load_scene
 from transfertwin.cps.node import Role
-from transfertwin.cps.opcua import OpcUaUnitHAL
+from transfertwin.cps.opcua import OpcUaUnitHAL, OperationRefused
 from transfertwin.cps.roles._plant_unit import PLANT_LOG, append_plant_log, physical_record
 
 __all__ = ["ExperimentRole"]
@@ -263,7 +264,12 @@ class ExperimentRole(Role):
         def run_one(unit: str, obj: str, face: str, conveyor: str, theta: int) -> dict:
             future = asyncio.run_coroutine_threadsafe(
                 self._cycle(unit, obj, face, conveyor, theta), loop)  # fmt: skip
-            return future.result(timeout=600)
+            try:
+                return future.result(timeout=600)
+            except OperationRefused as exc:
+                if "has no station" in exc.reason:  # never will: the campaign goes on without
+                    raise UnitUnavailableError(unit, exc.reason) from None
+                raise
 
         job = CampaignJob(request, self._campaign_dir(request.campaign_id), run_one, units,
                           campaign_predictions, on_update=self._campaign_published)  # fmt: skip

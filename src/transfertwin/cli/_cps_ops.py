@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import json
+import sys
 import time
 
 from transfertwin._errors import InputError
@@ -41,10 +42,31 @@ def cmd_orders(args: argparse.Namespace) -> int:
     return 0
 
 
+def _calibration_cost(args: argparse.Namespace, k: dict) -> dict:
+    """The KPIs with the floor time of the Experiment Manager's calibration campaigns
+    counted (`with_calibration`); as they were when the floor has no EM or it does not
+    answer (said on stderr)."""
+    from transfertwin.cps.dispatch import with_calibration
+
+    where, info, creds = floor_access(args)
+    ems = [a["id"] for a in info["assets"] if a.get("class") == "experiment_manager"]
+    if not ems:
+        return k
+    try:
+        st = json.loads(asyncio.run(call_asset(info, creds, ems[0], "CampaignStatus",
+                                               timeout_s=10)))  # fmt: skip
+    except Exception as exc:  # the KPIs stand without it
+        print(f"{where}: the Experiment Manager did not say its campaigns' floor time "
+              f"({type(exc).__name__}); KPIs without it", file=sys.stderr)  # fmt: skip
+        return k
+    return with_calibration(k, float(st.get("floor_s_all") or 0.0),
+                            len(k["utilisation"]["modules"]))
+
+
 def cmd_kpis(args: argparse.Namespace) -> int:
     """Print the floor's KPIs (operations per hour, success share and its interval, lead
     time, utilisation, failures by reason)."""
-    k = _ask(args, "Kpis")
+    k = _calibration_cost(args, _ask(args, "Kpis"))
     if args.json:
         print(json.dumps(k, indent=2))
         return 0
@@ -62,6 +84,10 @@ def cmd_kpis(args: argparse.Namespace) -> int:
         print(f"utilisation of the {kind}: {util}")
     reasons = ", ".join(f"{r}: {n}" for r, n in k["failed_by_reason"].items()) or "none"
     print(f"failed by reason: {reasons}")
+    if k.get("calibration_floor_s"):
+        per = k["operations_per_floor_hour_with_calibration"]
+        print(f"calibration campaigns: {k['calibration_floor_s']:.0f} s of floor time; per "
+              f"floor hour with it {per or 0:.1f}")  # fmt: skip
     if k.get("predictions_unanswered"):
         print(f"orders planned without a prediction (the Experiment Manager did not answer): "
               f"{k['predictions_unanswered']}")

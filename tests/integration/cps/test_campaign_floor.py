@@ -125,3 +125,10 @@ def test_a_campaign_survives_an_em_killed_with_minus_9_and_publishes_predictions
                "--theta-step", "90", "--seed", "2", "--wait")  # fmt: skip
     assert again.returncode == 0 and "finished" in again.stdout, again.stderr
     assert _status(wd)["plant_experiments"] == final["plant_experiments"]
+    # the KPIs count the campaign's floor time as a cost
+    kpis = tt("cps", "kpis", "--workdir", str(wd), "--json")
+    assert kpis.returncode == 0, kpis.stderr
+    k = json.loads(kpis.stdout)
+    assert k["calibration_floor_s"] == pytest.approx(final["floor_s"], abs=0.2)
+    text = tt("cps", "kpis", "--workdir", str(wd)).stdout
+    assert "calibration campaigns:" in text and "s of floor time" in text

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from scipy.stats import beta
 
-from transfertwin.cps.dispatch._kpis import kpis
+from transfertwin.cps.dispatch._kpis import kpis, with_calibration
 
 
 def _op(i, submitted, assigned, finished, status, module="TM_1", steps=(), floor_s=100.0,
@@ -78,3 +78,14 @@ def test_a_fault_is_counted_apart_from_the_transfer_outcomes():
     assert k["failed_by_reason"] == {"failed while transferring": 1}
     assert k["faults_by_reason"] == {"TM_1 restarted while docking": 1,
                                      "TM_1 went offline (lease expired) while transferring": 1}
+
+
+def test_calibration_floor_time_is_a_cost_shared_by_the_modules() -> None:
+    k = {"delivered": 6, "floor_makespan_s": 1800.0, "operations_per_floor_hour": 12.0}
+    out = with_calibration(k, 1200.0, modules=2)  # 1800 s + 1200 s / 2 modules
+    assert out["calibration_floor_s"] == 1200.0
+    assert out["operations_per_floor_hour_with_calibration"] == pytest.approx(3600 * 6 / 2400)
+    assert out["operations_per_floor_hour"] == 12.0  # the floor's own figure stays
+    assert with_calibration(k, 0.0, 2)["operations_per_floor_hour_with_calibration"] == 12.0
+    empty = {"delivered": 0, "floor_makespan_s": 0.0}
+    assert with_calibration(empty, 0.0, 1)["operations_per_floor_hour_with_calibration"] is None

@@ -19,7 +19,7 @@ if TYPE_CHECKING:
         estimate,
         floor_seconds,
     )
-    from transfertwin.cps.dispatch._kpis import UNIT_STEPS, is_fault, kpis
+    from transfertwin.cps.dispatch._kpis import UNIT_STEPS, is_fault, kpis, with_calibration
     from transfertwin.cps.dispatch._learn import (
         FACE_POOL,
         LEGS,
@@ -79,6 +79,7 @@ __all__ = [
     "twin_words",
     "uninformed",
     "virtual_predictions",
+    "with_calibration",
 ]
 
 __getattr__, __dir__ = lazy_exports(__name__, __file__)

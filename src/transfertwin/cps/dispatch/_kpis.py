@@ -23,7 +23,7 @@ from collections import Counter, defaultdict
 from collections.abc import Iterable, Mapping
 from typing import Any
 
-__all__ = ["UNIT_STEPS", "is_fault", "kpis"]
+__all__ = ["UNIT_STEPS", "is_fault", "kpis", "with_calibration"]
 
 #: The steps that occupy a transfer unit.
 UNIT_STEPS = ("docking", "scanning", "transferring")
@@ -115,3 +115,18 @@ def kpis(ops: Iterable[Mapping[str, Any]], modules: Iterable[str], units: Iterab
         "failed_by_reason": dict(sorted(reasons.items())),
         "faults_by_reason": dict(sorted(fault_reasons.items())),
     }
+
+
+def with_calibration(k: Mapping[str, Any], calibration_s: float, modules: int) -> dict[str, Any]:
+    """`kpis`' document with the floor time of calibration campaigns counted as a cost:
+    ``calibration_floor_s`` (the units' cycle time of every campaign's E^P) and
+    ``operations_per_floor_hour_with_calibration``, the delivered operations per hour of
+    the modelled makespan plus that time shared by the `modules` (as
+    `benchmarks/operations.py` charges a calibrated arm)."""
+    out = dict(k)
+    span = float(k.get("floor_makespan_s") or 0.0) + calibration_s / max(1, modules)
+    out["calibration_floor_s"] = round(calibration_s, 3)
+    out["operations_per_floor_hour_with_calibration"] = (
+        round(3600.0 * int(k["delivered"]) / span, 3) if span > 0 else None
+    )
+    return out

@@ -333,17 +333,27 @@ class ExperimentRole(Role):
         return json.dumps(self.campaign.status())
 
     async def _campaign_status(self) -> str:
+        """The last campaign's status, and ``floor_s_all``: the floor time of every
+        campaign this EM has run (their E^P's cycle times), the KPIs' calibration cost."""
+        total = await asyncio.to_thread(self._campaigns_floor_s)
         if self.campaign is not None:
-            return json.dumps(self.campaign.status())
+            return json.dumps({**self.campaign.status(), "floor_s_all": total})
         saved = self.state.data.get("campaign")
         if saved is None:
-            return json.dumps({"state": "none", "campaign": None})
+            return json.dumps({"state": "none", "campaign": None, "floor_s_all": total})
         path = self._campaign_dir(saved["id"]) / "campaign.json"
         try:  # the last status it wrote, before this process started
             st = json.loads(await asyncio.to_thread(path.read_text))
         except (OSError, json.JSONDecodeError):
             st = {"campaign": saved["id"]}
-        return json.dumps({**st, "state": saved["want"]})
+        return json.dumps({**st, "state": saved["want"], "floor_s_all": total})
+
+    def _campaigns_floor_s(self) -> float:
+        total = 0.0
+        for path in (self.node.cfg.state_dir / "campaigns").glob("*/campaign.json"):
+            with contextlib.suppress(OSError, ValueError, KeyError, TypeError):
+                total += float(json.loads(path.read_text())["floor_s"])
+        return round(total, 1)
 
     # -- studies --------------------------------------------------------------------------
     def _default_store(self, plan_hash: str) -> Path:

@@ -26,7 +26,7 @@ EXIT_FAILED = 3
 #: Request keys a flag of `start` sets (flag dest → JSON key).
 _FLAGS = {"objects": "objects", "experiments": "experiments", "runs": "runs",
           "validation_runs": "validation_runs", "theta_step": "theta_step", "seed": "seed",
-          "workers": "workers", "tune_trials": "tune_trials"}  # fmt: skip
+          "workers": "workers", "tune_trials": "tune_trials", "design": "design"}  # fmt: skip
 
 
 def status_line(st: dict) -> str:
@@ -142,6 +142,9 @@ def register(csub: argparse._SubParsersAction) -> None:
                                                "experiments (default 2, at least 2)")
     p.add_argument("--tune-trials", type=int, help="TPE trials over mu and the gap "
                                                    "(default 0: objects only)")
+    p.add_argument("--design", choices=("space-filling", "random"),
+                   help="the calibration states: space-filling (default; a Latin hypercube "
+                        "over face and θ per object) or random (the study's)")  # fmt: skip
     p.add_argument("--wait", action="store_true", help="follow the progress until it ends")
     p.set_defaults(func=cmd_start)
     p = sub.add_parser("resume", help="resume the last campaign")

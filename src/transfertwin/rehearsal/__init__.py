@@ -14,7 +14,7 @@ from transfertwin.rehearsal._config import (
     parse_object_list,
     twin_scene,
 )
-from transfertwin.rehearsal._design import calibration_design, holdout_split
+from transfertwin.rehearsal._design import DESIGNS, calibration_design, holdout_split
 from transfertwin.rehearsal._operations import (
     HANDLING_S,
     POLICIES,
@@ -31,6 +31,7 @@ from transfertwin.rehearsal._thresholded import majority_scores, training_thresh
 __all__ = [
     "COUNTER_MEASURES",
     "CURVE_KEYS",
+    "DESIGNS",
     "HANDLING_S",
     "POLICIES",
     "RECOVERY_S",

@@ -114,6 +114,8 @@ class RehearsalConfig:
             in-class plant simulated in PyBullet), see `transfertwin.plant.EmulatedPlant`.
         mismatch_off: Parts of the mismatch plant switched off (`MISMATCH_PARTS`; a
             rehearsal per ablated part, docs/fidelity.md); only with 'mismatch'.
+        design: The calibration experiments' states (`DESIGNS`): 'random' (the study's)
+            or 'space-filling' (a Latin hypercube over face and θ per object).
     """
 
     plant_seed: int
@@ -134,8 +136,13 @@ class RehearsalConfig:
     operations: int = 0
     plant_kind: str = "in-class"
     mismatch_off: tuple[str, ...] = ()
+    design: str = "random"
 
     def __post_init__(self) -> None:
+        from transfertwin.rehearsal._design import DESIGNS
+
+        if self.design not in DESIGNS:
+            raise InputError(f"--design must be one of {', '.join(DESIGNS)}, got {self.design!r}")
         object.__setattr__(self, "ablate", parse_ablations(self.ablate))
         if self.plant_kind not in PLANT_KINDS:
             raise InputError(
@@ -195,4 +202,6 @@ def config_record(cfg: RehearsalConfig) -> dict[str, object]:
         del out["plant_kind"]
     if not cfg.mismatch_off:
         del out["mismatch_off"]
+    if cfg.design == "random":
+        del out["design"]
     return out

@@ -1,6 +1,7 @@
 """Which plant experiments a rehearsal runs: the study's random calibration design (and the
-held-out test experiments from their own stream), and the stratified split of the
-calibration rows into training and held-out rows.
+held-out test experiments from their own stream), or a space-filling one (a Latin hypercube
+over face and θ per object), and the stratified split of the calibration rows into training
+and held-out rows.
 """
 
 from __future__ import annotations
@@ -9,10 +10,14 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from transfertwin._errors import InputError
 from transfertwin.ots import FACES, THETA_SINGLE
 from transfertwin.plant import PlantRequest
 
-__all__ = ["calibration_design", "holdout_split"]
+__all__ = ["DESIGNS", "calibration_design", "holdout_split"]
+
+#: Calibration designs: the study's random states, or space-filling ones.
+DESIGNS = ("random", "space-filling")
 
 
 #: Random streams of the designs: calibration experiments and held-out test experiments.
@@ -20,19 +25,37 @@ _DESIGN_TAGS = {"calibration": 0x44455349, "test": 0x54455354}
 
 
 def calibration_design(
-    objects: Sequence[str], k: int, seed: int, purpose: str = "calibration"
-) -> list[PlantRequest]:
-    """K random pre-transfer states, objects in turn (the study's calibration design): face
-    and θ uniform, the conveyor 'both' where θ allows it (Eq. 6.5), else left or right.
-    `purpose` 'test' draws the held-out test experiments from their own stream."""
+    objects: Sequence[str], k: int, seed: int, purpose: str = "calibration",
+    design: str = "random",
+) -> list[PlantRequest]:  # fmt: skip
+    """K pre-transfer states, objects in turn, the conveyor 'both' where θ allows it
+    (Eq. 6.5), else left or right. 'random' (the study's calibration design): face and θ
+    uniform. 'space-filling': per object, its n states a Latin hypercube sample over (face,
+    θ) (`scipy.stats.qmc.LatinHypercube`: each of n equal θ strata and each face's half of
+    the face axis hit once, so an object's few tries spread over both faces and the whole
+    circle instead of clumping). `purpose` 'test' draws the held-out test experiments from
+    their own stream."""
+    if design not in DESIGNS:
+        raise InputError(f"design must be one of {', '.join(DESIGNS)}, got {design!r}")
     rng = np.random.default_rng([seed, _DESIGN_TAGS[purpose]])
     single = set(THETA_SINGLE)
+    n = len(objects)
+    lhs = None
+    if design == "space-filling":
+        from scipy.stats import qmc
+
+        lhs = {j: qmc.LatinHypercube(d=2, rng=rng).random((k - j + n - 1) // n)
+               for j in range(min(n, k))}  # fmt: skip
     out = []
     for i in range(k):
-        face = FACES[int(rng.integers(len(FACES)))]
-        theta = int(rng.integers(-179, 181))
+        if lhs is None:  # (the draws in the order the study's design has always made them)
+            face = FACES[int(rng.integers(len(FACES)))]
+            theta = int(rng.integers(-179, 181))
+        else:
+            u_face, u_theta = lhs[i % n][i // n]
+            face, theta = FACES[int(u_face * len(FACES))], -179 + int(u_theta * 360)
         conveyor = ("left", "right")[int(rng.integers(2))] if theta in single else "both"
-        out.append(PlantRequest(objects[i % len(objects)], face, conveyor, theta))
+        out.append(PlantRequest(objects[i % n], face, conveyor, theta))
     return out
 
 

@@ -1,8 +1,8 @@
 """`rehearse`: the study's whole procedure against an emulated plant.
 
 1. K calibration experiments E^P on the plant at random states (the study's design: random
-   face, conveyor and θ, objects in turn), split into training rows and held-out rows
-   (stratified by object).
+   face, conveyor and θ, objects in turn; or space-filling, `calibration_design`), split
+   into training rows and held-out rows (stratified by object).
 2. The twin before calibration (default scene, built-in cores with their shipped features)
    replays the held-out rows: ``f05_before``.
 3. Virtual calibration on the training rows only: object calibration (`fit_proxy`, one
@@ -405,7 +405,8 @@ def rehearse(
         test_design = calibration_design(cfg.objects, cfg.test_experiments, cfg.seed, "test")
         test_rows = plant.run(test_design, workers=cfg.workers, on_progress=progress)
     stage(f"plant: {cfg.calibration_experiments} calibration experiments")
-    design = calibration_design(cfg.objects, cfg.calibration_experiments, cfg.seed)
+    design = calibration_design(cfg.objects, cfg.calibration_experiments, cfg.seed,
+                                design=cfg.design)  # fmt: skip
     plant_rows = plant.run(design, workers=cfg.workers, on_progress=progress)
     if cfg.test_experiments:
         train, test = list(plant_rows), list(test_rows)

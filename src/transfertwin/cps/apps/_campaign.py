@@ -54,7 +54,7 @@ STATUS = "campaign.json"
 CAMPAIGN_MEASURES = ("stability", "compliance")
 
 _KEYS = {"objects", "experiments", "runs", "validation_runs", "theta_step", "seed",
-         "workers", "holdout", "depths_mm", "tune_trials"}  # fmt: skip
+         "workers", "holdout", "depths_mm", "tune_trials", "design"}  # fmt: skip
 
 
 class CampaignStoppedError(Exception):
@@ -93,6 +93,9 @@ class CampaignRequest:
         holdout: Share of the K rows held out to score the twin before and after.
         depths_mm: Candidate protrusion depths of the object calibration.
         tune_trials: TPE trials over μ and the gap after the objects (0: none).
+        design: The calibration states: 'space-filling' (default: a Latin hypercube over
+            face and θ per object, so that an object's few tries cover both faces and the
+            circle) or 'random' (the study's).
     """
 
     objects: tuple[str, ...]
@@ -105,6 +108,7 @@ class CampaignRequest:
     holdout: float = 0.3
     depths_mm: tuple[float, ...] = (8.0, 16.0, 24.0, 32.0)
     tune_trials: int = 0
+    design: str = "space-filling"
     text: str = field(default="", compare=False)
 
     @classmethod
@@ -144,7 +148,8 @@ class CampaignRequest:
             tuple(objects), _int(d, "experiments", 40, 3, 10_000), _int(d, "runs", 2, 1, 100),
             _int(d, "validation_runs", 4, 1, 1000), _int(d, "theta_step", 30, 1, 360),
             _int(d, "seed", 0, 0, 2**32 - 1), _int(d, "workers", 2, 2, 256), float(holdout),
-            tuple(float(v) for v in depths), _int(d, "tune_trials", 0, 0, 1000), text,
+            tuple(float(v) for v in depths), _int(d, "tune_trials", 0, 0, 1000),
+            str(d.get("design", "space-filling")), text,
         )  # fmt: skip
         req.config()  # the rehearsal's own checks (θ step, hold-out split, depths)
         return req
@@ -154,7 +159,7 @@ class CampaignRequest:
                 "runs": self.runs, "validation_runs": self.validation_runs,
                 "theta_step": self.theta_step, "seed": self.seed, "workers": self.workers,
                 "holdout": self.holdout, "depths_mm": list(self.depths_mm),
-                "tune_trials": self.tune_trials}  # fmt: skip
+                "tune_trials": self.tune_trials, "design": self.design}  # fmt: skip
 
     @property
     def campaign_id(self) -> str:
@@ -171,7 +176,7 @@ class CampaignRequest:
             plant_seed=0, objects=self.objects, calibration_experiments=self.experiments,
             runs=self.runs, validation_runs=self.validation_runs, theta_step=self.theta_step,
             holdout=self.holdout, depths_mm=self.depths_mm, tune_trials=self.tune_trials,
-            seed=self.seed, workers=self.workers,
+            seed=self.seed, workers=self.workers, design=self.design,
         )  # fmt: skip
 
 

@@ -1,9 +1,10 @@
 """What the console shows of the floor's raw readings, in words (pure functions).
 
 The assets publish some values as JSON text (``KpisJson``, ``FusedPosesJson``,
-``DockingErrorsJson``, ``TransferHistoryJson``) and angles in radians; a session that fails
-leaves an exception's class name; the TMS's history mixes wall-clock timestamps with
-modelled floor times. These functions turn each into what an operator reads:
+``DockingErrorsJson``, ``TransferHistoryJson``, ``PredictionsJson``) and angles in
+radians; a session that fails leaves an exception's class name; the TMS's history mixes
+wall-clock timestamps with modelled floor times. These functions turn each into what an
+operator reads:
 
 - `value_text`: one live value as a readable field ('TM_1 at (1.20, 0.80) m', 'θ 90.0°');
 - `display_values`: an asset's values as (name, text) pairs, the KPIs left to their panel;
@@ -96,6 +97,26 @@ def _history(doc: list[Any]) -> str:
     return f"{len(doc)} transfer{'s' if len(doc) != 1 else ''}, the last {outcome}{where}"
 
 
+def _state_words(p: Mapping[str, Any]) -> str:
+    share, low, high = p.get("share"), p.get("ci_low"), p.get("ci_high")
+    odds = (f"{100 * share:.0f} % [{100 * low:.0f}, {100 * high:.0f}] of the twin's runs"
+            if all(isinstance(v, int | float) for v in (share, low, high)) else "?")  # fmt: skip
+    return (f"{p.get('face', '?')} face up, {p.get('conveyor', '?')} conveyor, "
+            f"θ {p.get('theta_deg', '?')}°: {odds}")
+
+
+def _predictions(doc: Mapping[str, Any]) -> str:
+    """An object's calibrated predictions (``PredictionsJson``), best and worst in words."""
+    best, worst = doc.get("best"), doc.get("worst")
+    if not isinstance(best, Mapping):
+        return "no campaign has predicted it yet"
+    legs = "both legs" if doc.get("leg") == "operation" else "there and back"
+    text = f"best {_state_words(best)} ({legs})"
+    if isinstance(worst, Mapping) and worst != best:
+        text += f"; worst {_state_words(worst)}"
+    return text + f"; campaign {doc.get('campaign', '?')}"
+
+
 def _json_text(name: str, text: str) -> str:
     try:
         doc = json.loads(text) if text else None
@@ -107,6 +128,8 @@ def _json_text(name: str, text: str) -> str:
         return _docking(doc)
     if name == "TransferHistoryJson" and isinstance(doc, list):
         return _history(doc)
+    if name == "PredictionsJson" and isinstance(doc, Mapping):
+        return _predictions(doc)
     if isinstance(doc, Mapping):
         return ", ".join(f"{k} {value_text(str(k), v)}" for k, v in list(doc.items())[:6])
     if isinstance(doc, list):

@@ -55,3 +55,18 @@ def test_the_auctions_expected_time_says_it_is_modelled_floor_time() -> None:
     assert step_text(text) == "assigned to TM_1 for TU_C (expected 225 s of modelled floor time)"
     ops = [{"operation": "op1", "object": "o5", "history": [[1.0e9, text]]}]
     assert order_rows(ops, [])[0]["steps"][0]["text"].endswith("of modelled floor time)")
+
+
+def test_an_objects_calibrated_predictions_read_as_its_best_and_worst_state() -> None:
+    best = {"face": "front", "conveyor": "left", "theta_deg": 30, "share": 0.875,
+            "ci_low": 0.473, "ci_high": 0.997}  # fmt: skip
+    worst = {"face": "back", "conveyor": "both", "theta_deg": 90, "share": 0.0,
+             "ci_low": 0.0, "ci_high": 0.369}  # fmt: skip
+    doc = {"campaign": "8f5d3906a510", "leg": "operation", "best": best, "worst": worst,
+           "states": [best, worst]}  # fmt: skip
+    assert value_text("PredictionsJson", json.dumps(doc)) == (
+        "best front face up, left conveyor, θ 30°: 88 % [47, 100] of the twin's runs "
+        "(both legs); worst back face up, both conveyor, θ 90°: 0 % [0, 37] of the twin's "
+        "runs; campaign 8f5d3906a510"
+    )
+    assert value_text("PredictionsJson", "{}") == "no campaign has predicted it yet"

@@ -50,6 +50,10 @@ PREDICT_WORKERS = 2
 
 log = logging.getLogger("transfertwin.cps")
 
+#: Statuses of a physical unit that offers no experiment cycle (a unit behind a HAL
+#: gateway without ``RunTransfer``): a campaign leaves it out.
+_NO_CYCLE = frozenset({"BadMethodInvalid", "BadNodeIdUnknown", "BadNotImplemented"})
+
 #: Seconds `StopStudy` waits for the batch in flight before it answers.
 STOP_WAIT_S = 120.0
 
@@ -266,8 +270,8 @@ class ExperimentRole(Role):
                 self._cycle(unit, obj, face, conveyor, theta), loop)  # fmt: skip
             try:
                 return future.result(timeout=600)
-            except OperationRefused as exc:
-                if "has no station" in exc.reason:  # never will: the campaign goes on without
+            except OperationRefused as exc:  # a unit that never will: it goes on without
+                if "has no station" in exc.reason or exc.status in _NO_CYCLE:
                     raise UnitUnavailableError(unit, exc.reason) from None
                 raise
 

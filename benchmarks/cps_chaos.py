@@ -39,12 +39,9 @@ import time
 from collections import Counter
 from pathlib import Path
 
+from _floor_client import tt
+
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def tt(*args: str, timeout: float = 300) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "transfertwin", *args], capture_output=True,
-                          text=True, timeout=timeout)  # fmt: skip
 
 
 class Floor:
@@ -208,7 +205,7 @@ async def chaos(args: argparse.Namespace) -> int:
                     held[o] += 1
         except Exception:
             pass
-    tt("cps", "down", "--workdir", str(wd))
+    tt("cps", "down", "--workdir", str(wd), timeout=300)
     return report(ledger, submitted, refused, kills, detect, rejoin, held, floor)
 
 

@@ -48,11 +48,9 @@ the ground-truth run's interval.
 from __future__ import annotations
 
 import argparse
-import asyncio
 import dataclasses
 import json
 import random
-import subprocess
 import sys
 import tempfile
 import time
@@ -60,13 +58,10 @@ from pathlib import Path
 
 import numpy as np
 
+from _floor_client import Tms, tt
+
 ROOT = Path(__file__).resolve().parents[1]
 BOOTSTRAP = 4000
-
-
-def tt(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "transfertwin", *args], capture_output=True,
-                          text=True, timeout=timeout)  # fmt: skip
 
 
 def make_study(floor, path: Path, runs: int, seed: int) -> None:
@@ -103,18 +98,6 @@ def order_sequence(floor, n: int, seed: int) -> list[tuple[str, str]]:
         history[obj].append(dest)
         out.append((obj, dest))
     return out
-
-
-class Tms:
-    def __init__(self, wd: Path) -> None:
-        from transfertwin.cli._cps_client import load_info
-
-        self.info, self.creds = load_info(wd)
-
-    def __call__(self, op: str, *args):
-        from transfertwin.cli._cps_client import call_asset
-
-        return asyncio.run(call_asset(self.info, self.creds, "TMS", op, *args, timeout_s=20))
 
 
 def unload_idle(tms, units: set[str], pending: list, running: dict) -> int:

@@ -27,7 +27,6 @@ is what keeping the workers warm buys.
 from __future__ import annotations
 
 import argparse
-import asyncio
 import dataclasses
 import json
 import sys
@@ -37,27 +36,10 @@ from pathlib import Path
 
 import numpy as np
 
+from _floor_client import Tms, tt
+
 ROOT = Path(__file__).resolve().parents[1]
 TARGET_S = {"published": 2.0, "again": 2.0, "new": 10.0}
-
-
-def tt(*args: str, timeout: float = 900):
-    import subprocess
-
-    return subprocess.run([sys.executable, "-m", "transfertwin", *args], capture_output=True,
-                          text=True, timeout=timeout)  # fmt: skip
-
-
-class Tms:
-    def __init__(self, wd: Path) -> None:
-        from transfertwin.cli._cps_client import load_info
-
-        self.info, self.creds = load_info(wd)
-
-    def __call__(self, op: str, *args):
-        from transfertwin.cli._cps_client import call_asset
-
-        return asyncio.run(call_asset(self.info, self.creds, "TMS", op, *args, timeout_s=20))
 
 
 def make_study(objects: list[str], path: Path, runs: int, seed: int) -> None:
@@ -208,6 +190,7 @@ def main() -> int:
         *(["--study", str(study)] if published else []),
         "--start-timeout",
         "600",
+        timeout=900,
     )
     if up.returncode != 0:
         print(up.stderr, file=sys.stderr)
@@ -215,7 +198,7 @@ def main() -> int:
     try:
         run = drive(fw, floor, set(published), len(floor.modules), args.timeout)
     finally:
-        tt("cps", "down", "--workdir", str(fw))
+        tt("cps", "down", "--workdir", str(fw), timeout=900)
     lat = run["latency_s"]
     print(
         f"\nplanning latency on {floor.name} ({len(objects)} objects, "

@@ -32,8 +32,13 @@ def test_join_spreads_and_leave_is_noticed(pki):
     cfg = pki.config()
     events: list[tuple[str, str, str]] = []
 
-    def connector(url):
-        return connect(url, url.rsplit("/", 1)[-1], **pki.client_kw())
+    def connector(me):
+        # an asset registers itself with its own application certificate (a registration
+        # naming another URI than the certificate's is refused)
+        def open_session(url):
+            return connect(url, url.rsplit("/", 1)[-1], **pki.client_kw(), certificate=me)
+
+        return open_session
 
     async def scenario():
         servers = {}
@@ -48,7 +53,7 @@ def test_join_spreads_and_leave_is_noticed(pki):
 
             agents[aid] = Discovery(servers[aid], period_s=60.0, on_change=note)
             seeds = [] if aid == "TU_A" else [servers["TU_A"].endpoint]
-            await agents[aid].join(seeds, connector)
+            await agents[aid].join(seeds, connector(aid))
 
         everyone = set(IDS)
 

@@ -167,26 +167,42 @@ async def _reach_as_peer(url, aid, cert_dir, name, pki) -> str:
 
 def test_a_rogue_registering_as_the_tms_is_not_taken_or_passed_on(pki, tmp_path):
     """A self-signed rogue registers itself as the TMS at TU_A over a channel without
-    security (asyncua accepts that). TU_A's discovery checks the candidate, refuses it,
-    and its FindServers never names it; the real peer it knew stays."""
+    security: refused with a status (BadSecurityModeInsufficient), nothing registered.
+    A floor asset's certificate (TU_B's) may register only its own URI, but it points it
+    at the rogue's address, where a self-signed server says it is TU_B: TU_A's discovery
+    checks the candidate, refuses it, and its FindServers never names it."""
     rogue_dir = tmp_path / "rogue"
-    cert, key = _run(ensure_certificate(rogue_dir, "TMS"))
+    cert, key = _run(ensure_certificate(rogue_dir, "TU_B"))
+    peer_dir = tmp_path / "tu_b"
+    install_certificate(peer_dir, "TU_B", pki.ca.issue(new_request(peer_dir, "TU_B")))
     users = _Recorder()
 
     async def scenario() -> None:
         rep = build_representation(_DESCS["TU_A"])
-        rogue = await _bare_server(cert, key, "urn:transfertwin:TMS", users)
-        cfg = pki.config(cert_dir=tmp_path / "tu_a")
+        rogue = await _bare_server(cert, key, "urn:transfertwin:TU_B", users)
+        cfg = pki.config(cert_dir=tmp_path / "tu_a", trust_dir=pki.trust_dir)
         try:
             async with AssetServer("TU_A", rep.submodels, cfg) as server:
                 agent = Discovery(server, period_s=60.0)
-                await _register_insecurely(server.endpoint, "urn:transfertwin:TMS",
-                                           _url(rogue, "TMS"))  # fmt: skip
-                assert ("urn:transfertwin:TMS", _url(rogue, "TMS")) in server.registered_peers()
+                with pytest.raises(ua.UaStatusCodeError, match="BadSecurityModeInsufficient"):
+                    await _register_insecurely(server.endpoint, "urn:transfertwin:TMS",
+                                               _url(rogue, "TMS"))  # fmt: skip
+                assert server.registered_peers() == []
+                async with connect(server.endpoint, "TU_A", credentials=pki.credentials,
+                                   cert_dir=peer_dir, certificate="TU_B",
+                                   trust_dir=pki.trust_dir) as session:  # fmt: skip
+                    registered = ua.RegisteredServer(
+                        ServerUri="urn:transfertwin:TU_B", ProductUri="urn:transfertwin",
+                        ServerNames=[ua.LocalizedText("TU_B")],
+                        ServerType=ua.ApplicationType.Server,
+                        DiscoveryUrls=[_url(rogue, "TU_B")], IsOnline=True)  # fmt: skip
+                    await session.client.uaclient.register_server2(ua.RegisterServer2Parameters(
+                        Server=registered, DiscoveryConfiguration=[]))  # fmt: skip
+                assert ("urn:transfertwin:TU_B", _url(rogue, "TU_B")) in server.registered_peers()
                 for _ in range(3):
                     await agent.round()
-                assert "urn:transfertwin:TMS" not in agent.peers
-                assert "urn:transfertwin:TMS" not in agent.candidates
+                assert "urn:transfertwin:TU_B" not in agent.peers
+                assert "urn:transfertwin:TU_B" not in agent.candidates
                 assert server.registered_peers() == []  # not passed on
         finally:
             await rogue.stop()
@@ -196,7 +212,7 @@ def test_a_rogue_registering_as_the_tms_is_not_taken_or_passed_on(pki, tmp_path)
 
 
 async def _register_insecurely(url: str, uri: str, rogue_url: str) -> None:
-    """RegisterServer2 over SecurityPolicy None, as any process on the network could."""
+    """RegisterServer2 over SecurityPolicy None, as any process on the network could try."""
     from asyncua import Client
 
     registered = ua.RegisteredServer(ServerUri=uri, ProductUri="urn:transfertwin",

@@ -9,21 +9,24 @@ from collections.abc import Iterable, Mapping
 from types import MappingProxyType
 
 from transfertwin.cps.aas import AssetDescriptor
+from transfertwin.cps.opcua import ASSET_ROLE
 
 __all__ = ["PEER_ROLES", "peer_roles"]
 
 #: The role of a peer asset's identity by its class. Every class calls operations of its
 #: peers (each heartbeats the knowledge graph; the TMS orders the modules, a module the
-#: units, the Experiment Manager the TMS), so each is an operator; a class left out here
-#: gets no session as a peer at all.
+#: units, the Experiment Manager the TMS), so each is an asset (`ASSET_ROLE`): an
+#: operator's rights but the operator-only methods (`OPERATOR_METHODS`: Shutdown), so no
+#: asset stops another; only people with the operator role do (`cps down`). A class left
+#: out here gets no session as a peer at all.
 PEER_ROLES: Mapping[str, str] = MappingProxyType({
-    "knowledge_graph": "operator",
-    "transport_module_system": "operator",
-    "experiment_manager": "operator",
-    "props": "operator",
-    "transfer_unit": "operator",
-    "transport_module": "operator",
-    "object": "operator",
+    "knowledge_graph": ASSET_ROLE,
+    "transport_module_system": ASSET_ROLE,
+    "experiment_manager": ASSET_ROLE,
+    "props": ASSET_ROLE,
+    "transfer_unit": ASSET_ROLE,
+    "transport_module": ASSET_ROLE,
+    "object": ASSET_ROLE,
 })  # fmt: skip
 
 

@@ -13,10 +13,13 @@ from transfertwin.cps.opcua._ca import (
     new_request,
     request_name,
 )
+from transfertwin.cps.opcua._caller import Caller, current_caller
 from transfertwin.cps.opcua._client import AssetClient, UntrustedServer, connect, trust_list
 from transfertwin.cps.opcua._discovery import Discovery, Peer
 from transfertwin.cps.opcua._remote_hal import OpcUaUnitHAL
 from transfertwin.cps.opcua._security import (
+    ASSET_ROLE,
+    OPERATOR_METHODS,
     ROLES,
     Credentials,
     RoleRuleset,
@@ -46,11 +49,14 @@ from transfertwin.cps.opcua._server import (
 )
 
 __all__ = [
+    "ASSET_ROLE",
     "BACKDATE",
     "NAMESPACE",
+    "OPERATOR_METHODS",
     "ROLES",
     "AssetClient",
     "AssetServer",
+    "Caller",
     "Credentials",
     "Discovery",
     "FloorCA",
@@ -70,6 +76,7 @@ __all__ = [
     "certificate_uris",
     "check_valid_now",
     "connect",
+    "current_caller",
     "ensure_ca",
     "ensure_certificate",
     "free_port",

@@ -3,7 +3,9 @@
 Secure by default: Basic256Sha256 SignAndEncrypt with a self-signed application certificate
 created on first start, username/password users with roles, no anonymous access. A *viewer*
 may read, browse, subscribe and call the knowledge graph's read-only Query; an *operator*
-may also write and call methods (order).
+may also write and call methods (order); a peer *asset* (its certificate as its identity)
+may write and call methods too, except the `OPERATOR_METHODS` (Shutdown): peers cannot
+stop each other, only the people operating the floor can.
 NoSecurity is only used when a caller passes ``insecure=True`` explicitly.
 
 Trust list: a server accepts a session only from a client whose application certificate is
@@ -26,7 +28,7 @@ import os
 import secrets
 import socket
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -47,8 +49,11 @@ from transfertwin._atomic import file_stamp, write_atomic
 from transfertwin._errors import InputError
 
 __all__ = [
+    "ASSET_ROLE",
+    "OPERATOR_METHODS",
     "ROLES",
     "Credentials",
+    "PeerUser",
     "RoleRuleset",
     "RoleUserManager",
     "TrustList",
@@ -71,6 +76,10 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 ROLES = ("viewer", "operator")
+
+#: The role of a peer asset's certificate (an X.509 identity; by its class:
+#: `transfertwin.cps.node.PEER_ROLES`): an operator's rights but the `OPERATOR_METHODS`.
+ASSET_ROLE = "asset"
 
 _READ_TYPES = {
     ua.ObjectIds.CreateSessionRequest_Encoding_DefaultBinary,
@@ -105,23 +114,41 @@ _WRITE_TYPES = {
 #: Methods a viewer may call too: they only read (the knowledge graph's SELECT-only Query).
 VIEWER_METHODS = frozenset({"ControlInterface.Query"})
 
+#: Methods only people with the operator role may call, never a peer asset's identity
+#: (`ASSET_ROLE`): stopping an asset's process (`transfertwin.cps.node.SHUTDOWN`).
+OPERATOR_METHODS = frozenset({"Lifecycle.Shutdown"})
 
-def _calls_only_viewer_methods(body: object) -> bool:
-    """Whether a CallRequest's body (a binary buffer, read from a copy) calls nothing but
-    `VIEWER_METHODS`."""
+
+def _called_methods(body: object) -> list[str] | None:
+    """``<submodel>.<operation>`` of every method a CallRequest's body (a binary buffer,
+    read from a copy) calls; None when it is not a call body asyncua can read, or names a
+    method by other than a string node id (neither is granted)."""
     try:
         params = struct_from_binary(ua.CallParameters, body.copy())  # type: ignore[attr-defined]
-    except Exception:  # not a call body asyncua can read: not granted
-        return False
+    except Exception:
+        return None
     ids = [m.MethodId.Identifier for m in params.MethodsToCall or ()]
-    return bool(ids) and all(
-        isinstance(i, str) and i.split(".", 1)[-1] in VIEWER_METHODS for i in ids
-    )
+    if not all(isinstance(i, str) for i in ids):
+        return None
+    return [i.split(".", 1)[-1] for i in ids]
+
+
+def _calls_only_viewer_methods(body: object) -> bool:
+    """Whether a CallRequest's body calls `VIEWER_METHODS` and nothing else."""
+    names = _called_methods(body)
+    return bool(names) and all(n in VIEWER_METHODS for n in names)
+
+
+def _calls_no_operator_method(body: object) -> bool:
+    """Whether a CallRequest's body calls none of the `OPERATOR_METHODS`."""
+    names = _called_methods(body)
+    return names is not None and not any(n in OPERATOR_METHODS for n in names)
 
 
 class RoleRuleset(PermissionRuleset):
-    """Viewers read (and call `VIEWER_METHODS`); operators also write and call; nobody
-    changes the address space."""
+    """Viewers read (and call `VIEWER_METHODS`); operators also write and call; peer
+    assets (`ASSET_ROLE`) write and call all but the `OPERATOR_METHODS`; nobody changes
+    the address space."""
 
     def __init__(self) -> None:
         self._read = {ua.NodeId(i) for i in _READ_TYPES}
@@ -146,7 +173,17 @@ class RoleRuleset(PermissionRuleset):
             return True
         if action_type_id == self._call and user.name == "viewer":
             return _calls_only_viewer_methods(body)
-        return action_type_id in self._write and user.name == "operator"
+        if action_type_id == self._call and user.name == ASSET_ROLE:
+            return _calls_no_operator_method(body)
+        return action_type_id in self._write and user.name in ("operator", ASSET_ROLE)
+
+
+@dataclass
+class PeerUser(User):
+    """The user of a peer asset's session: its role, and the asset its certificate names
+    (`transfertwin.cps.opcua.current_caller` tells a handler)."""
+
+    asset_id: str = field(default="")
 
 
 @dataclass(frozen=True)
@@ -293,7 +330,7 @@ class RoleUserManager:
         if role is None:
             log.warning("refused X.509 identity %s: not an asset of this floor", uris)
             return None
-        return User(role=UserRole.User, name=role)
+        return PeerUser(role=UserRole.User, name=role, asset_id=ids[0])
 
 
 def read_certificate(path: Path) -> x509.Certificate:

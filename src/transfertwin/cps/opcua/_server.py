@@ -13,9 +13,10 @@ Deviations from the companion specification: no AAS object/variable *types* are
 instantiated (plain folders, objects and variables), and references are not modelled.
 
 Async context manager; secure by default (see `_security`: trust list of client
-certificates, viewer/operator roles). Variables listed as writable accept client writes
-(external state synchronisation) from operators; all others are updated by the asset itself
-through `set`.
+certificates, viewer/operator roles, peer assets' identities; `_caller`: who calls a
+handler, registrations only over SignAndEncrypt from the asset registered). Variables listed
+as writable accept client writes (external state synchronisation) from operators and peer
+assets; all others are updated by the asset itself through `set`.
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ from cryptography import x509
 
 from transfertwin.cps.opcua._aspace import share_standard_address_space
 from transfertwin.cps.opcua._ca import CA_CERT, FloorCA, install_certificate, new_request
+from transfertwin.cps.opcua._caller import guard
 from transfertwin.cps.opcua._security import (
     Credentials,
     RoleRuleset,
@@ -235,6 +237,7 @@ class AssetServer:
             server.set_identity_tokens([*tokens, ua.X509IdentityToken] if cfg.peer_roles
                                        else tokens)  # fmt: skip
             server.set_certificate_validator(trust)
+            guard(server.iserver, trust)  # registrations: secure, trusted, its own URI
         server.subscribe_server_callback(CallbackType.PostWrite, self._written)
         self._ns = await server.register_namespace(NAMESPACE)
         await self._build(server)

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 from transfertwin._errors import InputError
 from transfertwin.cps.aas import AssetDescriptor, AssetKind, Capability, PhysicalType
 from transfertwin.cps.node import NO_LEASE, Role, directory_reply
-from transfertwin.cps.opcua import OperationRefused
+from transfertwin.cps.opcua import OperationRefused, current_caller
 
 if TYPE_CHECKING:
     from transfertwin.cps.node import AssetNode
@@ -35,6 +35,10 @@ class GraphRole(Role):
     graph is complete again one heartbeat period after it comes back. Its directory (the
     online assets' endpoints) has a version that changes with every join, leave and move;
     a heartbeat gets the directory only when the sender holds another version.
+
+    On a secure floor an asset speaks only for itself (`_speaks_for`): a heartbeat comes
+    from the asset it names, authenticated by its certificate (an X.509 identity naming
+    ``urn:transfertwin:<id>``), and a peer announces no leave but its own.
     """
 
     def __init__(self, node: AssetNode) -> None:
@@ -92,9 +96,25 @@ class GraphRole(Role):
     async def _query(self, sparql: str) -> str:
         return json.dumps(self.kg.query(sparql))
 
+    def _speaks_for(self, aid: str, *, people: bool) -> None:
+        """OperationRefused (BadUserAccessDenied) unless the caller may speak for `aid`: on
+        a secure server, a peer asset only for itself, a person (operator) only if
+        `people`; on an insecure one (explicit opt-in), anyone."""
+        caller = current_caller()
+        if caller is None or not caller.secure:
+            return
+        if caller.asset_id == aid or (people and caller.asset_id is None):
+            return
+        who = caller.asset_id or f"a {caller.role or 'session'} without an asset identity"
+        log.warning("KG: refused %s speaking for %s", who, aid)
+        raise OperationRefused(f"{who} may not speak for {aid}: an asset heartbeats and "
+                               "leaves in its own name, with its own certificate",
+                               status="BadUserAccessDenied")  # fmt: skip
+
     async def _heartbeat(self, payload: str) -> str:
         d = json.loads(payload)
         aid = d["id"]
+        self._speaks_for(aid, people=False)
         held = d.pop("directory", None)
         # a lease is held by one start of the asset's process (its random instance id: pids
         # repeat across hosts, and a process of the asset restarted elsewhere is a new one)
@@ -151,6 +171,7 @@ class GraphRole(Role):
                 log.debug("KG: %s: %s", aid, exc)
 
     async def _leave(self, aid: str) -> bool:
+        self._speaks_for(aid, people=True)
         if aid in self.leases:
             del self.leases[aid]
             self.kg.leave(aid)
@@ -222,5 +243,3 @@ def _state_word(state: object) -> str | None:
         return None
     word = "".join(c if c.isalpha() else "_" for c in state.lower())
     return word or None
-
-

@@ -1,6 +1,7 @@
 """Assets (Table 3.1) and their Asset Administration Shells (basyx)."""
 
 from transfertwin.cps.aas._assets import (
+    GENERIC_CLASSES,
     TYPE_PROPERTIES,
     AssetDescriptor,
     AssetKind,
@@ -51,6 +52,7 @@ from transfertwin.cps.aas._spec import (
     CapabilitySpec,
     OperationSpec,
     PropertySpec,
+    capability_specs,
 )
 
 __all__ = [
@@ -60,6 +62,7 @@ __all__ = [
     "DEMO_PLACEMENT",
     "DEMO_STATIONS",
     "EXPORT_SUFFIXES",
+    "GENERIC_CLASSES",
     "HISTORY_LIMIT",
     "ID_BASE",
     "LOGICAL_CLASSES",
@@ -85,6 +88,7 @@ __all__ = [
     "capability",
     "capability_id_short",
     "capability_relations",
+    "capability_specs",
     "demo_descriptors",
     "element_reference",
     "export_aas",

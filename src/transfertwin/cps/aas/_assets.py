@@ -15,6 +15,7 @@ from enum import Enum
 from transfertwin._errors import InputError
 
 __all__ = [
+    "GENERIC_CLASSES",
     "TYPE_PROPERTIES",
     "AssetDescriptor",
     "AssetKind",
@@ -83,6 +84,23 @@ class Capability(Enum):
     KNOWLEDGE = "knowledge"  # answer queries over the knowledge graph
 
 
+#: The generic asset classes the code knows, by the capabilities an asset must offer to
+#: run as one (the first that fits wins). An asset of a class the code has never seen
+#: (a second make of transport module, a buffer station) runs as the generic class its
+#: capabilities name (`AssetDescriptor.role_class`); it must offer some (an object is of
+#: the class ``object``).
+GENERIC_CLASSES: tuple[tuple[str, frozenset[Capability]], ...] = (
+    ("knowledge_graph", frozenset({Capability.KNOWLEDGE})),
+    ("transport_module_system", frozenset({Capability.ALLOCATE})),
+    ("experiment_manager", frozenset({Capability.EXPERIMENT})),
+    ("props", frozenset({Capability.FUSE_POSES})),
+    ("transport_module", frozenset({Capability.TRANSPORT, Capability.TRANSFER})),
+    ("transfer_unit", frozenset({Capability.TRANSFER})),
+    ("object", frozenset()),
+)
+_GENERIC_NAMES = frozenset(name for name, _ in GENERIC_CLASSES)
+
+
 class Layer(Enum):
     """The layers of an asset (Fig. 3.2); only HAL differs between a physical asset and
     its virtual model."""
@@ -106,6 +124,10 @@ class AssetDescriptor:
         capabilities: What it offers.
         station: Station it belongs to (transfer units), if any.
         models: For a virtual model: the id of the physical asset it mirrors.
+        constraints: What binds its capabilities where it differs from its generic class's
+            (`CAPABILITY_SPECS`), as (capability, constraint idShort, value), e.g.
+            ``(Capability.TRANSPORT, "ObjectMassMax", 3.0)`` for a module that carries
+            objects of at most 3 kg.
     """
 
     asset_id: str
@@ -116,6 +138,7 @@ class AssetDescriptor:
     station: str | None = None
     models: str | None = None
     extra: dict[str, str] = field(default_factory=dict)
+    constraints: tuple[tuple[Capability, str, float | str], ...] = ()
 
     def __post_init__(self) -> None:
         if not self.asset_id or not self.asset_id.replace("_", "").isalnum():
@@ -126,6 +149,28 @@ class AssetDescriptor:
             raise InputError(f"{self.asset_id}: physical assets and virtual models need a type")
         if self.kind is AssetKind.VIRTUAL_MODEL and not self.models:
             raise InputError(f"{self.asset_id}: a virtual model must name the asset it models")
+
+    @property
+    def role_class(self) -> str:
+        """The generic class it runs as: its own class if the code knows it, else the first
+        of `GENERIC_CLASSES` whose capabilities it offers (a transfer unit: at a station).
+
+        Raises:
+            InputError: A class the code does not know whose capabilities name none.
+        """
+        if self.asset_class in _GENERIC_NAMES:
+            return self.asset_class
+        offered = set(self.capabilities)
+        for name, needs in GENERIC_CLASSES:
+            if name == "transfer_unit" and self.station is None:
+                continue
+            if needs and needs <= offered:
+                return name
+        raise InputError(
+            f"{self.asset_id}: asset class {self.asset_class!r} is unknown and its capabilities "
+            f"({', '.join(c.value for c in self.capabilities) or 'none'}) name no generic "
+            f"class ({', '.join(n for n, _ in GENERIC_CLASSES)}); a transfer unit needs a station"
+        )
 
     @property
     def properties(self) -> TypeProperties | None:

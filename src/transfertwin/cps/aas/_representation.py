@@ -35,11 +35,11 @@ from transfertwin.cps.aas._elements import (
     text_property,
 )
 from transfertwin.cps.aas._spec import (
-    CAPABILITY_SPECS,
     CONTROL_INTERFACE,
     LOGICAL_CLASSES,
     OPERATIONAL_DATA,
     PHYSICAL_CLASSES,
+    capability_specs,
 )
 
 __all__ = [
@@ -133,12 +133,12 @@ def build_representation(
     """
     _check(desc)
     sync = desc.properties.sync if desc.properties else None
-    data = _submodel(desc.asset_id, "OperationalData", _operational_data(desc.asset_class, sync))
+    data = _submodel(desc.asset_id, "OperationalData", _operational_data(desc.role_class, sync))
     control = None
     if desc.kind is AssetKind.LOGICAL or (desc.properties and desc.properties.control_interface):
         ops = [
             operation(spec)
-            for spec in CONTROL_INTERFACE[desc.asset_class]
+            for spec in CONTROL_INTERFACE[desc.role_class]
             if not spec.external_sync or sync in ("external", "mixed")
         ]
         control = _submodel(desc.asset_id, "ControlInterface", ops)
@@ -167,14 +167,15 @@ def _capabilities(
     desc: AssetDescriptor, targets: dict[tuple[str, str], type[model.SubmodelElement]]
 ) -> list[model.SubmodelElement]:
     """Per capability its Capability element and, where its class says how it is realised
-    (`CAPABILITY_SPECS`), its ``<name>Relations`` collection."""
+    (`CAPABILITY_SPECS`, with the asset's own constraint values: `capability_specs`), its
+    ``<name>Relations`` collection."""
     elements: list[model.SubmodelElement] = []
-    specs = CAPABILITY_SPECS.get(desc.asset_class, {})
+    specs = capability_specs(desc)
     for cap in desc.capabilities:
         name = capability_id_short(cap)
         elements.append(capability(name))
-        if cap.value in specs:
-            elements.append(capability_relations(desc.asset_id, name, specs[cap.value], targets))
+        if cap in specs:
+            elements.append(capability_relations(desc.asset_id, name, specs[cap], targets))
     return elements
 
 
@@ -183,10 +184,15 @@ def _check(desc: AssetDescriptor) -> None:
         raise InputError(f"{desc.asset_id}: type A assets have no virtual representation")
     logical = desc.kind is AssetKind.LOGICAL
     classes = LOGICAL_CLASSES if logical else PHYSICAL_CLASSES
-    if desc.asset_class not in classes:
+    try:  # a class the code does not know: the generic one its capabilities name
+        role = desc.role_class
+    except InputError:
+        role = None
+    if role not in classes:
         raise InputError(
             f"{desc.asset_id}: asset class {desc.asset_class!r} does not fit kind "
-            f"{desc.kind.value} (one of {', '.join(sorted(classes))})"
+            f"{desc.kind.value} (one of {', '.join(sorted(classes))}; a class of its own "
+            "runs as the one its capabilities name)"
         )
     try:
         model.Referable.validate_id_short(desc.asset_id)

@@ -12,8 +12,11 @@ UCUM-like codes attached as a ``Unit`` qualifier.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from types import MappingProxyType
+
+from transfertwin._errors import InputError
+from transfertwin.cps.aas._assets import AssetDescriptor, Capability
 
 __all__ = [
     "CAPABILITY_SPECS",
@@ -25,6 +28,7 @@ __all__ = [
     "CapabilitySpec",
     "OperationSpec",
     "PropertySpec",
+    "capability_specs",
 ]
 
 
@@ -632,3 +636,40 @@ CAPABILITY_SPECS: Mapping[str, Mapping[str, CapabilitySpec]] = MappingProxyType(
         "object": MappingProxyType({}),
     }
 )
+
+
+def capability_specs(desc: AssetDescriptor) -> dict[Capability, CapabilitySpec]:
+    """How the asset realises each capability it offers: its generic class's row of
+    `CAPABILITY_SPECS` (`AssetDescriptor.role_class`) with the asset's own constraint values
+    (`AssetDescriptor.constraints`) in place of the class's. A capability its class does not
+    say how to realise is left out.
+
+    Raises:
+        InputError: A constraint the asset sets that its class's capability does not have
+            (only known constraints: the ontology defines each), or a value of another type.
+    """
+    rows = CAPABILITY_SPECS.get(desc.role_class, {})
+    own: dict[Capability, dict[str, float | str]] = {}
+    for cap, name, value in desc.constraints:
+        spec = rows.get(cap.value) if cap in desc.capabilities else None
+        known = {c.id_short: c for c in spec.constraints} if spec else {}
+        if name not in known:
+            raise InputError(
+                f"{desc.asset_id}: capability {cap.value} has no constraint {name!r}; "
+                f"known: {', '.join(known) or 'none'}"
+            )
+        if isinstance(value, str) != isinstance(known[name].initial, str):
+            raise InputError(f"{desc.asset_id}: constraint {name} must be like "
+                             f"{known[name].initial!r}, got {value!r}")  # fmt: skip
+        own.setdefault(cap, {})[name] = value
+    out = {}
+    for cap in desc.capabilities:
+        spec = rows.get(cap.value)
+        if spec is None:
+            continue
+        values = own.get(cap, {})
+        bound = tuple(
+            replace(c, initial=values.get(c.id_short, c.initial)) for c in spec.constraints
+        )
+        out[cap] = replace(spec, constraints=bound)
+    return out

@@ -17,6 +17,7 @@ x_m = 2.6                                 # centre of the station's front face, 
 y_m = 6.6
 yaw_deg = 90                              # inward normal of the face (docked heading)
 mount = "left"                            # mounting side of the unit (Fig. 5.16)
+# class = "buffer_station"                # optional: a class of its own (see below)
 hal = "remote"                            # optional: this unit's HAL (virtual|plant|remote)
 gateway = "opc.tcp://192.168.10.21:4840"  # remote: its HAL gateway (OPC UA)
 
@@ -28,6 +29,11 @@ theta_deg = 0
 standby = false                           # true: prepared, started later by hand
 hal = "plant"                             # optional: virtual | plant | remote
 # gateway = "opc.tcp://192.168.10.31:4840"  # remote: its HAL gateway (OPC UA)
+class = "light_transport_module"          # optional: a make of its own; what it runs as
+capabilities = ["transport", "transfer", "sense"]  # follows from what it offers (these,
+                                          # the default: a transport module's role)
+[module.constraints]                      # optional: its own bounds of those capabilities,
+ObjectMassMax = 3.0                       # by the constraint's idShort in its AAS (kg)
 
 [[object]]                                # a built-in core id, and the unit it lies on
 id = "o5"
@@ -69,11 +75,13 @@ from typing import TYPE_CHECKING
 
 from transfertwin._errors import InputError
 from transfertwin.cps.aas import (
+    CAPABILITY_SPECS,
     DEMO_PLACEMENT,
     AssetDescriptor,
     AssetKind,
     Capability,
     PhysicalType,
+    capability_specs,
     physical_twin,
 )
 
@@ -117,6 +125,9 @@ class StationSpec:
     mount: str
     hal: str = "virtual"
     gateway: str | None = None
+    asset_class: str = "transfer_unit"
+    capabilities: tuple[Capability, ...] = _TU_CAPS
+    constraints: tuple[tuple[str, float | str], ...] = ()
 
     @property
     def unit(self) -> str:
@@ -135,6 +146,9 @@ class ModuleSpec:
     standby: bool = False
     hal: str = "virtual"
     gateway: str | None = None
+    asset_class: str = "transport_module"
+    capabilities: tuple[Capability, ...] = _TM_CAPS
+    constraints: tuple[tuple[str, float | str], ...] = ()
 
     @property
     def home(self) -> tuple[float, float, float]:
@@ -208,13 +222,15 @@ class FloorSpec:
         physical twins of the units on the emulated plant (``TU_<name>_P``, kind physical:
         the plant's own units, beside their virtual models), in that order."""
         units = tuple(
-            _virtual(s.unit, "transfer_unit", PhysicalType.D_E, _TU_CAPS, s.name)
+            _virtual(s.unit, s.asset_class, PhysicalType.D_E, s.capabilities, s.name,
+                     s.constraints)
             for s in self.stations
-        )
+        )  # fmt: skip
         modules = tuple(
-            _virtual(m.asset_id, "transport_module", PhysicalType.E, _TM_CAPS)
+            _virtual(m.asset_id, m.asset_class, PhysicalType.E, m.capabilities,
+                     constraints=m.constraints)
             for m in self.modules
-        )
+        )  # fmt: skip
         objects = tuple(_virtual(o, "object", PhysicalType.B) for o, _ in self.objects)
         logical = tuple(
             AssetDescriptor(aid, AssetKind.LOGICAL, LOGICAL_ASSETS[aid][0],
@@ -278,10 +294,24 @@ class FloorSpec:
 
 
 def _virtual(aid: str, cls: str, ptype: PhysicalType, caps: tuple[Capability, ...] = (),
-             station: str | None = None) -> AssetDescriptor:  # fmt: skip
-    return AssetDescriptor(aid, AssetKind.VIRTUAL_MODEL, cls, physical_type=ptype,
+             station: str | None = None,
+             constraints: tuple[tuple[str, float | str], ...] = ()) -> AssetDescriptor:  # fmt: skip
+    """A virtual model; each of `constraints` (idShort, value) binds every capability of the
+    asset that has that constraint (`CAPABILITY_SPECS` of its generic class)."""
+    desc = AssetDescriptor(aid, AssetKind.VIRTUAL_MODEL, cls, physical_type=ptype,
                            capabilities=caps, station=station,
                            models=f"{aid}_P")  # fmt: skip
+    if not constraints:
+        return desc
+    specs = CAPABILITY_SPECS.get(desc.role_class, {})
+    bound = []
+    for name, value in constraints:
+        caps_with = [c for c in caps if c.value in specs
+                     and any(k.id_short == name for k in specs[c.value].constraints)]  # fmt: skip
+        if not caps_with:
+            raise InputError(f"{aid}: no capability of it has the constraint {name!r}")
+        bound += [(c, name, value) for c in caps_with]
+    return replace(desc, constraints=tuple(bound))
 
 
 def _check(floor: FloorSpec) -> None:
@@ -324,6 +354,11 @@ def _check(floor: FloorSpec) -> None:
         if aid not in LOGICAL_ASSETS:
             raise InputError(f"{where}: unknown logical asset {aid!r}; "
                              f"known: {', '.join(LOGICAL_ASSETS)}")  # fmt: skip
+    try:  # a class of its own: what it runs as (`role_class`), and its bounds
+        for d in floor.descriptors():
+            capability_specs(d)
+    except InputError as exc:
+        raise InputError(f"{where}: {exc}") from None
     for need in ("KG", "TMS"):
         if need not in floor.logical:
             raise InputError(f"{where}: a floor needs the logical asset {need}")

@@ -9,6 +9,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from transfertwin._errors import InputError
+from transfertwin.cps.aas import Capability
 from transfertwin.cps.floor._floor_file import (
     LOGICAL_ASSETS,
     FloorSpec,
@@ -45,7 +46,8 @@ def parse_floor(doc: dict, name: str) -> FloorSpec:
         stations.append(StationSpec(nonempty(t, "name", where), finite(t, "x_m", where),
                                     finite(t, "y_m", where), finite(t, "yaw_deg", where),
                                     nonempty(t, "mount", where), str(t.get("hal", hal)),
-                                    None if gateway is None else str(gateway)))  # fmt: skip
+                                    None if gateway is None else str(gateway),
+                                    **_own_class(t, where, StationSpec)))  # fmt: skip
     modules = []
     for i, t in enumerate(doc.get("module", [])):
         where = f"floor {name}: module {i + 1}"
@@ -53,7 +55,8 @@ def parse_floor(doc: dict, name: str) -> FloorSpec:
         modules.append(ModuleSpec(nonempty(t, "id", where), finite(t, "x_m", where),
                                   finite(t, "y_m", where), float(t.get("theta_deg", 0.0)),
                                   bool(t.get("standby", False)), str(t.get("hal", hal)),
-                                  None if gateway is None else str(gateway)))  # fmt: skip
+                                  None if gateway is None else str(gateway),
+                                  **_own_class(t, where, ModuleSpec)))  # fmt: skip
     objects = []
     for i, t in enumerate(doc.get("object", [])):
         where = f"floor {name}: object {i + 1}"
@@ -67,6 +70,35 @@ def parse_floor(doc: dict, name: str) -> FloorSpec:
     return FloorSpec(name, size_m, tuple(stations), tuple(modules), tuple(objects),
                      tuple(logical), _operation(doc.get("operation", {}), name),
                      tuple(bind.items()))  # fmt: skip
+
+
+def _own_class(t: dict, where: str, spec: type[StationSpec | ModuleSpec]) -> dict:
+    """A station's or module's ``class``, ``capabilities`` and ``[constraints]`` (each
+    optional: the generic class's by default) as keyword arguments of `spec`."""
+    out: dict = {}
+    if "class" in t:
+        cls = t["class"]
+        if not isinstance(cls, str) or not cls.replace("_", "").isalnum():
+            raise InputError(f"{where}: class must be letters, digits or '_', got {cls!r}")
+        out["asset_class"] = cls
+    if "capabilities" in t:
+        caps = t["capabilities"]
+        known = [c.value for c in Capability]
+        if not isinstance(caps, list) or not all(c in known for c in caps):
+            raise InputError(f"{where}: capabilities must be a list of {', '.join(known)}; "
+                             f"got {caps!r}")  # fmt: skip
+        out["capabilities"] = tuple(Capability(c) for c in caps)
+    if "constraints" in t:
+        table = t["constraints"]
+        ok = isinstance(table, dict) and all(
+            isinstance(v, str) or (isinstance(v, int | float) and not isinstance(v, bool))
+            for v in table.values())  # fmt: skip
+        if not ok:
+            raise InputError(f"{where}: [constraints] must map a constraint's idShort to a "
+                             "number or a text, e.g. ObjectMassMax = 3.0")  # fmt: skip
+        out["constraints"] = tuple((k, v if isinstance(v, str) else float(v))
+                                   for k, v in table.items())  # fmt: skip
+    return out
 
 
 def _operation(table: object, name: str) -> OperationSpec:
@@ -136,6 +168,7 @@ def floor_toml(floor: FloorSpec) -> str:
             lines.append(f"hal = {json.dumps(s.hal)}")
         if s.gateway is not None:
             lines.append(f"gateway = {json.dumps(s.gateway)}")
+        lines += _own_class_lines(s, StationSpec(s.name, 0.0, 0.0, 0.0, "left"), "station")
     for m in floor.modules:
         lines += ["", "[[module]]", f"id = {json.dumps(m.asset_id)}", f"x_m = {m.x_m!r}",
                   f"y_m = {m.y_m!r}", f"theta_deg = {m.theta_deg!r}",
@@ -144,6 +177,7 @@ def floor_toml(floor: FloorSpec) -> str:
             lines.append(f"hal = {json.dumps(m.hal)}")
         if m.gateway is not None:
             lines.append(f"gateway = {json.dumps(m.gateway)}")
+        lines += _own_class_lines(m, ModuleSpec(m.asset_id, 0.0, 0.0), "module")
     for obj, at in floor.objects:
         lines += ["", "[[object]]", f"id = {json.dumps(obj)}", f"at = {json.dumps(at)}"]
     op = floor.operation
@@ -160,3 +194,20 @@ def floor_toml(floor: FloorSpec) -> str:
     if floor.bind:
         lines += ["", "[bind]", *(f"{json.dumps(a)} = {json.dumps(v)}" for a, v in floor.bind)]
     return "\n".join(lines) + "\n"
+
+
+def _own_class_lines(spec: StationSpec | ModuleSpec, default: StationSpec | ModuleSpec,
+                     table: str) -> list[str]:  # fmt: skip
+    """The ``class``, ``capabilities`` and ``[<table>.constraints]`` lines of a station or
+    module whose differ from the generic class's (`default`)."""
+    lines = []
+    if spec.asset_class != default.asset_class:
+        lines.append(f"class = {json.dumps(spec.asset_class)}")
+    if spec.capabilities != default.capabilities:
+        caps = ", ".join(json.dumps(c.value) for c in spec.capabilities)
+        lines.append(f"capabilities = [{caps}]")
+    if spec.constraints:
+        lines += ["", f"[{table}.constraints]"]
+        lines += [f"{k} = {json.dumps(v) if isinstance(v, str) else repr(v)}"
+                  for k, v in spec.constraints]  # fmt: skip
+    return lines

@@ -15,7 +15,13 @@ from importlib import resources
 from rdflib import RDF, Graph, Literal, Namespace, URIRef
 
 from transfertwin._errors import InputError
-from transfertwin.cps.aas import AssetDescriptor, AssetKind, Capability, PhysicalType
+from transfertwin.cps.aas import (
+    AssetDescriptor,
+    AssetKind,
+    Capability,
+    PhysicalType,
+    capability_specs,
+)
 
 __all__ = [
     "ASSET_CLASSES",
@@ -119,13 +125,22 @@ def describe(
         status: 'online' or 'offline'.
         state: Operational state ('idle', 'busy', ...), or None when unknown.
 
+    An asset of a class the code does not know is typed by the generic class it runs as
+    (`AssetDescriptor.role_class`: by its capabilities); ``tt:assetClass`` keeps its own.
+    Each constraint of a capability it offers (`capability_specs`: its class's, or its own
+    values) is a node ``<asset IRI>/capability/<capability>/<constraint>`` with
+    ``tt:ofCapability``, ``tt:constraint`` (the ontology's individual) and ``tt:value``:
+    what partners are chosen by (`transfertwin.cps.node.find_partners`).
+
     Returns:
-        A new graph with the asset node, its interface node and its station node.
+        A new graph with the asset node, its interface node, its station node and its
+        capabilities' constraint nodes.
 
     Raises:
-        InputError: An asset class without a role class in the ontology.
+        InputError: An asset class that is unknown and whose capabilities name no generic
+            class, or a constraint its capabilities lack.
     """
-    role = ROLE_CLASSES.get(desc.asset_class)
+    role = ROLE_CLASSES.get(desc.role_class)
     if role is None:
         raise InputError(
             f"{desc.asset_id}: unknown asset class {desc.asset_class!r}; "
@@ -137,6 +152,7 @@ def describe(
     g.add((node, RDF.type, KIND_CLASSES[desc.kind]))
     g.add((node, RDF.type, role))
     g.add((node, TT.assetId, Literal(desc.asset_id)))
+    g.add((node, TT.assetClass, Literal(desc.asset_class)))
     g.add((node, TT.status, Literal(status)))
     if state is not None:
         g.add((node, TT.operationalState, Literal(state)))
@@ -144,6 +160,14 @@ def describe(
         g.add((node, TT.assetType, TYPE_IRIS[desc.physical_type]))
     for cap in desc.capabilities:
         g.add((node, TT.hasCapability, CAPABILITY_IRIS[cap]))
+    for cap, spec in capability_specs(desc).items():
+        for c in spec.constraints:
+            bound = URIRef(f"{node}/capability/{cap.value}/{c.id_short}")
+            g.add((node, TT.hasConstraint, bound))
+            g.add((bound, RDF.type, TT.ConstraintValue))
+            g.add((bound, TT.ofCapability, CAPABILITY_IRIS[cap]))
+            g.add((bound, TT.constraint, TT[c.id_short]))
+            g.add((bound, TT.value, Literal(c.initial)))
     if desc.station is not None:
         station = station_iri(desc.station)
         g.add((node, TT.atStation, station))

@@ -307,9 +307,11 @@ class KnowledgeGraph:
         return node
 
     def _remove_own(self, node: URIRef) -> None:
-        for iface in list(self._graph.objects(node, TT.hasInterface)):
-            if str(iface).startswith(f"{node}/"):
-                self._graph.remove((iface, None, None))
+        """Forget an asset's description: its node and its own nodes under its IRI (its
+        interfaces, its capabilities' constraints)."""
+        for own in list(self._graph.objects(node, None)):
+            if isinstance(own, URIRef) and str(own).startswith(f"{node}/"):
+                self._graph.remove((own, None, None))
         self._graph.remove((node, None, None))
 
     def _row(self, node: URIRef) -> dict[str, str | None]:

@@ -15,8 +15,9 @@ Shape rules (``data/ontology/shapes.ttl``; messages carry the id):
 * KG-10 an asset's ``tt:hasCapability`` values are ``tt:Capability`` individuals.
 
 Beyond the shapes, a description must be about one asset whose IRI matches its id, be
-online, and state nothing about nodes other than the asset, its own interfaces (IRIs under
-the asset's IRI) and the ``rdf:type`` of its stations; so no asset can rewrite another.
+online, and state nothing about nodes other than the asset, its own interfaces and its
+capabilities' constraints (IRIs under the asset's IRI) and the ``rdf:type`` of its
+stations; so no asset can rewrite another.
 """
 
 from __future__ import annotations
@@ -119,10 +120,11 @@ def validate_description(description: Graph, graph: Graph) -> tuple[URIRef, str]
 
 
 def _check_subjects(description: Graph, graph: Graph, node: URIRef, name: str) -> None:
-    interfaces = set(description.objects(node, TT.hasInterface))
+    own = set(description.objects(node, TT.hasInterface))
+    own |= set(description.objects(node, TT.hasConstraint))
     stations = set(description.objects(node, TT.atStation))
     for subject in set(description.subjects()) - {node}:
-        own_interface = subject in interfaces and str(subject).startswith(f"{node}/")
+        own_interface = subject in own and str(subject).startswith(f"{node}/")
         station_type_only = subject in stations and set(description.predicate_objects(subject)) <= {
             (RDF.type, TT.Station)
         }

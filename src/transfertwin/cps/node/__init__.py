@@ -28,6 +28,13 @@ if TYPE_CHECKING:
         heartbeat_payload,
         lifecycle_submodel,
     )
+    from transfertwin.cps.node._partners import (
+        Partner,
+        capability_name,
+        find_partners,
+        partners_from_rows,
+        partners_query,
+    )
     from transfertwin.cps.node._peers import Peers
     from transfertwin.cps.node._role import Role
     from transfertwin.cps.node._state import NodeState
@@ -41,16 +48,21 @@ __all__ = [
     "AssetNode",
     "ModuleHost",
     "NodeState",
+    "Partner",
     "Peers",
     "Renewal",
     "Role",
     "RoleFactory",
+    "capability_name",
     "default_lease",
     "directory_reply",
+    "find_partners",
     "heartbeat_payload",
     "heartbeat_period",
     "instance_id",
     "lifecycle_submodel",
+    "partners_from_rows",
+    "partners_query",
 ]
 
 __getattr__, __dir__ = lazy_exports(__name__, __file__)

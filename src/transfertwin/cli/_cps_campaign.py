@@ -16,7 +16,7 @@ import time
 from pathlib import Path
 
 from transfertwin._errors import InputError
-from transfertwin.cli._cps_study import _call
+from transfertwin.cli._cps_study import Steering, _call
 
 __all__ = ["register"]
 
@@ -98,26 +98,9 @@ def cmd_start(args: argparse.Namespace) -> int:
     return _follow(args.workdir, st) if args.wait else 0
 
 
-def cmd_resume(args: argparse.Namespace) -> int:
-    """Resume the last campaign (stopped, killed, or failed on a passing fault)."""
-    st = _call(args.workdir, "StartCampaign", "", timeout_s=120.0)
-    print(status_line(st), flush=True)
-    return _follow(args.workdir, st) if args.wait else 0
-
-
-def cmd_status(args: argparse.Namespace) -> int:
-    """The last campaign's state, progress, E^P, floor time and result."""
-    st = _call(args.workdir, "CampaignStatus")
-    print(json.dumps(st, indent=1) if args.json else status_line(st))
-    return 0
-
-
-def cmd_stop(args: argparse.Namespace) -> int:
-    """Stop the running campaign after the experiments in flight."""
-    st = _call(args.workdir, "StopCampaign", timeout_s=180.0)
-    print(status_line(st) + ("; 'transfertwin cps campaign resume' continues it"
-                             if st["state"] == "stopped" else ""))  # fmt: skip
-    return 0
+#: The campaign's `resume` (an empty request: the last campaign), `status` and `stop`.
+CAMPAIGN = Steering("campaign", ("StartCampaign", ""), "CampaignStatus", "StopCampaign",
+                    lambda st: status_line(st), lambda wd, st: _follow(wd, st))  # fmt: skip
 
 
 def register(csub: argparse._SubParsersAction) -> None:
@@ -147,14 +130,4 @@ def register(csub: argparse._SubParsersAction) -> None:
                         "over face and θ per object) or random (the study's)")  # fmt: skip
     p.add_argument("--wait", action="store_true", help="follow the progress until it ends")
     p.set_defaults(func=cmd_start)
-    p = sub.add_parser("resume", help="resume the last campaign")
-    p.add_argument("--workdir", required=True)
-    p.add_argument("--wait", action="store_true", help="follow the progress until it ends")
-    p.set_defaults(func=cmd_resume)
-    p = sub.add_parser("status", help="state, progress, floor time and result of the campaign")
-    p.add_argument("--workdir", required=True)
-    p.add_argument("--json", action="store_true", help="the status as one JSON document")
-    p.set_defaults(func=cmd_status)
-    p = sub.add_parser("stop", help="stop the campaign after the experiments in flight")
-    p.add_argument("--workdir", required=True)
-    p.set_defaults(func=cmd_stop)
+    CAMPAIGN.add(sub, "state, progress, floor time and result of the campaign")

@@ -13,6 +13,8 @@ import asyncio
 import json
 import sys
 import time
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 from transfertwin._errors import InputError
@@ -117,26 +119,62 @@ def cmd_start(args: argparse.Namespace) -> int:
     return _follow(args.workdir, st) if args.wait else 0
 
 
-def cmd_resume(args: argparse.Namespace) -> int:
-    """Resume the last study (stopped, or failed on a passing fault)."""
-    st = _call(args.workdir, "StartStudy", "", "", timeout_s=120.0)
-    print(status_line(st), flush=True)
-    return _follow(args.workdir, st) if args.wait else 0
+@dataclass(frozen=True)
+class Steering:
+    """`resume`, `status` and `stop` of a job the Experiment Manager runs (a study, a
+    campaign): its operations, how a status reads, how it is followed.
+
+    Attributes:
+        noun: 'study' or 'campaign' (the command's name).
+        resume: The start operation and its arguments that resume the last job.
+        status_op: The status operation.
+        stop_op: The stop operation.
+        line: One status as a line.
+        follow: (workdir, first status) → exit code, following it until it ends.
+    """
+
+    noun: str
+    resume: tuple[str, ...]
+    status_op: str
+    stop_op: str
+    line: Callable[[dict], str]
+    follow: Callable[[str, dict], int]
+
+    def cmd_resume(self, args: argparse.Namespace) -> int:
+        st = _call(args.workdir, *self.resume, timeout_s=120.0)
+        print(self.line(st), flush=True)
+        return self.follow(args.workdir, st) if args.wait else 0
+
+    def cmd_status(self, args: argparse.Namespace) -> int:
+        st = _call(args.workdir, self.status_op)
+        print(json.dumps(st, indent=1) if args.json else self.line(st))
+        return 0
+
+    def cmd_stop(self, args: argparse.Namespace) -> int:
+        st = _call(args.workdir, self.stop_op, timeout_s=180.0)
+        print(self.line(st) + (f"; 'transfertwin cps {self.noun} resume' continues it"
+                               if st["state"] == "stopped" else ""))  # fmt: skip
+        return 0
+
+    def add(self, sub: argparse._SubParsersAction, status_help: str) -> None:
+        """Add the `resume`, `status` and `stop` subcommands."""
+        p = sub.add_parser("resume", help=f"resume the last {self.noun}")
+        p.add_argument("--workdir", required=True)
+        p.add_argument("--wait", action="store_true", help="follow the progress until it ends")
+        p.set_defaults(func=self.cmd_resume)
+        p = sub.add_parser("status", help=status_help)
+        p.add_argument("--workdir", required=True)
+        p.add_argument("--json", action="store_true", help="the status as one JSON document")
+        p.set_defaults(func=self.cmd_status)
+        p = sub.add_parser("stop", help=f"stop the {self.noun} after the experiments in flight")
+        p.add_argument("--workdir", required=True)
+        p.set_defaults(func=self.cmd_stop)
 
 
-def cmd_status(args: argparse.Namespace) -> int:
-    """The last study's state, progress, rate, ETA and store."""
-    st = _call(args.workdir, "StudyStatus")
-    print(json.dumps(st, indent=1) if args.json else status_line(st))
-    return 0
-
-
-def cmd_stop(args: argparse.Namespace) -> int:
-    """Stop the running study after the experiments in flight."""
-    st = _call(args.workdir, "StopStudy", timeout_s=180.0)
-    print(status_line(st) + ("; 'transfertwin cps study resume' continues it"
-                             if st["state"] == "stopped" else ""))  # fmt: skip
-    return 0
+#: The study's `resume`, `status` and `stop` (a study stopped, or failed on a passing
+#: fault, resumes with an empty plan).
+STUDY = Steering("study", ("StartStudy", "", ""), "StudyStatus", "StopStudy",
+                 lambda st: status_line(st), lambda wd, st: _follow(wd, st))  # fmt: skip
 
 
 def register(csub: argparse._SubParsersAction) -> None:
@@ -152,14 +190,4 @@ def register(csub: argparse._SubParsersAction) -> None:
                                    "one in the Experiment Manager's state folder)")
     p.add_argument("--wait", action="store_true", help="follow the progress until it ends")
     p.set_defaults(func=cmd_start)
-    p = ssub.add_parser("resume", help="resume the last study")
-    p.add_argument("--workdir", required=True)
-    p.add_argument("--wait", action="store_true", help="follow the progress until it ends")
-    p.set_defaults(func=cmd_resume)
-    p = ssub.add_parser("status", help="state, progress, rate, ETA and store of the study")
-    p.add_argument("--workdir", required=True)
-    p.add_argument("--json", action="store_true", help="the status as one JSON document")
-    p.set_defaults(func=cmd_status)
-    p = ssub.add_parser("stop", help="stop the study after the experiments in flight")
-    p.add_argument("--workdir", required=True)
-    p.set_defaults(func=cmd_stop)
+    STUDY.add(ssub, "state, progress, rate, ETA and store of the study")

@@ -1,11 +1,13 @@
 """The documentation site: paths into docs/ that the README and the code name exist, every
-page is in mkdocs.yml's nav, and (slow) `mkdocs build --strict` passes.
+page is in mkdocs.yml's nav, and (slow) `mkdocs build --strict` passes and no built page shows
+a literal caret in its prose (`E^V`, `kg/m^3`: the notation renders as math).
 
 The site is built by `.ci/run` too; the fast checks here catch a moved page without mkdocs.
 """
 
 from __future__ import annotations
 
+import html
 import re
 import shutil
 import subprocess
@@ -55,3 +57,19 @@ def test_the_site_builds_strictly(tmp_path: Path) -> None:
     done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr[-4000:]
     assert (tmp_path / "reference/cli/index.html").is_file()
+    carets = [f"{page.relative_to(tmp_path)}: ...{words}..." for page in
+              sorted(tmp_path.rglob("*.html")) for words in shown_carets(page)]  # fmt: skip
+    shown = "a page shows a literal caret (scripts/docs_notation.py):\n"
+    assert not carets, shown + "\n".join(carets)
+
+
+#: What a reader does not see as prose: code, scripts, and the math KaTeX typesets.
+HIDDEN = re.compile(
+    r"<(script|style|pre|code)\b.*?</\1>|<(span|div) class=\"arithmatex\">.*?</\2>", re.S
+)
+
+
+def shown_carets(page: Path) -> list[str]:
+    """The words around each literal caret in the prose of a built page (`E^V`, `m^3`)."""
+    text = html.unescape(re.sub(r"<[^>]+>", " ", HIDDEN.sub(" ", page.read_text("utf-8"))))
+    return [text[max(0, m.start() - 30) : m.end() + 30] for m in re.finditer(r"\w\^\w", text)]

@@ -1,50 +1,82 @@
 """The docs' notation renders as math: the pages write the study's symbols as $E^V$ (typeset
 by pymdownx.arithmatex and the KaTeX vendored under docs/javascripts/), never as a literal
-caret in prose; the Background page names the source work and is linked from the home page."""
+caret in prose; the API reference's docstrings go through scripts/docs_notation.py, which
+writes them as math there; the Background page names the source work and is linked from the
+home page. (The built site's HTML is checked for literal carets by tests/unit/test_docs.py.)"""
 
 from __future__ import annotations
 
-import re
+import sys
 from pathlib import Path
 
+import pytest
 import yaml
 
 ROOT = Path(__file__).parents[2]
 DOCS = ROOT / "docs"
-#: The study's symbols as carets; outside code they must be written as math.
-CARETS = re.compile(r"(?<![\$\w])(?:E\^[VP]|ȳ\^MA)(?![\w\$])")
-#: Generated from the CLI's help text (plain text, no math there).
+#: Generated from the CLI's help text (plain text in code blocks, no math there).
 GENERATED = {"reference/cli.md"}
+sys.path.insert(0, str(ROOT / "scripts"))
+from docs_notation import as_math, literal_carets  # noqa: E402
 
 
-def _prose(text: str) -> list[str]:
-    """The page's lines outside fenced code, with inline code spans cut out."""
-    out, fence = [], None
-    for line in text.split("\n"):
-        m = re.match(r"\s*(```|~~~)", line)
-        if m:
-            fence = (
-                m.group(1) if fence is None else (None if line.strip().startswith(fence) else fence)
-            )
-            continue
-        if fence is None:
-            out.append("".join(line.split("`")[0::2]))
-    return out
+def _mkdocs() -> dict:
+    return yaml.load((ROOT / "mkdocs.yml").read_text(encoding="utf-8"), Loader=yaml.BaseLoader)
 
 
-def test_no_page_writes_the_study_symbols_with_a_literal_caret() -> None:
+def test_no_page_shows_a_literal_caret() -> None:
     bad = [
-        f"{p.relative_to(DOCS)}: {line.strip()}"
-        for p in sorted(DOCS.rglob("*.md"))
-        if str(p.relative_to(DOCS)) not in GENERATED
-        for line in _prose(p.read_text(encoding="utf-8"))
-        if CARETS.search(line)
+        f"{p.relative_to(ROOT)}: ...{words}..."
+        for p in [ROOT / "README.md", *sorted(DOCS.rglob("*.md"))]
+        if str(p.relative_to(DOCS) if p.is_relative_to(DOCS) else p) not in GENERATED
+        for words in literal_carets(p.read_text(encoding="utf-8"))
     ]
-    assert not bad, "write $E^V$, $E^P$, $\\overline{y}^{MA}$:\n" + "\n".join(bad)
+    assert not bad, "write $E^V$, $E^P$, $\\overline{y}^{MA}$, 10<sup>9</sup>:\n" + "\n".join(bad)
+
+
+@pytest.mark.parametrize(
+    ("text", "math"),
+    [
+        ("one E^V, the E^P's rows", "one $E^V$, the $E^P$'s rows"),
+        ("ȳ^MA of TM^V", r"$\overline{y}^{MA}$ of $\mathrm{TM}^V$"),
+        ("density in kg/m^3, inertia kg m^2", "density in kg/m³, inertia kg m²"),
+        ("as code: `E^V`, ``E^P``; as math: $E^V$", "as code: `E^V`, ``E^P``; as math: $E^V$"),
+    ],
+)
+def test_docstring_notation_becomes_math_outside_code(text: str, math: str) -> None:
+    assert as_math(text) == math
+    assert not literal_carets(math)
+
+
+def test_a_caret_outside_code_and_math_is_found() -> None:
+    assert literal_carets("one E^V") and literal_carets("in kg/m^3") and literal_carets("10^9")
+    assert not literal_carets("`E^V`, $E^V$, 10<sup>9</sup>")
+
+
+def test_no_docstring_shows_a_literal_caret_in_the_api_reference() -> None:
+    """The API pages load the package through the griffe extension that mkdocs.yml names;
+    every docstring it loads (public or not) must then be free of literal carets."""
+    import griffe
+
+    (plugin,) = [p["mkdocstrings"] for p in _mkdocs()["plugins"] if "mkdocstrings" in p]
+    options = plugin["handlers"]["python"]["options"]
+    assert "scripts/docs_notation.py:CaretsAsMath" in options["extensions"]
+    loader = griffe.GriffeLoader(
+        extensions=griffe.load_extensions(str(ROOT / "scripts/docs_notation.py") + ":CaretsAsMath"),
+        search_paths=[str(ROOT / "src")],
+    )
+    bad: list[str] = []
+    todo = [loader.load("transfertwin")]
+    while todo:
+        obj = todo.pop()
+        if obj.docstring is not None:
+            bad += [f"{obj.path}: ...{w}..." for w in literal_carets(obj.docstring.value)]
+        todo += [m for m in obj.members.values() if not m.is_alias]
+    assert not bad, "\n".join(bad)
 
 
 def test_math_is_typeset_by_the_vendored_katex() -> None:
-    cfg = yaml.load((ROOT / "mkdocs.yml").read_text(encoding="utf-8"), Loader=yaml.BaseLoader)
+    cfg = _mkdocs()
     exts = [e if isinstance(e, str) else next(iter(e)) for e in cfg["markdown_extensions"]]
     assert "pymdownx.arithmatex" in exts
     for asset in (*cfg["extra_javascript"], *cfg["extra_css"]):

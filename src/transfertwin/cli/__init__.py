@@ -39,11 +39,17 @@ DESCRIPTION = (
     "transfer unit (TU), finds the placements that get it across, calibrates the simulation "
     "against real experiments and runs it beside a cyber-physical floor."
 )
+#: The legend under `transfertwin --help`: the source's notation that help texts cite.
+NOTATION = (
+    "Notation of the source work (docs/background.md): E^V is a virtual experiment (one "
+    "transfer simulated in the twin), E^P a physical one (on the real or emulated plant); "
+    "Sec., Eq., Alg. and Fig. numbers are the thesis's."
+)
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand."""
-    parser = Parser(prog="transfertwin", description=DESCRIPTION)
+    parser = Parser(prog="transfertwin", description=DESCRIPTION, epilog=NOTATION)
     parser.add_argument("-v", "--verbose", action="count", default=0,
                         help="-v: progress messages (INFO), -vv: debug logging")  # fmt: skip
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)

@@ -298,18 +298,21 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "that asset's gateway trust list ([hal] trust_dir)")  # fmt: skip
     p.set_defaults(func=cmd_trust)
     p = csub.add_parser("experiment",
-                        help="run experiments through the Experiment Manager: E^V on a "
-                             "virtual unit, E^P on a physical one")  # fmt: skip
+                        help="run experiments through the Experiment Manager: virtual ones "
+                             "(E^V) on a virtual unit, physical ones (E^P) on a physical "
+                             "one")  # fmt: skip
     p.add_argument("--workdir", required=True)
     p.add_argument("--unit", required=True, help="transfer unit, e.g. TU_A (or TU_A_P)")
     p.add_argument("--physical", action="store_true",
-                   help="E^P on the unit's physical twin (needs cps up --plant-seed)")  # fmt: skip
+                   help="physical experiments (E^P) on the unit's physical twin (needs "
+                        "cps up --plant-seed)")  # fmt: skip
     p.add_argument("--object", required=True, help="built-in core, e.g. o2")
     p.add_argument("--face", required=True)
     p.add_argument("--conveyor", required=True)
     p.add_argument("--theta", type=int, required=True, help="yaw in degrees")
     p.add_argument("--seed", type=int, default=0,
-                   help="seed of the first E^V (one more per run; recorded for E^P)")  # fmt: skip
+                   help="seed of the first virtual experiment (E^V; one more per run; "
+                        "recorded for physical ones, E^P)")  # fmt: skip
     p.add_argument("--runs", type=int, default=1, help="experiments in a row (default 1)")
     p.set_defaults(func=cmd_experiment)
     p = csub.add_parser("export", help="write the demo assets' AAS as JSON, XML or AASX")

@@ -114,11 +114,12 @@ def register(csub: argparse._SubParsersAction) -> None:
                                      "flags given override it")  # fmt: skip
     p.add_argument("--objects", help="the floor's objects to calibrate and predict, e.g. "
                                      "o1,o3 (default: all)")  # fmt: skip
-    p.add_argument("--experiments", type=int, help="K calibration experiments E^P on the "
-                                                   "floor's physical units (default 40)")
+    p.add_argument("--experiments", type=int, help="K physical calibration experiments (E^P) "
+                   "on the floor's physical units (default 40)")  # fmt: skip
     p.add_argument("--runs", type=int, help="runs per state and per replayed row (default 2)")
     p.add_argument("--validation-runs", type=int,
-                   help="E^P and E^V per object's best and worst state (default 4)")
+                   help="physical and virtual experiments (E^P, E^V) per object's best "
+                   "and worst state (default 4)")  # fmt: skip
     p.add_argument("--theta-step", type=int, help="θ grid of the prediction (default 30)")
     p.add_argument("--seed", type=int, help="the twin's seed (default 0)")
     p.add_argument("--workers", type=int, help="worker processes of the virtual "

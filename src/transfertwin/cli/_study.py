@@ -254,8 +254,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "experiments instead of resampled measurements")  # fmt: skip
     p.add_argument("--leg", choices=("round-trip", "pick-up", "operation"),
                    default="round-trip", help="what each experiment runs: the object there "
-                   "and back from the module (round-trip, the study's E^V), a floor's pick-up "
-                   "from a unit onto the module (pick-up), or the pick-up and then the "
+                   "and back from the module (round-trip, the study's virtual experiment "
+                   "E^V), a floor's pick-up from a unit onto the module (pick-up), or the "
+                   "pick-up and then the "
                    "delivery at another unit (operation)")  # fmt: skip
     p.add_argument("--max-experiments", type=int, help="stop after this many new results")
     p.add_argument("--sampling", choices=("exhaustive", "adaptive"), default="exhaustive",

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import argparse
+
 import pytest
 
 from transfertwin.cli import build_parser, main
@@ -28,6 +30,30 @@ def test_dock_and_docking_say_which_is_which(capsys) -> None:
     text = " ".join(capsys.readouterr().out.split())
     assert "docking errors drawn from a model fitted to measured ones" in text
     assert "docking errors that emerge from simulated navigation" in text
+
+
+def _helps(parser: argparse.ArgumentParser, path: str = "transfertwin"):
+    """(command path, help text) of every command and option under `parser`."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for choice in action._choices_actions:
+                yield f"{path} {choice.dest}", choice.help or ""
+            for name, sub in action.choices.items():
+                yield from _helps(sub, f"{path} {name}")
+        elif action.help:
+            yield f"{path} {'/'.join(action.option_strings) or action.dest}", action.help
+
+
+def test_help_says_the_source_notation_in_words(capsys) -> None:
+    """A help text that cites E^V or E^P says 'virtual'/'physical' beside it, and the
+    top-level help is the legend (plain text: help has no math)."""
+    _help()
+    legend = " ".join(capsys.readouterr().out.split())
+    assert "E^V is a virtual experiment" in legend and "E^P a physical one" in legend
+    words = {"E^V": "virtual", "E^P": "physical"}
+    bare = [f"{where}: {text}" for where, text in _helps(build_parser())
+            for symbol, word in words.items() if symbol in text and word not in text]  # fmt: skip
+    assert not bare, "\n".join(bare)
 
 
 def test_every_demo_option_has_help(capsys) -> None:

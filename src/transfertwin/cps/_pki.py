@@ -7,14 +7,20 @@ asset makes it where it runs (its own key and signing request in its certificate
 (``W/certs/client-<role>``), and in every trust folder the CA certificate and its CRL only.
 A certificate still current is kept; a revoked one too (a restart does not put a revoked
 asset back on the floor: ``cps ca issue`` does).
+
+Its cost is the RSA keys (2048 bits, the least Basic256Sha256 allows; ~50 ms of CPU each,
+nine tenths of the whole): they are made in worker processes, one per core, and the main
+process makes the CA's own key and signs each request as it comes back, so nothing waits for
+the last key but that key's certificate (`benchmarks/cps_certificates.py`).
 """
 
 from __future__ import annotations
 
 import logging
 import os
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from concurrent.futures import ProcessPoolExecutor
+from contextlib import contextmanager
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
 
@@ -26,10 +32,12 @@ from transfertwin.cps.opcua import (
     FloorCA,
     application_uri,
     certificate_uris,
-    ensure_ca,
+    init_ca,
     install_certificate,
+    load_ca,
     new_request,
 )
+from transfertwin.cps.opcua._ca import CA_CERT
 
 __all__ = ["CA_DIR", "prepare_certificates"]
 
@@ -47,17 +55,30 @@ def prepare_certificates(workdir: Path, configs: Iterable[AssetConfig]) -> Floor
     asset of `configs` (``cert_dir/<id>.der``, the key beside it) and for the command-line
     clients (``W/certs/client-<role>.der``), and the CA certificate and CRL in every trust
     folder (``W/certs/trusted`` and each asset's ``trust_dir``). Keys are made in parallel
-    (one process per core): a floor of 200 assets needs 200 RSA keys."""
+    (one process per core) while this one makes the CA (the first time) and signs the
+    requests as they come: a floor of 200 assets needs 200 RSA keys."""
     configs = list(configs)
-    ca = ensure_ca(Path(workdir) / CA_DIR)
-    revoked = {r.serial for r in ca.issued() if r.revoked}
+    folder = Path(workdir) / CA_DIR
     wanted = [(Path(workdir) / "certs", f"client-{role}", None) for role in ROLES]
     wanted += [(cfg.cert_dir, cfg.asset_id, cfg.host) for cfg in configs]
-    todo = [w for w in wanted if not _current(ca, *w, revoked)]
-    requests = _requests(todo)
-    certs = ca.issue_many([csr for *_, csr in requests])
-    for (folder, name, _host, _csr), cert in zip(requests, certs, strict=True):
-        install_certificate(folder, name, cert)
+    ca = load_ca(folder) if (folder / CA_CERT).exists() else None
+    if ca is None:  # a new CA issued nothing yet: every certificate is made
+        todo = wanted
+    else:
+        revoked = {r.serial for r in ca.issued() if r.revoked}
+        todo = [w for w in wanted if not _current(ca, *w, revoked)]
+    with _requests(todo) as requests:
+        ca = ca or init_ca(folder)  # its key is made while the workers make theirs
+        done: list[tuple[Path, str]] = []
+
+        def arriving() -> Iterator[x509.CertificateSigningRequest]:
+            for (folder_, name, _host), csr in requests:
+                done.append((folder_, name))
+                yield csr
+
+        certs = ca.issue_many(arriving())
+    for (cert_dir, name), cert in zip(done, certs, strict=True):
+        install_certificate(cert_dir, name, cert)
     return _finish(ca, workdir, configs)
 
 
@@ -68,14 +89,18 @@ def _finish(ca: FloorCA, workdir: Path, configs: list[AssetConfig]) -> FloorCA:
     return ca
 
 
+@contextmanager
 def _requests(todo: list[tuple[Path, str, str | None]]):
-    """(folder, name, host, signing request) for each of `todo`, the keys made in
-    parallel when there are many."""
+    """An iterator of ((folder, name, host), signing request) for each of `todo`, in that
+    order, as they are made; the keys are made in worker processes (one per core this
+    process may use), which start at once, when there are many."""
     if len(todo) < 8:
-        return [(*t, new_request(*t, write_request=False)) for t in todo]
-    with ProcessPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
-        csrs = list(pool.map(_request, todo, chunksize=max(1, len(todo) // 32)))
-    return [(*t, x509.load_pem_x509_csr(pem)) for t, pem in zip(todo, csrs, strict=True)]
+        yield ((t, new_request(*t, write_request=False)) for t in todo)
+        return
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    with ProcessPoolExecutor(max_workers=cores or 1) as pool:
+        pems = pool.map(_request, todo, chunksize=max(1, len(todo) // (8 * (cores or 1))))
+        yield ((t, x509.load_pem_x509_csr(pem)) for t, pem in zip(todo, pems, strict=True))
 
 
 def _request(item: tuple[Path, str, str | None]) -> bytes:

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Iterable
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
@@ -292,8 +293,9 @@ class FloorCA:
         if self._pending is None:
             self._write_index(rows)
 
-    def issue_many(self, csrs: list[x509.CertificateSigningRequest]) -> list[x509.Certificate]:
-        """`issue` for each request, the table written once (a floor's preparation)."""
+    def issue_many(self, csrs: Iterable[x509.CertificateSigningRequest]) -> list[x509.Certificate]:
+        """`issue` for each request, the table written once (a floor's preparation); the
+        requests may arrive one by one (an iterator: each is signed as it comes)."""
         self._pending = self._index()
         try:
             out = [self.issue(csr) for csr in csrs]

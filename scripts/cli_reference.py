@@ -18,6 +18,8 @@ import sys
 from collections.abc import Iterator
 from pathlib import Path
 
+from _generated_section import generated_section_main
+
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT / "src") not in sys.path:
     sys.path.insert(0, str(ROOT / "src"))
@@ -73,23 +75,7 @@ def anchor(path: tuple[str, ...]) -> str:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--write", action="store_true")
-    parser.add_argument("--check", action="store_true")
-    args = parser.parse_args()
-    section = render()
-    if not (args.write or args.check):
-        print(section)
-        return 0
-    text = PAGE.read_text(encoding="utf-8")
-    start, end = text.index(BEGIN), text.index(END) + len(END)
-    if args.check:
-        if text[start:end] == section:
-            return 0
-        print(f"{PAGE.relative_to(ROOT)} is stale: run python scripts/cli_reference.py --write")
-        return 1
-    PAGE.write_text(text[:start] + section + text[end:], encoding="utf-8")
-    return 0
+    return generated_section_main(__file__, __doc__, PAGE, BEGIN, END, render)
 
 
 if __name__ == "__main__":

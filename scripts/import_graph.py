@@ -9,9 +9,10 @@ The graph is read from the source, so the page cannot drift from what the code i
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
+
+from _generated_section import generated_section_main
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGE = ROOT / "docs" / "architecture.md"
@@ -35,20 +36,7 @@ def render() -> str:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--write", action="store_true")
-    parser.add_argument("--check", action="store_true")
-    args = parser.parse_args()
-    section = render()
-    if not (args.write or args.check):
-        print(section)
-        return 0
-    text = PAGE.read_text(encoding="utf-8")
-    start, end = text.index(BEGIN), text.index(END) + len(END)
-    if args.check:
-        return 0 if text[start:end] == section else 1
-    PAGE.write_text(text[:start] + section + text[end:], encoding="utf-8")
-    return 0
+    return generated_section_main(__file__, __doc__, PAGE, BEGIN, END, render)
 
 
 if __name__ == "__main__":

@@ -33,6 +33,7 @@ if TYPE_CHECKING:
         twin_priors,
         uninformed,
     )
+    from transfertwin.cps.dispatch._needs import object_needs
     from transfertwin.cps.dispatch._orders import OrderBook, order_view
     from transfertwin.cps.dispatch._predict import (
         DEFAULT_STATE,
@@ -67,6 +68,7 @@ __all__ = [
     "is_fault",
     "kpis",
     "learning_alone_states",
+    "object_needs",
     "order_view",
     "posterior",
     "rank_states",

@@ -31,6 +31,7 @@ PEER_ROLES: Mapping[str, str] = MappingProxyType({
 
 
 def peer_roles(descriptors: Iterable[AssetDescriptor]) -> tuple[tuple[str, str], ...]:
-    """(asset id, role) of every asset of a floor whose class has a peer role."""
-    return tuple(sorted((d.asset_id, PEER_ROLES[d.asset_class]) for d in descriptors
-                        if d.asset_class in PEER_ROLES))  # fmt: skip
+    """(asset id, role) of every asset of a floor whose class has a peer role (by the
+    generic class it runs as: `AssetDescriptor.role_class`)."""
+    return tuple(sorted((d.asset_id, PEER_ROLES[d.role_class]) for d in descriptors
+                        if d.role_class in PEER_ROLES))  # fmt: skip

@@ -91,6 +91,7 @@ def heartbeat_payload(desc: AssetDescriptor, endpoint: str, policy: str,
         "id": desc.asset_id, "kind": desc.kind.value, "class": desc.asset_class,
         "type": desc.physical_type.value if desc.physical_type else None,
         "capabilities": [c.value for c in desc.capabilities], "station": desc.station,
+        "constraints": [[c.value, name, value] for c, name, value in desc.constraints],
         "models": desc.models, "endpoint": endpoint, "security_policy": policy,
         "instance": instance, "pid": os.getpid(), **live,
     })  # fmt: skip

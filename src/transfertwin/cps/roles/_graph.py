@@ -143,6 +143,8 @@ class GraphRole(Role):
                 physical_type=PhysicalType(d["type"]) if d.get("type") else None,
                 capabilities=tuple(Capability(c) for c in d.get("capabilities", ())),
                 station=d.get("station"), models=d.get("models"),
+                constraints=tuple((Capability(c), str(n), v)
+                                  for c, n, v in d.get("constraints", ())),
             )  # fmt: skip
             self.kg.join(desc, endpoint=d["endpoint"], security_policy=d["security_policy"],
                          state=_state_word(d.get("state")))  # fmt: skip
@@ -157,12 +159,12 @@ class GraphRole(Role):
         not fit yet, e.g. a location on an asset not joined, waits for the next beat)."""
         kg = self.kg
         updates = [lambda: kg.set_state(aid, _state_word(d.get("state")) or "idle")]
-        if d["class"] == "transport_module":
+        if "transport" in d.get("capabilities", ()):  # a module, whatever its class
             docked = d.get("docked")
             updates.append(lambda: kg.set_docked(aid, docked if docked in self.leases else None))
         if "possesses" in d:
             updates.append(lambda: kg.set_possesses(aid, d["possesses"]))
-        if d["class"] == "object" and d.get("location") in self.leases:
+        if d.get("location") in self.leases:  # an object (only objects report one)
             updates.append(lambda: kg.set_location(aid, d["location"]))
         for update in updates:
             try:

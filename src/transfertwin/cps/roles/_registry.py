@@ -18,10 +18,13 @@ __all__ = ["role_for"]
 
 
 def role_for(node: AssetNode) -> Role:
-    """The role of the node's asset class. The roles that carry the simulation, the study
-    stack or the dispatcher are imported when a node of their class is made: a unit's or an
-    object's process imports none of them (`prepare_forking` keeps their pages shared)."""
-    cls = node.desc.asset_class
+    """The role of the node's asset class: the generic class it runs as, its own if the code
+    knows it, else the one its capabilities name (`AssetDescriptor.role_class`: a second
+    make of transport module runs a module's role, a buffer station a unit's). The roles
+    that carry the simulation, the study stack or the dispatcher are imported when a node
+    of their class is made: a unit's or an object's process imports none of them
+    (`prepare_forking` keeps their pages shared)."""
+    cls = node.desc.role_class
     if node.desc.kind is AssetKind.PHYSICAL and cls == "transfer_unit":  # the plant's own
         from transfertwin.cps.roles._plant_unit import PlantUnitRole
 

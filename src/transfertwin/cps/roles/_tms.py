@@ -27,18 +27,19 @@ import logging
 import time
 from typing import TYPE_CHECKING, Any
 
-from transfertwin.cps.aas import object_properties
+from transfertwin.cps.aas import Capability, object_properties
 from transfertwin.cps.dispatch import (
     Bid,
     OrderBook,
     choose,
     fallback,
     learning_alone_states,
+    object_needs,
     order_view,
     rerank,
     twin_words,
 )
-from transfertwin.cps.node import Role
+from transfertwin.cps.node import Role, find_partners
 from transfertwin.cps.opcua import OperationRefused
 
 if TYPE_CHECKING:
@@ -81,6 +82,9 @@ class TmsRole(Role):
                     self._claimed[op["module"]] = op_id
                 self.node.spawn(self._run(op_id))
         await self.set("Policy", self.policy)
+        # weigh the floor's objects (`object_needs`: the mesh library) off the event loop
+        self.node.spawn(asyncio.to_thread(
+            lambda: [object_needs(o) for o, _ in self.node.floor.objects]))  # fmt: skip
         await self._counters()
         self.node.spawn(self._publisher())
 
@@ -98,8 +102,18 @@ class TmsRole(Role):
         return await self._accept(obj, destination, None)
 
     async def _accept(self, obj: str, destination: str, source: str | None) -> str:
-        """Check and queue an order (`OrderBook.accept`), then run it."""
-        op_id = self.book.accept(obj, destination, source, await self._modules())
+        """Check and queue an order (`OrderBook.accept`), then run it. Refused when modules
+        are online but the constraints of none admit the object (`_modules`)."""
+        modules = await self._modules()
+        fit = await self._modules(obj)
+        if modules and fit is not None and any(m["online"] for m in modules) and not any(
+                m["online"] for m in fit):  # fmt: skip
+            raise OperationRefused(
+                f"no online transport module carries {obj} "
+                f"({', '.join(f'{k} {v:g}' for k, v in object_needs(obj).items())}): the "
+                "constraints of their transport capability do not admit it",
+                status="BadResourceUnavailable", argument="object")  # fmt: skip
+        op_id = self.book.accept(obj, destination, source, modules)
         await self._counters()
         self.node.spawn(self._run(op_id))
         return op_id
@@ -141,19 +155,25 @@ class TmsRole(Role):
         return True
 
     # -- execution ------------------------------------------------------------------------
-    async def _modules(self) -> list[dict[str, Any]] | None:
-        """The transport modules as the knowledge graph knows them (None: graph away)."""
-        assets = await self.node.graph_status()
+    async def _modules(self, obj: str | None = None) -> list[dict[str, Any]] | None:
+        """The transport modules as the knowledge graph knows them (None: graph away): the
+        assets that realise Transport, whatever their class (`find_partners`), with what
+        the graph's ``Status`` says of them; with `obj`, only those whose transport
+        constraints admit it (`object_needs`: its mass)."""
+        movers = await find_partners(self.node, Capability.TRANSPORT,
+                                     object_needs(obj) if obj else None, online=False)
+        assets = await self.node.graph_status() if movers is not None else None
         if assets is None:
             return None
-        return [a for a in assets if a.get("class") == "transport_module"]
+        ids = {p.asset_id for p in movers or ()}
+        return [a for a in assets if a["id"] in ids]
 
     async def _eligible(self, op: dict[str, Any]) -> list[str]:
         """Online, idle, unclaimed modules that may take `op`: the carrier alone for an
         object on a module; else those that carry nothing (objects travel one at a time)."""
         carrier = op["source"] if op["source"] not in self.node.floor.units else None
         out = []
-        for m in await self._modules() or []:
+        for m in await self._modules(op["object"]) or []:
             if carrier is not None and m["id"] != carrier:
                 continue
             if carrier is None and self.book.carried_by(m["id"]):
@@ -273,11 +293,17 @@ class TmsRole(Role):
         return preds
 
     async def _ask_em(self, obj: str) -> list[dict[str, Any]]:
-        """Poll the Experiment Manager's `Predict` until its experiments are done."""
+        """Poll the Experiment Manager's `Predict` until its experiments are done: the
+        asset that realises Experiment (`find_partners`; the first by id if several)."""
         spec = self.node.floor.operation
         while True:
+            managers = await find_partners(self.node, Capability.EXPERIMENT)
+            if not managers:
+                raise ConnectionError("no online asset realises Experiment (the knowledge "
+                                      f"graph: {'away' if managers is None else 'none'})")
+            em = managers[0].asset_id
             answer = await asyncio.wait_for(self.node.peers.call(
-                "EM", "Predict", obj, spec.runs, self.node.cfg.seed), 10)  # fmt: skip
+                em, "Predict", obj, spec.runs, self.node.cfg.seed), 10)  # fmt: skip
             if answer:
                 return json.loads(answer)
             await asyncio.sleep(1.0)
@@ -364,7 +390,7 @@ class TmsRole(Role):
                 continue
             except TimeoutError:
                 pass
-            modules = await self._modules()
+            modules = await self.node.graph_status()
             if modules is None:
                 continue  # the graph is away: cannot tell, keep waiting
             if module in {m["id"] for m in modules if m["online"]}:

@@ -8,8 +8,9 @@ import asyncio
 import logging
 from typing import TYPE_CHECKING, Any
 
+from transfertwin.cps.aas import Capability
 from transfertwin.cps.hal import GatewayHAL, poll_gateway
-from transfertwin.cps.node import Role
+from transfertwin.cps.node import Role, find_partners
 
 if TYPE_CHECKING:
     from transfertwin.cps.node import AssetNode
@@ -25,6 +26,8 @@ UNIT_SIGMA_THETA_RAD = 0.002
 
 #: How often a unit tells PropS its pose again, s.
 POSE_REPORT_S = 60.0
+#: How often a unit asks the knowledge graph for a pose fuser while it lists none, s.
+NO_FUSER_S = 10.0
 
 
 class UnitRole(Role):
@@ -60,8 +63,7 @@ class UnitRole(Role):
         self.node.server.on_client_write(self._written)
         if self.gateway is not None:
             self.node.spawn(self._poll_barriers())
-        if "PropS" in self.node.floor.logical:
-            self.node.spawn(self._report_pose())
+        self.node.spawn(self._report_pose())
         self.node.spawn(self._watch_docked())
 
     async def _watch_docked(self) -> None:
@@ -95,21 +97,25 @@ class UnitRole(Role):
         return None if row is None else bool(row.get("online"))
 
     async def _report_pose(self) -> None:
-        """Tell PropS where this unit stands (its surveyed docking goal on the floor), and
-        again every `POSE_REPORT_S` (a restarted PropS hears it then)."""
+        """Tell the pose fusers (the assets that realise FusePoses: PropS, `find_partners`)
+        where this unit stands (its surveyed docking goal on the floor), and again every
+        `POSE_REPORT_S` (a restarted one hears it then); while the graph lists none, ask it
+        again every `NO_FUSER_S`."""
 
         floor = self.node.floor
         spec = next(s for s in floor.stations if s.unit == self.aid)
         x, y, theta = (float(v) for v in floor.shop_floor().station(spec.name).goal_pose())
         while True:
-            try:
-                await asyncio.wait_for(self.node.peers.call(
-                    "PropS", "ReportPose", self.aid, self.aid, x, y, theta, UNIT_SIGMA_XY_M,
-                    UNIT_SIGMA_THETA_RAD), 10.0)  # fmt: skip
-                delay = POSE_REPORT_S
-            except Exception as exc:  # PropS not (yet) there: try again soon
-                log.debug("%s: PropS not answering (%s)", self.aid, exc)
-                delay = 2.0
+            fusers = await find_partners(self.node, Capability.FUSE_POSES)
+            delay = POSE_REPORT_S if fusers else NO_FUSER_S
+            for fuser in fusers or ():
+                try:
+                    await asyncio.wait_for(self.node.peers.call(
+                        fuser.asset_id, "ReportPose", self.aid, self.aid, x, y, theta,
+                        UNIT_SIGMA_XY_M, UNIT_SIGMA_THETA_RAD), 10.0)  # fmt: skip
+                except Exception as exc:  # not (yet) answering: try again soon
+                    log.debug("%s: %s not answering (%s)", self.aid, fuser.asset_id, exc)
+                    delay = 2.0
             await asyncio.sleep(delay)
 
     async def stop(self) -> None:

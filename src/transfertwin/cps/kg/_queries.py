@@ -121,9 +121,23 @@ def _walk(node: Any) -> Iterable[CompValue]:
 
 
 def read_only_select(sparql: str) -> Query:
-    """Parse a SELECT query; anything else (updates, CONSTRUCT, SERVICE) is refused."""
+    """Parse a SELECT query; anything else (updates, CONSTRUCT, SERVICE) is refused.
+
+    The last `QUERY_CACHE` texts are parsed once (rdflib's parser takes ~60 ms a query):
+    the roles ask the same capability queries again and again
+    (`transfertwin.cps.node.partners_query`).
+    """
     if not isinstance(sparql, str):
         raise InputError(f"a SPARQL query must be a string, got {type(sparql).__name__}")
+    return _parse_select(sparql)
+
+
+#: How many distinct query texts `read_only_select` keeps parsed.
+QUERY_CACHE = 128
+
+
+@functools.lru_cache(maxsize=QUERY_CACHE)
+def _parse_select(sparql: str) -> Query:
     try:
         with _PARSER_LOCK:
             query = prepareQuery(sparql, initNs=_NS)

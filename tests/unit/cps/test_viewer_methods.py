@@ -1,6 +1,7 @@
 """The servers' role rules for method calls: a viewer may call the knowledge graph's
 read-only Query (`VIEWER_METHODS`) and nothing else, alone or in one request with another
-method; an operator may call anything."""
+method; an operator may call anything; a peer asset's certificate (`ASSET_ROLE`) anything
+but the `OPERATOR_METHODS` (Shutdown, steering studies and campaigns)."""
 
 from __future__ import annotations
 
@@ -34,6 +35,15 @@ def _call(*methods: str) -> Buffer:
         ("viewer", ("KG.Other.Query",), False),  # only the ControlInterface's Query
         ("operator", ("TU_A.ControlInterface.SetBeltSpeed",), True),
         ("TMS", ("TU_A.ControlInterface.SetBeltSpeed",), False),  # a peer role, not operator
+        # a peer asset's certificate (ASSET_ROLE): all but the OPERATOR_METHODS
+        ("asset", ("TU_A.ControlInterface.SetBeltSpeed",), True),
+        ("asset", ("KG.ControlInterface.Heartbeat",), True),
+        ("asset", ("KG.Lifecycle.Shutdown",), False),
+        ("asset", ("TU_A.ControlInterface.SetBeltSpeed", "TU_A.Lifecycle.Shutdown"), False),
+        ("asset", ("EM.ControlInterface.StartStudy",), False),
+        ("asset", ("EM.ControlInterface.StopCampaign",), False),
+        ("operator", ("KG.Lifecycle.Shutdown",), True),
+        ("operator", ("EM.ControlInterface.StartCampaign",), True),
     ],
 )
 def test_a_viewer_may_call_query_only(role: str, methods: tuple[str, ...], granted: bool) -> None:

@@ -115,8 +115,14 @@ _WRITE_TYPES = {
 VIEWER_METHODS = frozenset({"ControlInterface.Query"})
 
 #: Methods only people with the operator role may call, never a peer asset's identity
-#: (`ASSET_ROLE`): stopping an asset's process (`transfertwin.cps.node.SHUTDOWN`).
-OPERATOR_METHODS = frozenset({"Lifecycle.Shutdown"})
+#: (`ASSET_ROLE`): stopping an asset's process (`transfertwin.cps.node.SHUTDOWN`), and
+#: steering the Experiment Manager's studies and calibration campaigns (no asset starts or
+#: stops them; `cps study`, `cps campaign` do, with the operator's credential).
+OPERATOR_METHODS = frozenset({
+    "Lifecycle.Shutdown",
+    "ControlInterface.StartStudy", "ControlInterface.StopStudy",
+    "ControlInterface.StartCampaign", "ControlInterface.StopCampaign",
+})  # fmt: skip
 
 
 def _called_methods(body: object) -> list[str] | None:

@@ -104,10 +104,9 @@ class TmsRole(Role):
     async def _accept(self, obj: str, destination: str, source: str | None) -> str:
         """Check and queue an order (`OrderBook.accept`), then run it. Refused when modules
         are online but the constraints of none admit the object (`_modules`)."""
-        modules = await self._modules()
-        fit = await self._modules(obj)
-        if modules and fit is not None and any(m["online"] for m in modules) and not any(
-                m["online"] for m in fit):  # fmt: skip
+        modules = await self._modules(obj)
+        online = [m for m in modules or () if m["online"]]
+        if online and not any(m["admits"] for m in online):
             raise OperationRefused(
                 f"no online transport module carries {obj} "
                 f"({', '.join(f'{k} {v:g}' for k, v in object_needs(obj).items())}): the "
@@ -158,15 +157,15 @@ class TmsRole(Role):
     async def _modules(self, obj: str | None = None) -> list[dict[str, Any]] | None:
         """The transport modules as the knowledge graph knows them (None: graph away): the
         assets that realise Transport, whatever their class (`find_partners`), with what
-        the graph's ``Status`` says of them; with `obj`, only those whose transport
-        constraints admit it (`object_needs`: its mass)."""
-        movers = await find_partners(self.node, Capability.TRANSPORT,
-                                     object_needs(obj) if obj else None, online=False)
+        the graph's ``Status`` says of them and ``admits``: whether the constraints of
+        their transport capability admit `obj` (`object_needs`: its mass; True without)."""
+        movers = await find_partners(self.node, Capability.TRANSPORT, online=False)
         assets = await self.node.graph_status() if movers is not None else None
         if assets is None:
             return None
-        ids = {p.asset_id for p in movers or ()}
-        return [a for a in assets if a["id"] in ids]
+        needs = object_needs(obj) if obj else {}
+        admits = {p.asset_id: p.admits(needs) for p in movers or ()}
+        return [{**a, "admits": admits[a["id"]]} for a in assets if a["id"] in admits]
 
     async def _eligible(self, op: dict[str, Any]) -> list[str]:
         """Online, idle, unclaimed modules that may take `op`: the carrier alone for an
@@ -178,7 +177,8 @@ class TmsRole(Role):
                 continue
             if carrier is None and self.book.carried_by(m["id"]):
                 continue
-            if m["online"] and m["state"] == "idle" and m["id"] not in self._claimed:
+            if m["online"] and m["admits"] and m["state"] == "idle" \
+                    and m["id"] not in self._claimed:  # fmt: skip
                 out.append(m["id"])
         return out
 

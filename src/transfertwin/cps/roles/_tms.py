@@ -39,7 +39,7 @@ from transfertwin.cps.dispatch import (
     rerank,
     twin_words,
 )
-from transfertwin.cps.node import Role, find_partners
+from transfertwin.cps.node import Partner, Role, find_partners
 from transfertwin.cps.opcua import OperationRefused
 
 if TYPE_CHECKING:
@@ -51,6 +51,10 @@ log = logging.getLogger("transfertwin.cps")
 
 #: Seconds the TMS waits for the Experiment Manager's on-the-fly predictions of an object.
 PREDICT_TIMEOUT_S = 900.0
+#: Seconds the TMS keeps the graph's answer to "who realises Transport, with which
+#: constraints" (online or not comes from the graph's Status at every look): orders that
+#: wait for a module look every 0.5 s, and a query costs the graph ~14 ms on a large floor.
+MOVERS_TTL_S = 2.0
 
 
 class TmsRole(Role):
@@ -62,6 +66,7 @@ class TmsRole(Role):
         self.ledger, self.ops = self.book.ledger, self.book.ops
         self.policy = node.floor.operation.policy
         self._claimed: dict[str, str] = {}  # module -> operation
+        self._movers: tuple[float, list[Partner]] = (float("-inf"), [])  # (when, answer)
         self._done: dict[str, asyncio.Event] = {}
 
     def initial(self) -> dict[str, Any]:
@@ -159,13 +164,24 @@ class TmsRole(Role):
         assets that realise Transport, whatever their class (`find_partners`), with what
         the graph's ``Status`` says of them and ``admits``: whether the constraints of
         their transport capability admit `obj` (`object_needs`: its mass; True without)."""
-        movers = await find_partners(self.node, Capability.TRANSPORT, online=False)
+        movers = await self._transport_partners()
         assets = await self.node.graph_status() if movers is not None else None
         if assets is None:
             return None
         needs = object_needs(obj) if obj else {}
         admits = {p.asset_id: p.admits(needs) for p in movers or ()}
         return [{**a, "admits": admits[a["id"]]} for a in assets if a["id"] in admits]
+
+    async def _transport_partners(self) -> list[Partner] | None:
+        """The assets that realise Transport, online or not (`find_partners`), as the graph
+        answered within the last `MOVERS_TTL_S` (None: the graph is away)."""
+        when, movers = self._movers
+        if time.monotonic() - when < MOVERS_TTL_S:
+            return movers
+        found = await find_partners(self.node, Capability.TRANSPORT, online=False)
+        if found is not None:
+            self._movers = (time.monotonic(), found)
+        return found
 
     async def _eligible(self, op: dict[str, Any]) -> list[str]:
         """Online, idle, unclaimed modules that may take `op`: the carrier alone for an

@@ -16,7 +16,10 @@ server of this process; a server not `secure`'d by `guard` behaves as asyncua's)
   unless it comes over SignAndEncrypt (else BadSecurityModeInsufficient), from a client
   whose application certificate is trusted (BadCertificateUntrusted, ...Revoked,
   ...TimeInvalid) and names the server it registers (BadCertificateUriInvalid): asset A
-  registers A, nobody registers B.
+  registers A, nobody registers B. A session (so any heartbeat, call, read or write) is
+  refused over a channel without security too, at CreateSession and ActivateSession
+  (BadSecurityModeInsufficient), not only later for its missing certificate; only
+  GetEndpoints and FindServers, which say how to connect, are answered on such a channel.
 """
 
 from __future__ import annotations
@@ -66,6 +69,11 @@ _CALLER: contextvars.ContextVar[Caller | None] = contextvars.ContextVar("caller"
 #: The servers whose registrations are checked, with their trust lists.
 _GUARDED: WeakKeyDictionary[object, TrustList] = WeakKeyDictionary()
 
+_SESSION = {
+    ua.NodeId(ua.ObjectIds.CreateSessionRequest_Encoding_DefaultBinary),
+    ua.NodeId(ua.ObjectIds.ActivateSessionRequest_Encoding_DefaultBinary),
+}
+
 _REGISTER = {
     ua.NodeId(ua.ObjectIds.RegisterServerRequest_Encoding_DefaultBinary): ua.RegisteredServer,
     ua.NodeId(ua.ObjectIds.RegisterServer2Request_Encoding_DefaultBinary):
@@ -103,10 +111,12 @@ class GuardedProcessor(UaProcessor):
         user = self.session.user if self.session is not None else None
         caller = Caller(secure, _uris(der), getattr(user, "name", None),
                         getattr(user, "asset_id", None))  # fmt: skip
-        if typeid in _REGISTER:
-            trust = _GUARDED.get(self.iserver)
-            if trust is not None:
-                self._check_registration(caller, der, trust, _REGISTER[typeid], body)
+        trust = _GUARDED.get(self.iserver) if typeid in _REGISTER or typeid in _SESSION else None
+        if trust is not None and typeid in _SESSION and not caller.secure:
+            log.warning("refused a session over a channel without security")
+            raise ServiceError(ua.StatusCodes.BadSecurityModeInsufficient)
+        if trust is not None and typeid in _REGISTER:
+            self._check_registration(caller, der, trust, _REGISTER[typeid], body)
         token = _CALLER.set(caller)
         try:
             return await super()._process_message(typeid, requesthdr, seqhdr, body)

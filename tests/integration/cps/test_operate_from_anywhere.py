@@ -91,10 +91,14 @@ def test_an_asset_needs_its_bundle_or_file(capfd):
     assert done.returncode == 2 and "give the asset's bundle folder" in done.stderr
 
 
-def test_shutdown_stops_a_node_of_a_floor_in_one_process_and_the_last_ends_it(tmp_path, capfd):
+@pytest.mark.parametrize("insecure", [True, False], ids=["insecure", "secure"])
+def test_shutdown_stops_a_node_of_a_floor_in_one_process_and_the_last_ends_it(
+        tmp_path, capfd, insecure):  # fmt: skip
     """Each asset's ``Lifecycle.Shutdown`` (what `cps down` calls, operator role): the node
     answers, leaves (the graph says so) and stops; the floor ends with its last node. `cps
-    down --asset` stops one asset so, and never signals the process the others share."""
+    down --asset` stops one asset so, and never signals the process the others share. On a
+    secure floor too, where the assets' own certificates may not call it (the operator's
+    credential does)."""
     from transfertwin.cps import LocalFloor, load_floor
     from transfertwin.cps.node import LIFECYCLE
 
@@ -102,7 +106,7 @@ def test_shutdown_stops_a_node_of_a_floor_in_one_process_and_the_last_ends_it(tm
     floor = load_floor(tmp_path / "floor.toml")
 
     async def main() -> None:
-        async with LocalFloor(floor, tmp_path / "w", insecure=True, lease_s=2.0) as local:
+        async with LocalFloor(floor, tmp_path / "w", insecure=insecure, lease_s=2.0) as local:
             down = await asyncio.to_thread(run_main, capfd, "cps", "down", "--workdir",
                                            str(tmp_path / "w"), "--asset", "o1")  # fmt: skip
             assert down.returncode == 0, down.stderr

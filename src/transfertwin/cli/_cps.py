@@ -146,7 +146,8 @@ def _trust_gateway(wd: Path, asset: str | None, cert) -> int:
 
 def _experiment_unit(info: dict, unit: str, physical: bool) -> str:
     """The transfer unit an experiment runs against: `unit`, or its physical twin."""
-    units = [a["id"] for a in info["assets"] if a["class"] == "transfer_unit"]
+    units = [a["id"] for a in info["assets"]
+             if a.get("role_class", a["class"]) == "transfer_unit"]  # fmt: skip
     if physical and not unit.endswith("_P"):
         unit = f"{unit}_P"
     if unit not in units:

@@ -156,6 +156,7 @@ def remote_info(graph: str, ca: str | None, credential: str | None) -> tuple[dic
             raise InputError(f"--graph {graph}: {exc}") from None
         raise
     info["assets"] += [{"id": a["id"], "kind": a["kind"], "class": a["class"],
+                        "role_class": a.get("role_class", a["class"]),
                         "endpoint": a["address"], "standby": False}
                        for a in status["assets"] if a["id"] != "KG" and a.get("address")]
     return info, creds

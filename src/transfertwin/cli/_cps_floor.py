@@ -621,7 +621,7 @@ def floor_order(where: str, info: dict, creds, args: argparse.Namespace) -> int:
     restart of the TMS. Exit 0 when delivered, `ORDER_FAILED` when it failed."""
     from transfertwin.cps.opcua import OperationRefused
 
-    by_id = {a["id"]: a["class"] for a in info["assets"]}
+    by_id = {a["id"]: a.get("role_class", a["class"]) for a in info["assets"]}  # generic
     if by_id.get(args.object) != "object":
         objects = sorted(a for a, c in by_id.items() if c == "object")
         raise InputError(f"--object {args.object}: not an object of this floor; objects: "

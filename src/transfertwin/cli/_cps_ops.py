@@ -49,7 +49,8 @@ def _calibration_cost(args: argparse.Namespace, k: dict) -> dict:
     from transfertwin.cps.dispatch import with_calibration
 
     where, info, creds = floor_access(args)
-    ems = [a["id"] for a in info["assets"] if a.get("class") == "experiment_manager"]
+    ems = [a["id"] for a in info["assets"]
+           if a.get("role_class", a.get("class")) == "experiment_manager"]  # fmt: skip
     if not ems:
         return k
     try:

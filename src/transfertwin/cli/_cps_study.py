@@ -29,7 +29,8 @@ EXIT_FAILED = 3
 def _floor(workdir: str) -> tuple[dict, object, str]:
     """cps.json, the client credentials and the Experiment Manager's endpoint."""
     info, creds = load_info(Path(workdir))
-    ems = [a for a in info["assets"] if a.get("class") == "experiment_manager"]
+    ems = [a for a in info["assets"]
+           if a.get("role_class", a.get("class")) == "experiment_manager"]  # fmt: skip
     if not ems:
         raise InputError(f"{workdir}: the floor has no Experiment Manager (add \"EM\" to "
                          "'logical' in the floor file)")  # fmt: skip

@@ -146,9 +146,9 @@ def prepare_floor(
         hal = HalConfig(kind, plant_seed_file=own_seed, endpoint=gateway,
                         insecure=insecure)  # fmt: skip
         own_study = None
-        if floor.uses_plant() and d.asset_class == "experiment_manager":
+        if floor.uses_plant() and d.role_class == "experiment_manager":
             _rotate(home / PLANT_LOG)  # this start's E^P rows in a table of their own
-        if study is not None and d.asset_class == "experiment_manager":
+        if study is not None and d.role_class == "experiment_manager":
             own_study = _copy_private(Path(study), home / "study.sqlite")
         configs[aid] = AssetConfig(
             asset_id=aid, floor_file=floor_file, host=hosts[aid], port=ports[aid],
@@ -358,6 +358,7 @@ def write_floor_info(workdir: Path, configs: dict[str, AssetConfig], floor: Floo
     info = {
         "floor": str((workdir / "floor.toml").resolve()),
         "assets": [{"id": aid, "kind": by_id[aid].kind.value, "class": by_id[aid].asset_class,
+                    "role_class": by_id[aid].role_class,
                     "type": by_id[aid].physical_type.value if by_id[aid].physical_type else None,
                     "endpoint": cfg.endpoint,
                     "security_policy": "None" if cfg.insecure else "Basic256Sha256_SignAndEncrypt",

@@ -100,6 +100,7 @@ def merge_assets(
         if not isinstance(aid, str) or aid in out or not row.get("address"):
             continue
         out[aid] = {"id": aid, "kind": row.get("kind"), "class": row.get("class"),
+                    "role_class": row.get("role_class", row.get("class")),
                     "type": None, "endpoint": row["address"], "security_policy": policy,
                     "joined": True}  # fmt: skip
     return dict(sorted(out.items()))

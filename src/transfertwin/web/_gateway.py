@@ -446,8 +446,11 @@ class CpsGateway(OrderDesk):
         return self._assets[aid]
 
     def ids_of(self, cls: str) -> list[str]:
-        """Asset ids of one class (from cps.json), e.g. 'transfer_unit', 'object'."""
-        return [aid for aid, a in self._assets.items() if a.get("class") == cls]
+        """Asset ids of one generic class (from cps.json), e.g. 'transfer_unit', 'object': a
+        class of its own counts as the one it runs as (``role_class``, a buffer station as
+        a transfer unit)."""
+        return [aid for aid, a in self._assets.items()
+                if a.get("role_class", a.get("class")) == cls]  # fmt: skip
 
     # -- orders: the floor's operations by their unique id ----------------------------------
     def order_rows(self) -> list[dict[str, Any]]:

@@ -89,6 +89,7 @@ def heartbeat_payload(desc: AssetDescriptor, endpoint: str, policy: str,
     repeat across hosts), and its live state (state, docked, possesses, location, pose)."""
     return json.dumps({
         "id": desc.asset_id, "kind": desc.kind.value, "class": desc.asset_class,
+        "role_class": desc.role_class,
         "type": desc.physical_type.value if desc.physical_type else None,
         "capabilities": [c.value for c in desc.capabilities], "station": desc.station,
         "constraints": [[c.value, name, value] for c, name, value in desc.constraints],

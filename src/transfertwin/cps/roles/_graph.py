@@ -217,6 +217,7 @@ class GraphRole(Role):
         for aid, d in sorted(self.info.items()):
             online = aid in self.leases or aid == self.aid
             rows.append({"id": aid, "kind": d.get("kind"), "class": d.get("class"),
+                         "role_class": d.get("role_class", d.get("class")),
                          "address": d.get("endpoint"), "pid": d.get("pid"),
                          "instance": d.get("instance"), "online": online,
                          "state": d.get("state") if online else "offline",

@@ -28,6 +28,7 @@ from cryptography import x509
 
 from transfertwin.cps.floor import AssetConfig
 from transfertwin.cps.opcua import (
+    CA_CERT,
     ROLES,
     FloorCA,
     application_uri,
@@ -37,7 +38,6 @@ from transfertwin.cps.opcua import (
     load_ca,
     new_request,
 )
-from transfertwin.cps.opcua._ca import CA_CERT
 
 __all__ = ["CA_DIR", "prepare_certificates"]
 

@@ -3,6 +3,7 @@
 from transfertwin.cps.opcua._aspace import build_standard_address_space
 from transfertwin.cps.opcua._ca import (
     BACKDATE,
+    CA_CERT,
     FloorCA,
     IssuedCertificate,
     application_uri,
@@ -51,6 +52,7 @@ from transfertwin.cps.opcua._server import (
 __all__ = [
     "ASSET_ROLE",
     "BACKDATE",
+    "CA_CERT",
     "NAMESPACE",
     "OPERATOR_METHODS",
     "ROLES",

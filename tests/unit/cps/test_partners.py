@@ -173,3 +173,14 @@ def test_a_description_may_not_state_another_assets_constraints(graph):
     desc.add((other, TT.value, Literal(9.0)))
     with pytest.raises(InputError, match="may state only the asset"):
         graph.join_graph(desc)
+
+
+def test_kg_11_a_constraint_value_names_a_constraint_of_the_ontology(graph):
+    from rdflib import URIRef
+
+    desc = graph.describe(_module("light_transport_module"),
+                          endpoint="opc.tcp://127.0.0.1:4840")  # fmt: skip
+    own = URIRef("https://transfertwin.dev/ids/asset/TM_L/capability/transport/ObjectMassMax")
+    desc.set((own, TT.constraint, TT.PayloadMax))  # no such concept
+    with pytest.raises(InputError, match="KG-11"):
+        graph.join_graph(desc)

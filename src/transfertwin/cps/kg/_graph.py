@@ -1,7 +1,7 @@
 """The knowledge graph: the descriptive layer as a logical asset (Sec. 3.3).
 
 Assets join with an RDF description (built by `describe` from an `AssetDescriptor`, or
-sent by the asset itself), which must pass the SHACL shapes KG-1 … KG-10 before any of
+sent by the asset itself), which must pass the SHACL shapes KG-1 … KG-11 before any of
 it enters the graph. The graph holds the ontology (TBox) and the asset descriptions
 (ABox) together, so queries may follow ``rdfs:subClassOf``.
 
@@ -102,7 +102,7 @@ class KnowledgeGraph:
         security_policy: str | None = None,
         state: str | None = "idle",
     ) -> None:
-        """Validate an asset's description (KG-1 … KG-10) and add it; see `describe`.
+        """Validate an asset's description (KG-1 … KG-11) and add it; see `describe`.
 
         A joining asset is 'idle' unless ``state`` says otherwise (None: unknown).
         """

@@ -12,7 +12,10 @@ Shape rules (``data/ontology/shapes.ttl``; messages carry the id):
 * KG-8 an object is located at (``tt:locatedAt``) no more than one asset;
 * KG-9 every concept an AAS names (``tt:AasConcept``) has a label and a ``skos:definition``
   (a rule of the ontology itself: `tests/unit/cps/test_ontology.py` checks it);
-* KG-10 an asset's ``tt:hasCapability`` values are ``tt:Capability`` individuals.
+* KG-10 an asset's ``tt:hasCapability`` values are ``tt:Capability`` individuals;
+* KG-11 a capability constraint's value (``tt:ConstraintValue``) binds one
+  ``tt:Capability`` (``tt:ofCapability``), names one ``tt:CapabilityConstraint``
+  (``tt:constraint``) and has one literal ``tt:value``.
 
 Beyond the shapes, a description must be about one asset whose IRI matches its id, be
 online, and state nothing about nodes other than the asset, its own interfaces and its
@@ -42,7 +45,7 @@ def _shapes() -> Graph:
 
 
 def first_violation(data: Graph, focus: set[URIRef] | None = None) -> str | None:
-    """Validate ``data`` against the shapes KG-1 … KG-10.
+    """Validate ``data`` against the shapes KG-1 … KG-11.
 
     Args:
         data: The data graph.

@@ -70,6 +70,11 @@ def test_orders_use_a_module_class_the_code_has_never_seen_within_its_constraint
             kg = local.nodes["KG"].role.kg
             assert kg.query('SELECT ?c WHERE { ?a tt:assetId "LM_1" ; tt:assetClass ?c }') == [
                 {"c": "light_transport_module"}]  # fmt: skip
+            # the command line and the console pick units and modules by the class they run as
+            info = {a["id"]: a for a in json.loads((wd / "cps.json").read_text())["assets"]}
+            assert (info["TU_B"]["class"], info["TU_B"]["role_class"]) == (
+                "buffer_station", "transfer_unit")  # fmt: skip
+            assert info["LM_1"]["role_class"] == "transport_module"
             async with local.client("LM_1", role="viewer") as lm:
                 assert await lm.read("Identification", "AssetClass") == "light_transport_module"
             async with local.client("TMS") as tms:

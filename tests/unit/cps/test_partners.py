@@ -5,6 +5,8 @@ with which constraints, online or not."""
 
 from __future__ import annotations
 
+import asyncio
+import json
 import tomllib
 
 import pytest
@@ -21,7 +23,14 @@ from transfertwin.cps.aas import (
 from transfertwin.cps.floor import parse_floor
 from transfertwin.cps.floor._floor_io import floor_toml
 from transfertwin.cps.kg import CAPABILITY_IRIS, TT, KnowledgeGraph
-from transfertwin.cps.node import Partner, capability_name, partners_from_rows, partners_query
+from transfertwin.cps.node import (
+    Partner,
+    capability_name,
+    find_partner_ids,
+    find_partners,
+    partners_from_rows,
+    partners_query,
+)
 
 _TM_CAPS = (Capability.TRANSPORT, Capability.TRANSFER, Capability.SENSE)
 
@@ -184,3 +193,36 @@ def test_kg_11_a_constraint_value_names_a_constraint_of_the_ontology(graph):
     desc.set((own, TT.constraint, TT.PayloadMax))  # no such concept
     with pytest.raises(InputError, match="KG-11"):
         graph.join_graph(desc)
+
+
+class _Node:
+    """An asset node as `find_partners` sees it: its floor's assets, and a graph that
+    answers `rows` (or does not answer: None)."""
+
+    def __init__(self, rows, floor_text: str = FLOOR) -> None:
+        descs = parse_floor(tomllib.loads(floor_text), "makes").descriptors()
+        self.descriptors = {d.asset_id: d for d in descs}
+        self.desc = self.descriptors["TM_L"]
+        self.rows = rows
+        self.asked: list[tuple] = []
+        self.peers = self
+
+    async def call(self, aid: str, op: str, *args):
+        self.asked.append((aid, op))
+        if self.rows is None:
+            raise ConnectionError("the graph is away")
+        return json.dumps(self.rows)
+
+
+def test_partners_are_asked_of_the_graph_and_of_the_floor_file_while_it_is_away():
+    rows = [{"id": "TMS", "status": "online"}, {"id": "TMS_2", "status": "offline"}]
+    node = _Node(rows)
+    assert asyncio.run(find_partner_ids(node, Capability.ALLOCATE)) == ["TMS"]
+    assert asyncio.run(find_partner_ids(node, Capability.ALLOCATE, online=False)) == [
+        "TMS", "TMS_2"]  # fmt: skip
+    assert node.asked[0] == ("KG", "Query")  # the graph, found through its seed
+    away = _Node(None)
+    assert asyncio.run(find_partners(away, Capability.ALLOCATE)) is None
+    # by what the floor file's assets offer, never their class; not the asking asset itself
+    assert asyncio.run(find_partner_ids(away, Capability.TRANSPORT)) == ["TM_1"]
+    assert asyncio.run(find_partner_ids(away, Capability.ALLOCATE)) == ["TMS"]

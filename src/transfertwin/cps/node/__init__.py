@@ -31,6 +31,7 @@ if TYPE_CHECKING:
     from transfertwin.cps.node._partners import (
         Partner,
         capability_name,
+        find_partner_ids,
         find_partners,
         partners_from_rows,
         partners_query,
@@ -56,6 +57,7 @@ __all__ = [
     "capability_name",
     "default_lease",
     "directory_reply",
+    "find_partner_ids",
     "find_partners",
     "heartbeat_payload",
     "heartbeat_period",

@@ -24,7 +24,14 @@ from transfertwin.cps.aas import Capability
 if TYPE_CHECKING:
     from transfertwin.cps.node._node import AssetNode
 
-__all__ = ["Partner", "capability_name", "find_partners", "partners_from_rows", "partners_query"]
+__all__ = [
+    "Partner",
+    "capability_name",
+    "find_partner_ids",
+    "find_partners",
+    "partners_from_rows",
+    "partners_query",
+]
 
 log = logging.getLogger(__name__)
 
@@ -134,3 +141,16 @@ async def find_partners(node: AssetNode, cap: Capability,
         return None
     return [p for p in partners_from_rows(json.loads(answer))
             if (p.online or not online) and p.admits(needs or {})]  # fmt: skip
+
+
+async def find_partner_ids(node: AssetNode, cap: Capability, *,
+                           online: bool = True) -> list[str]:  # fmt: skip
+    """Ids of the assets that realise `cap` (`find_partners`: the online ones, or with
+    ``online=False`` all, the online first); while the graph does not answer, those of the
+    floor file that offer it (the node's descriptors: what they offer, never their class),
+    so that a report or a pose is not held up by the graph."""
+    found = await find_partners(node, cap, online=online)
+    if found is not None:
+        return [p.asset_id for p in sorted(found, key=lambda p: not p.online)]
+    return sorted(aid for aid, d in node.descriptors.items()
+                  if cap in d.capabilities and aid != node.desc.asset_id)  # fmt: skip

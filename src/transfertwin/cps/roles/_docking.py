@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from transfertwin.cps.aas import Capability
-from transfertwin.cps.node import find_partners
+from transfertwin.cps.node import find_partner_ids
 from transfertwin.sim import DockingError
 
 __all__ = ["CAMERA_SIGMA_THETA_RAD", "CAMERA_SIGMA_XY_M", "observe_docking",
@@ -66,19 +66,18 @@ async def props_docking_estimate(role, unit: str, error, observed,
     the emulated plant the physics docks with the true error (it is the reality; the
     estimate is what the twin knows). Without PropS on the floor, or when it does not
     answer, `error` (recorded as `measured`: the true one, or the module's localisation's
-    on real hardware), and why. PropS is the asset the knowledge graph says realises
-    FusePoses (`find_partners`, offline ones too: one that is away is said to be)."""
+    on real hardware), and why. PropS is the asset that realises FusePoses
+    (`find_partner_ids`: the graph's answer, offline ones too: one that is away is said to
+    be; or the floor file's while the graph is away)."""
     tm = role.aid
-    fusers = await find_partners(role.node, Capability.FUSE_POSES, online=False)
-    if fusers == []:  # no pose fuser on the floor
+    fusers = await find_partner_ids(role.node, Capability.FUSE_POSES, online=False)
+    if not fusers:  # no pose fuser on the floor
         return error, None
+    props = fusers[0]
     own, seen = await asyncio.to_thread(observed)
     info: dict[str, Any] = {measured: _mm_deg(error.x_m, error.y_m, error.theta_rad),
                             "camera": seen is not None}  # fmt: skip
     try:
-        if fusers is None:
-            raise ConnectionError("the knowledge graph does not answer")
-        props = next((f.asset_id for f in fusers if f.online), fusers[0].asset_id)
         await asyncio.wait_for(role.node.peers.call(props, "ReportPose", tm, tm, *own), 10.0)
         if seen is not None:
             await asyncio.wait_for(role.node.peers.call(

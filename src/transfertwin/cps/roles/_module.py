@@ -38,7 +38,7 @@ from transfertwin.cps.apps import (
 )
 from transfertwin.cps.dispatch import estimate, floor_seconds
 from transfertwin.cps.hal import MirroredUnitHAL, environment_for, load_scene
-from transfertwin.cps.node import Role, find_partners
+from transfertwin.cps.node import Role, find_partner_ids
 from transfertwin.cps.opcua import OpcUaUnitHAL, OperationRefused
 from transfertwin.cps.roles._docking import observe_docking, props_docking_estimate
 
@@ -279,19 +279,19 @@ class ModuleRole(Role):
         self._outbox_kick.set()
 
     async def _flush_outbox(self) -> None:
-        """Send the queued reports, in order, to the allocator: the asset the knowledge
-        graph says realises Allocate (`find_partners`; the TMS)."""
+        """Send the queued reports, in order, to the allocator: the asset that realises
+        Allocate (`find_partner_ids`; the TMS)."""
         while True:
             outbox = self.state.data["outbox"]
-            allocators = await find_partners(self.node, Capability.ALLOCATE) if outbox else []
+            allocators = await find_partner_ids(self.node, Capability.ALLOCATE) if outbox else []
             while outbox:
                 op_id, event = outbox[0]
                 try:
                     if not allocators:
                         raise ConnectionError("no online asset realises Allocate")
+                    report = json.dumps(event)
                     await asyncio.wait_for(self.node.peers.call(
-                        allocators[0].asset_id, "ReportProgress", op_id, json.dumps(event)),
-                        10.0)  # fmt: skip
+                        allocators[0], "ReportProgress", op_id, report), 10.0)  # fmt: skip
                 except Exception as exc:
                     log.debug("%s: TMS not answering (%s); report kept", self.aid, exc)
                     break

@@ -39,7 +39,7 @@ from transfertwin.cps.dispatch import (
     rerank,
     twin_words,
 )
-from transfertwin.cps.node import Partner, Role, find_partners
+from transfertwin.cps.node import Partner, Role, find_partner_ids, find_partners
 from transfertwin.cps.opcua import OperationRefused
 
 if TYPE_CHECKING:
@@ -310,14 +310,13 @@ class TmsRole(Role):
 
     async def _ask_em(self, obj: str) -> list[dict[str, Any]]:
         """Poll the Experiment Manager's `Predict` until its experiments are done: the
-        asset that realises Experiment (`find_partners`; the first by id if several)."""
+        asset that realises Experiment (`find_partner_ids`; the first by id if several)."""
         spec = self.node.floor.operation
         while True:
-            managers = await find_partners(self.node, Capability.EXPERIMENT)
+            managers = await find_partner_ids(self.node, Capability.EXPERIMENT)
             if not managers:
-                raise ConnectionError("no online asset realises Experiment (the knowledge "
-                                      f"graph: {'away' if managers is None else 'none'})")
-            em = managers[0].asset_id
+                raise ConnectionError("no online asset realises Experiment")
+            em = managers[0]
             answer = await asyncio.wait_for(self.node.peers.call(
                 em, "Predict", obj, spec.runs, self.node.cfg.seed), 10)  # fmt: skip
             if answer:

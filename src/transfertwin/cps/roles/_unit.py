@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 from transfertwin.cps.aas import Capability
 from transfertwin.cps.hal import GatewayHAL, poll_gateway
-from transfertwin.cps.node import Role, find_partners
+from transfertwin.cps.node import Role, find_partner_ids
 
 if TYPE_CHECKING:
     from transfertwin.cps.node import AssetNode
@@ -97,7 +97,7 @@ class UnitRole(Role):
         return None if row is None else bool(row.get("online"))
 
     async def _report_pose(self) -> None:
-        """Tell the pose fusers (the assets that realise FusePoses: PropS, `find_partners`)
+        """Tell the pose fusers (the assets that realise FusePoses: PropS, `find_partner_ids`)
         where this unit stands (its surveyed docking goal on the floor), and again every
         `POSE_REPORT_S` (a restarted one hears it then); while the graph lists none, ask it
         again every `NO_FUSER_S`."""
@@ -106,15 +106,15 @@ class UnitRole(Role):
         spec = next(s for s in floor.stations if s.unit == self.aid)
         x, y, theta = (float(v) for v in floor.shop_floor().station(spec.name).goal_pose())
         while True:
-            fusers = await find_partners(self.node, Capability.FUSE_POSES)
+            fusers = await find_partner_ids(self.node, Capability.FUSE_POSES)
             delay = POSE_REPORT_S if fusers else NO_FUSER_S
-            for fuser in fusers or ():
+            for fuser in fusers:
                 try:
                     await asyncio.wait_for(self.node.peers.call(
-                        fuser.asset_id, "ReportPose", self.aid, self.aid, x, y, theta,
+                        fuser, "ReportPose", self.aid, self.aid, x, y, theta,
                         UNIT_SIGMA_XY_M, UNIT_SIGMA_THETA_RAD), 10.0)  # fmt: skip
                 except Exception as exc:  # not (yet) answering: try again soon
-                    log.debug("%s: %s not answering (%s)", self.aid, fuser.asset_id, exc)
+                    log.debug("%s: %s not answering (%s)", self.aid, fuser, exc)
                     delay = 2.0
             await asyncio.sleep(delay)
 

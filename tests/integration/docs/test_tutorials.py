@@ -109,3 +109,4 @@ def test_cps_and_console_runs_as_written(tmp_path: Path) -> None:
                 subprocess.run([TT, "cps", "down", "--workdir", str(tmp_path / "work" / wd)],
                                capture_output=True, timeout=120)  # fmt: skip
     assert "o5" in proc.stdout and "TU_C" in proc.stdout
+    assert re.search(r"campaign \w{12}: finished; \d+ E\^P", proc.stdout), proc.stdout[-2000:]

@@ -50,7 +50,7 @@ PREDICTIONS = "predictions.json"
 STATUS = "campaign.json"
 
 #: The twin's counter-measures in a campaign: the floor's units have no scale, so the
-#: measured-mass one (`EmulatedPlant.weigh`) is off.
+#: measured-mass one (the plant's `weigh` in a rehearsal) is off.
 CAMPAIGN_MEASURES = ("stability", "compliance")
 
 _KEYS = {"objects", "experiments", "runs", "validation_runs", "theta_step", "seed",

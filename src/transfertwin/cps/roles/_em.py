@@ -231,7 +231,7 @@ class ExperimentRole(Role):
         return sorted(
             d.asset_id
             for d in self.node.descriptors.values()
-            if d.kind is AssetKind.PHYSICAL and d.asset_class == "transfer_unit"
+            if d.kind is AssetKind.PHYSICAL and d.role_class == "transfer_unit"
         )
 
     async def _start_campaign(self, request_json: str) -> str:
@@ -455,7 +455,7 @@ class ExperimentRole(Role):
 
         desc = self.node.descriptors.get(unit)
         if desc is not None and desc.kind is AssetKind.PHYSICAL and \
-                desc.asset_class == "transfer_unit":  # E^P on the plant's unit
+                desc.role_class == "transfer_unit":  # E^P on the plant's unit
             return await self._run_physical(unit, obj, face, conveyor, theta_deg, seed)
         if unit not in self.node.floor.units:
             raise ValueError(f"no transfer unit {unit!r}")

@@ -54,7 +54,11 @@ class Floor:
         self.info = json.loads((wd / "cps.json").read_text())
         self.creds = load_credentials(Path(self.info["credentials_file"]))
         self.endpoint = {a["id"]: a["endpoint"] for a in self.info["assets"]}
-        self.cls = {a["id"]: a["class"] for a in self.info["assets"]}
+        # the floor's own assets by class; a plant's physical units (TU_A_P...) are not
+        # destinations of orders (the TMS refuses them) and hold nothing of the ledger's
+        self.cls = {a["id"]: a["class"] for a in self.info["assets"]
+                    if a.get("kind") != "physical"}  # fmt: skip
+        self.ids = sorted(a["id"] for a in self.info["assets"])  # every asset can be killed
 
     async def call(self, aid: str, op: str, *args, timeout_s: float = 5.0):
         from transfertwin.cps.opcua import connect
@@ -162,7 +166,7 @@ async def chaos(args: argparse.Namespace) -> int:
     submitted: list[str] = []
     refused: Counter = Counter()
     flow = asyncio.ensure_future(order_flow(floor, rng, stop, submitted, refused, modules))
-    victims = sorted(floor.cls)
+    victims = floor.ids
     detect, rejoin, kills = [], [], []
     try:
         for k in range(args.kills):

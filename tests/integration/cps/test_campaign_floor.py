@@ -125,6 +125,12 @@ def test_a_campaign_survives_an_em_killed_with_minus_9_and_publishes_predictions
                "--theta-step", "90", "--seed", "2", "--wait")  # fmt: skip
     assert again.returncode == 0 and "finished" in again.stdout, again.stderr
     assert _status(wd)["plant_experiments"] == final["plant_experiments"]
+    # the TMS plans o5's next order with the predictions in o5's AAS (an outcome either way)
+    order = tt("cps", "order", "--workdir", str(wd), "--object", "o5", "--to", "TU_C")
+    assert order.returncode in (0, 3), order.stderr
+    ops = json.loads(_call(wd, "TMS", op="Orders"))
+    status = _call(wd, "TMS", op="OperationStatus", args=(ops[-1]["operation"],))
+    assert f"predictions of o5 from its AAS (campaign {campaign})" in status, status[:2000]
     # the KPIs count the campaign's floor time as a cost
     kpis = tt("cps", "kpis", "--workdir", str(wd), "--json")
     assert kpis.returncode == 0, kpis.stderr

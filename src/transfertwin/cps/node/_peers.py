@@ -86,6 +86,16 @@ class Peers:
                 await self.drop(aid)
                 raise
 
+    async def read(self, aid: str, prop: str) -> Any:
+        """Read an OperationalData property of `aid`."""
+        lock = self._locks.setdefault(aid, asyncio.Lock())
+        async with lock:
+            try:
+                return await (await self.session(aid)).read("OperationalData", prop)
+            except Exception:
+                await self.drop(aid)
+                raise
+
     async def drop(self, aid: str) -> None:
         """Close the session with `aid`, if any."""
         held = self._stacks.pop(aid, None)

@@ -283,12 +283,24 @@ class TmsRole(Role):
                 "fallback": after}  # fmt: skip
 
     async def _predictions(self, obj: str, op_id: str) -> list[dict[str, Any]]:
-        """The twin's ranked states for `obj`: cached; else the Experiment Manager's (from
-        the floor's study store, which its bundle holds, or its on-the-fly experiments;
-        each prediction names its ``source``). When it does not answer, the operation's
-        history and the log say so, and ``Kpis`` counts it (``predictions_unanswered``)."""
+        """The twin's ranked states for `obj`: those a calibration campaign published in
+        the object's AAS (``PredictionsJson``; a newer campaign replaces what was cached);
+        else cached; else the Experiment Manager's (from the floor's study store, which its
+        bundle holds, or its on-the-fly experiments; each prediction names its
+        ``source``). When it does not answer, the operation's history and the log say so,
+        and ``Kpis`` counts it (``predictions_unanswered``)."""
 
         cache = self.state.data.setdefault("predictions", {})
+        published = await self._published(obj)
+        if published is not None:
+            campaign, states = published
+            if self.state.data.setdefault("prediction_campaign", {}).get(obj) != campaign:
+                self.state.data["prediction_campaign"][obj] = campaign
+                cache[obj] = states
+                self.ops[op_id]["history"].append(
+                    [time.time(), f"predictions of {obj} from its AAS (campaign {campaign})"])
+                self.book.save()
+            return cache[obj]
         if obj in cache:
             return cache[obj]
         self.ops[op_id]["history"].append(
@@ -307,6 +319,21 @@ class TmsRole(Role):
         cache[obj] = preds
         self.book.save()
         return preds
+
+    async def _published(self, obj: str) -> tuple[str, list[dict[str, Any]]] | None:
+        """(campaign, ranked states) a calibration campaign published in `obj`'s AAS, or
+        None: none yet, or the object's server does not answer (the EM's `Predict` answers
+        from the same campaign)."""
+        try:
+            doc = json.loads(await asyncio.wait_for(
+                self.node.peers.read(obj, "PredictionsJson"), 2) or "{}")  # fmt: skip
+        except Exception as exc:
+            log.debug("TMS: %s's published predictions not read: %r", obj, exc)
+            return None
+        states = doc.get("states") if isinstance(doc, dict) else None
+        if not states or not doc.get("campaign"):
+            return None
+        return str(doc["campaign"]), states
 
     async def _ask_em(self, obj: str) -> list[dict[str, Any]]:
         """Poll the Experiment Manager's `Predict` until its experiments are done: the

@@ -93,6 +93,14 @@ class OrderBook:
                 f"where {obj} is is unknown since {unknown['operation']} "
                 f"(last seen at {unknown['last_seen']}); say where it is with "
                 f"'transfertwin cps locate'", status="BadInvalidState", argument="object")
+        stuck = self.data.get("stuck", {}).get(obj)
+        if stuck is not None and self.tail(obj) is None:
+            raise OperationRefused(
+                f"{obj} lies on {stuck['module']} outside a pre-transfer state (the scan of "
+                f"{stuck['operation']}): no transfer can start from there and a module cannot "
+                f"turn it; take it off, put it on a transfer unit and say where "
+                f"('transfertwin cps locate --object {obj} --at UNIT')",
+                status="BadInvalidState", argument="object")  # fmt: skip
         targets = self.targets(destination)
         after = self.tail(obj)
         if after is not None and source is not None:
@@ -176,6 +184,7 @@ class OrderBook:
         """`obj` is on `holder` now (its place known again)."""
         previous = self.ledger.move(obj, holder)
         self.data["unknown"].pop(obj, None)
+        self.data.get("stuck", {}).pop(obj, None)
         self.save()
         self.pending |= {previous, holder, obj}
 
@@ -214,6 +223,12 @@ class OrderBook:
         record(self.data.setdefault("evidence", {}), obj,
                (op.get("plan") or {}).get("state"), result)  # fmt: skip
         ok = result.get("status") == "delivered"
+        where = self.ledger.location(obj)
+        if not ok and where not in self.floor.units and where in self.ledger.holders and \
+                result.get("failed_step") == "scanning" and \
+                NOT_PRE_TRANSFER in str(result.get("reason", "")):  # fmt: skip
+            # left on the module where no transfer can start: only an operator can help
+            self.data.setdefault("stuck", {})[obj] = {"module": where, "operation": op_id}
         op.update(state="finished", phase="done" if ok else "failed", result=result,
                   location=self.where(obj), finished=time.time())  # fmt: skip
         op["history"].append([time.time(), op["phase"]])
@@ -288,6 +303,11 @@ class OrderBook:
 _ORDER_STATE = {"queued": "queued", "assigned": "assigned", "navigating": "driving",
                 "docking": "docking", "scanning": "docking", "transferring": "transferring",
                 "done": "done", "failed": "failed"}  # fmt: skip
+
+
+#: What a module's scan says of an object that rests outside every pre-transfer state
+#: (`cps.apps.form_ots`): on a module's belts it stays so until someone takes it off.
+NOT_PRE_TRANSFER = "is not in a pre-transfer state"
 
 
 def order_view(op: Mapping[str, Any]) -> dict[str, Any]:

@@ -142,7 +142,11 @@ async def order_flow(floor: Floor, rng: random.Random, stop: asyncio.Event,
                 submitted.append(await floor.call("TMS", "SubmitTransportOperation", source,
                                                   target, obj))  # fmt: skip
             except Exception as exc:
-                refused[getattr(exc, "reason", type(exc).__name__)[:60]] += 1
+                reason = getattr(exc, "reason", type(exc).__name__)
+                refused[reason[:60]] += 1
+                if "outside a pre-transfer state" in reason:  # as an operator would:
+                    with contextlib.suppress(Exception):  # take it off onto a station
+                        await floor.call("TMS", "Locate", obj, target)
         await asyncio.sleep(0.5)
 
 

@@ -158,6 +158,11 @@ def drive(wd: Path, orders: list[tuple[str, str]], inflight: int, timeout_s: flo
                     pending.insert(nxt, (obj, dest))
                     retried += 1
                     break
+                if "outside a pre-transfer state" in exc.reason:  # left on a module where
+                    tms("Locate", obj, next(u for u in sorted(units) if u != dest))  # no
+                    located += 1  # transfer starts: an operator puts it on a unit, and
+                    pending.insert(nxt, (obj, dest))  # the order goes from there
+                    break
                 refused.append({"object": obj, "destination": dest, "reason": exc.reason})
         located += unload_idle(tms, units, pending, running)  # a module kept blocked
         done = len(orders) - len(pending) - len(running)

@@ -111,7 +111,8 @@ def _predictions(doc: Mapping[str, Any]) -> str:
     if not isinstance(best, Mapping):
         return "no campaign has predicted it yet"
     legs = "both legs" if doc.get("leg") == "operation" else "there and back"
-    text = f"best {_state_words(best)} ({legs})"
+    advice = f"{doc['advice']} " if doc.get("advice") else ""
+    text = f"{advice}best {_state_words(best)} ({legs})"
     if isinstance(worst, Mapping) and worst != best:
         text += f"; worst {_state_words(worst)}"
     return text + f"; campaign {doc.get('campaign', '?')}"

@@ -119,6 +119,7 @@ def test_a_campaign_survives_an_em_killed_with_minus_9_and_publishes_predictions
     assert all(p["leg"] == "operation" and p["k_pickup"] is not None for p in preds)
     shown = json.loads(_call(wd, "o5", prop="PredictionsJson"))
     assert shown["campaign"] == campaign and shown["best"] == preds[0]
+    assert shown["advice"].startswith("Put it ")  # decided as the study's report decides
     # the same request again: its outputs stand, nothing reruns
     again = tt("cps", "campaign", "start", "--workdir", str(wd), "--objects", "o1,o5",
                "--experiments", str(K), "--runs", "1", "--validation-runs", "2",

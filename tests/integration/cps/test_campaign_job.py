@@ -11,7 +11,7 @@ import pytest
 
 from transfertwin._errors import InputError
 from transfertwin.cps.apps import CampaignJob, CampaignRequest
-from transfertwin.cps.dispatch import campaign_predictions
+from transfertwin.cps.dispatch import campaign_advice, campaign_predictions
 from transfertwin.plant import EmulatedPlant, PlantRequest
 from transfertwin.rehearsal import REHEARSAL_KEYS, calibration_design
 
@@ -83,6 +83,9 @@ def test_a_campaign_stops_resumes_from_its_journal_and_publishes_predictions(tmp
             assert s["ci_low"] <= s["share"] <= s["ci_high"]
             assert s["source"] == f"campaign {request.campaign_id}"
     assert final["summary"]["f05_before"] == doc["f05_before"]
+    advice = campaign_advice(folder, ["o1", "o23", "o2"])
+    assert advice["o1"].startswith("Put it ") and advice["o23"].startswith("Put it ")
+    assert advice["o2"] == ""  # not in the campaign
 
 
 def test_a_journal_of_another_campaign_is_refused(tmp_path) -> None:

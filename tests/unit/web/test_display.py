@@ -70,3 +70,7 @@ def test_an_objects_calibrated_predictions_read_as_its_best_and_worst_state() ->
         "runs; campaign 8f5d3906a510"
     )
     assert value_text("PredictionsJson", "{}") == "no campaign has predicted it yet"
+    advised = {**doc, "advice": "Put it on its front face, on any conveyor, at any θ."}
+    assert value_text("PredictionsJson", json.dumps(advised)).startswith(
+        "Put it on its front face, on any conveyor, at any θ. best front face up"
+    )

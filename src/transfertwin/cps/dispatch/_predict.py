@@ -33,6 +33,7 @@ __all__ = [
     "DEFAULT_STATE",
     "ON_THE_FLY_THETA_STEP",
     "StatePrediction",
+    "campaign_advice",
     "campaign_predictions",
     "learning_alone_states",
     "rank_states",
@@ -149,6 +150,23 @@ def campaign_predictions(folder: Path, objects: Sequence[str], campaign_id: str,
         rows = [_typed(r) for r in csv.DictReader(f)]
     source = f"campaign {campaign_id}"
     return {o: [p.as_dict() for p in rank_states(rows, o, source, leg)] for o in objects}
+
+
+def campaign_advice(folder: str | Path, objects: Sequence[str]) -> dict[str, str]:
+    """Each object's placement advice from a campaign's ``fullstate.csv``, decided as the
+    study's report decides it (face, then conveyor, then θ, each only where the twin's runs
+    tell them apart: `decide_placement`), in words; '' for an object it has no run of."""
+    import csv
+
+    from transfertwin.study.fullstate import decide_placement, placement_headline, state_table
+
+    with (Path(folder) / "fullstate.csv").open(newline="") as f:
+        stats = state_table([_typed(r) for r in csv.DictReader(f)])
+    out = {}
+    for obj in objects:
+        mine = [s for s in stats if s.object_id == obj and s.n > 0]
+        out[obj] = placement_headline(decide_placement(mine, obj)) if mine else ""
+    return out
 
 
 def virtual_predictions(obj: str, runs: int, seed: int, scene=None, workers: int = 1,

@@ -34,6 +34,7 @@ from transfertwin.cps.apps import (
     study_opcua_values,
 )
 from transfertwin.cps.dispatch import (
+    campaign_advice,
     campaign_predictions,
     study_predictions,
     virtual_predictions,
@@ -301,8 +302,10 @@ class ExperimentRole(Role):
         object that is away gets them from `Predict` all the same."""
         path = job.folder / "predictions.json"
         doc = json.loads(await asyncio.to_thread(path.read_text))
+        advice = await asyncio.to_thread(campaign_advice, job.folder, list(doc["predictions"]))
         for obj, preds in doc["predictions"].items():
             value = json.dumps({"campaign": doc["campaign"], "leg": doc["leg"],
+                                "advice": advice.get(obj, ""),
                                 "best": preds[0] if preds else None,
                                 "worst": preds[-1] if preds else None,
                                 "states": preds})  # fmt: skip

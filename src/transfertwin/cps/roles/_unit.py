@@ -99,14 +99,19 @@ class UnitRole(Role):
     async def _report_pose(self) -> None:
         """Tell the pose fusers (the assets that realise FusePoses: PropS, `find_partner_ids`)
         where this unit stands (its surveyed docking goal on the floor), and again every
-        `POSE_REPORT_S` (a restarted one hears it then); while the graph lists none, ask it
-        again every `NO_FUSER_S`."""
+        `POSE_REPORT_S` (a restarted one hears it then). While the graph lists none online,
+        those the floor file says offer it are told (one still starting answers within
+        seconds: tried again every 2 s, as an order may dock by then); with none at all, the
+        graph is asked again every `NO_FUSER_S`."""
 
         floor = self.node.floor
         spec = next(s for s in floor.stations if s.unit == self.aid)
         x, y, theta = (float(v) for v in floor.shop_floor().station(spec.name).goal_pose())
         while True:
             fusers = await find_partner_ids(self.node, Capability.FUSE_POSES)
+            if not fusers:  # none online yet: those the floor file says offer it (a fuser
+                fusers = sorted(aid for aid, d in self.node.descriptors.items()  # starting
+                                if Capability.FUSE_POSES in d.capabilities)  # fmt: skip
             delay = POSE_REPORT_S if fusers else NO_FUSER_S
             for fuser in fusers:
                 try:

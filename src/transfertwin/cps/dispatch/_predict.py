@@ -140,14 +140,19 @@ def _typed(row: Mapping[str, str]) -> dict[str, Any]:
     return out
 
 
+def _fullstate_rows(folder: str | Path) -> list[dict[str, Any]]:
+    """A campaign's ``fullstate.csv`` rows, typed (`_typed`)."""
+    import csv
+
+    with (Path(folder) / "fullstate.csv").open(newline="") as f:
+        return [_typed(r) for r in csv.DictReader(f)]
+
+
 def campaign_predictions(folder: Path, objects: Sequence[str], campaign_id: str,
                          leg: str = "operation") -> dict[str, list[dict[str, Any]]]:  # fmt: skip
     """Each object's states as the calibrated twin predicts them (its ``fullstate.csv``),
     ranked best first as the TMS ranks them (`rank_states`), as `StatePrediction.as_dict`."""
-    import csv
-
-    with (Path(folder) / "fullstate.csv").open(newline="") as f:
-        rows = [_typed(r) for r in csv.DictReader(f)]
+    rows = _fullstate_rows(folder)
     source = f"campaign {campaign_id}"
     return {o: [p.as_dict() for p in rank_states(rows, o, source, leg)] for o in objects}
 
@@ -156,12 +161,9 @@ def campaign_advice(folder: str | Path, objects: Sequence[str]) -> dict[str, str
     """Each object's placement advice from a campaign's ``fullstate.csv``, decided as the
     study's report decides it (face, then conveyor, then θ, each only where the twin's runs
     tell them apart: `decide_placement`), in words; '' for an object it has no run of."""
-    import csv
-
     from transfertwin.study.fullstate import decide_placement, placement_headline, state_table
 
-    with (Path(folder) / "fullstate.csv").open(newline="") as f:
-        stats = state_table([_typed(r) for r in csv.DictReader(f)])
+    stats = state_table(_fullstate_rows(folder))
     out = {}
     for obj in objects:
         mine = [s for s in stats if s.object_id == obj and s.n > 0]

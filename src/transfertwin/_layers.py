@@ -2,7 +2,7 @@
 
 `LAYERS` lists the packages bottom-up. A module may import its own package's private
 modules, the public surface (`__init__`) of a package below its own, and the root's private
-helpers (`transfertwin._errors`, `_atomic`, `_layers`, `_lazy`). Anything else
+helpers (`transfertwin._errors`, `_atomic`, `_aio`, `_layers`, `_lazy`). Anything else
 — a private module of another package, or a package at the same level or above — breaks the
 layering. `tests/unit/test_layering.py` enforces it; `scripts/import_graph.py` draws it.
 
@@ -67,7 +67,7 @@ LAYERS: tuple[str, ...] = (
     "cli",
 )
 
-_ROOT_HELPERS = ("_errors", "_atomic", "_layers", "_lazy")
+_ROOT_HELPERS = ("_errors", "_atomic", "_aio", "_layers", "_lazy")
 
 ImportEdge = tuple[str, int, str]  # (importing module, line, imported module)
 

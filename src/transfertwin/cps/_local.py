@@ -21,6 +21,7 @@ import os
 import time
 from pathlib import Path
 
+from transfertwin._aio import stop_tasks
 from transfertwin._errors import InputError
 from transfertwin.cps._compose import asset_node
 from transfertwin.cps._launcher import SEED_ASSETS, check_workdir, prepare_floor, write_floor_info
@@ -85,8 +86,7 @@ class LocalFloor:
         return self
 
     async def __aexit__(self, *exc: object) -> None:
-        for task in self._watches:
-            task.cancel()
+        await stop_tasks(list(self._watches))
         rest = [a for a in self.nodes if a not in SEED_ASSETS]
         await asyncio.gather(*(self.stop(a) for a in rest), return_exceptions=True)
         for aid in [a for a in SEED_ASSETS if a in self.nodes][::-1]:

@@ -26,6 +26,7 @@ from typing import Any
 
 from basyx.aas import model
 
+from transfertwin._aio import stop_tasks
 from transfertwin._errors import InputError
 from transfertwin.cps.aas import (
     Arg,
@@ -166,14 +167,11 @@ class AssetNode:
 
     async def __aexit__(self, *exc: object) -> None:
         if self._beating is not None:  # no heartbeat after the leave: it would join again
-            self._beating.cancel()
-            await asyncio.wait({self._beating}, timeout=2.0)
+            await stop_tasks([self._beating], deadline_s=2.0)
         if self.desc.asset_id != "KG":  # the graph does not open a session to itself to leave
             with contextlib.suppress(Exception):  # announce the leave; the lease covers a crash
                 await asyncio.wait_for(self.peers.call("KG", "Leave", self.desc.asset_id), 2.0)
-        for task in list(self._tasks):
-            task.cancel()
-        await asyncio.gather(*self._tasks, return_exceptions=True)
+        await stop_tasks(list(self._tasks))  # cancelled again if one swallows it (3.11)
         await self.role.stop()
         if self.discovery is not None:
             await self.discovery.stop()

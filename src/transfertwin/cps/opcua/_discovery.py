@@ -23,7 +23,7 @@ import asyncio
 import logging
 import time
 from collections.abc import Callable, Iterable
-from contextlib import AbstractAsyncContextManager, suppress
+from contextlib import AbstractAsyncContextManager
 from dataclasses import dataclass, field
 
 from asyncua import Client, ua
@@ -31,6 +31,7 @@ from asyncua.common.utils import ServiceError
 from asyncua.crypto import uacrypto
 from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
 
+from transfertwin._aio import stop_tasks
 from transfertwin.cps.opcua._client import AssetClient, UntrustedServer, trust_list
 from transfertwin.cps.opcua._server import AssetServer
 
@@ -258,7 +259,5 @@ class Discovery:
     async def stop(self) -> None:
         """Stop gossiping (the server's going away is what peers notice)."""
         if self._task is not None:
-            self._task.cancel()
-            with suppress(asyncio.CancelledError):
-                await self._task
+            await stop_tasks([self._task])
             self._task = None

@@ -35,6 +35,7 @@ from asyncua.common.callback import CallbackType
 from asyncua.common.node import Node
 from cryptography import x509
 
+from transfertwin._aio import stop_tasks
 from transfertwin.cps.opcua._aspace import share_standard_address_space
 from transfertwin.cps.opcua._ca import CA_CERT, FloorCA, install_certificate, new_request
 from transfertwin.cps.opcua._caller import guard
@@ -287,9 +288,7 @@ class AssetServer:
 
     async def __aexit__(self, *exc: object) -> None:
         if self._watch is not None:
-            self._watch.cancel()
-            with suppress(asyncio.CancelledError):
-                await self._watch
+            await stop_tasks([self._watch])
             self._watch = None
         if self._server is not None:
             # asyncua's stop waits for its clock task to finish its 1 s sleep (each server,

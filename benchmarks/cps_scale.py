@@ -59,6 +59,17 @@ def floor_of(n: int):
     return FloorSpec(f"scale{n}", (width, 12.0), st, mods, objs, ("KG", "TMS"))
 
 
+def projected_mb(n: int, pss_by_class: dict[str, float]) -> float:
+    """The PSS a floor of `n` would take, MB: each class's median PSS (measured on a smaller
+    floor) times how many of that class `floor_of(n)` holds (a larger floor is mostly
+    objects, the lightest processes; a mean over the small floor would overstate it)."""
+    spec = floor_of(n)
+    counts = {"KG": 1, "TMS": 1, "TM": len(spec.modules), "TU": len(spec.stations),
+              "object": len(spec.objects)}
+    heaviest = max(pss_by_class.values())
+    return sum(c * pss_by_class.get(k, heaviest) for k, c in counts.items())
+
+
 def memory(pid: int) -> tuple[float, float]:
     """(RSS, PSS) of a process, MB."""
     rss = pss = 0.0
@@ -117,14 +128,15 @@ async def status_latency(wd: Path, repeats: int = 20) -> list[float]:
 
 
 def run_size(n: int, base: Path, lease: float | None, idle_s: float,
-             per_process_mb: float | None, fork: bool = True,
+             pss_by_class: dict[str, float] | None, fork: bool = True,
              converge_s: float | None = None, settle_s: float = 0.0):  # fmt: skip
     from transfertwin._errors import InputError
     from transfertwin.cli._cps_floor import _wait_online, floor_status
     from transfertwin.cps import asset_pids, launch, prepare_floor, stop_floor, write_floor_info
 
-    if per_process_mb is not None and n * per_process_mb * 1.5 > available_mb():
-        return {"n": n, "skipped": f"needs about {n * per_process_mb * 1.5 / 1024:.1f} GB, "
+    need = None if pss_by_class is None else projected_mb(n, pss_by_class) * 1.5
+    if need is not None and need > available_mb():
+        return {"n": n, "skipped": f"needs about {need / 1024:.1f} GB, "
                                    f"{available_mb() / 1024:.1f} GB available"}  # fmt: skip
     floor = floor_of(n)
     wd = base / f"floor{n}{'' if fork else '-exec'}"
@@ -235,17 +247,18 @@ def main() -> int:
         ap.error(f"--sizes: a comma-separated list of integers, got {args.sizes!r}")
     base = Path(args.workdir or tempfile.mkdtemp(prefix="cps-scale-"))
     rows = []
-    per_process = None
+    by_class: dict[str, float] | None = None  # the largest median PSS per class so far
     runs = [(sizes[0], False)] if args.baseline else []
     for n, fork in [*runs, *((n, True) for n in sizes)]:
-        row = run_size(n, base, args.lease, args.idle, per_process if fork else None, fork,
+        row = run_size(n, base, args.lease, args.idle, by_class if fork else None, fork,
                        args.converge_timeout, args.settle)  # fmt: skip
         rows.append(row)
         if "skipped" in row:
             print(f"{n:4d} assets: skipped ({row['skipped']})", flush=True)
             continue
         if fork:
-            per_process = max(per_process or 0.0, row["pss_total_mb"] / n)
+            by_class = {k: max(v, (by_class or {}).get(k, 0.0))
+                        for k, v in row["pss_by_class"].items()}  # fmt: skip
         how = "forked" if fork else "one interpreter each (baseline)"
         up = (f"up in {row['startup_s']:.1f} s" if row["converged"] else
               f"NOT converged: {row['online']} of {n} online after {row['startup_s']:.0f} s")

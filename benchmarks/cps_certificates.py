@@ -85,6 +85,31 @@ def with_ca(base: Path, n: int) -> tuple[float, int]:
     return total_s, files
 
 
+def compare(n: int) -> list[str]:
+    """Prepare `n` assets' credentials both ways (in a temporary folder) and say how long
+    each took, in lines (also `benchmarks/cps_scale.py --credentials`)."""
+    cores = len(os.sched_getaffinity(0))
+    with tempfile.TemporaryDirectory(prefix="cps-certs-", dir=os.environ.get("TMPDIR")) as tmp:
+        c0 = _cpu()
+        keys_s, lists_s, files = pinned(Path(tmp) / "pinned", n)
+        c1 = _cpu()
+        ca_s, ca_files = with_ca(Path(tmp) / "ca", n)
+        c2 = _cpu()
+    load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
+    old_s, old_cpu, ca_cpu = keys_s + lists_s, c1 - c0, c2 - c1
+    return [
+        f"{n} assets, {cores} cores (load average {load})",
+        f"  pinned, hard-linked lists: {old_s:8.2f} s, CPU {old_cpu:6.2f} s (keys "
+        f"{keys_s:.2f} s, trust lists {lists_s:.2f} s; {files} files in {n + 1} trust "
+        "folders)",
+        f"  floor CA:                  {ca_s:8.2f} s, CPU {ca_cpu:6.2f} s (CA, {n + 2} keys "
+        f"and requests, signing, CA + CRL copied; {ca_files} files in {n + 1} trust "
+        "folders)",
+        f"  ratio pinned / CA: {old_s / ca_s:.1f}x wall clock, {old_cpu / ca_cpu:.1f}x CPU; "
+        f"CA on {cores} idle cores: ~{ca_cpu / cores:.1f} s",
+    ]  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--assets", type=int, default=50, help="asset processes (default 50)")
@@ -97,24 +122,7 @@ def main() -> None:
             os.sched_setaffinity(0, {int(c) for c in args.cores.split(",")})
         except (ValueError, OSError) as exc:
             ap.error(f"--cores {args.cores}: {exc}")
-    n, cores = args.assets, len(os.sched_getaffinity(0))
-    with tempfile.TemporaryDirectory(prefix="cps-certs-", dir=os.environ.get("TMPDIR")) as tmp:
-        c0 = _cpu()
-        keys_s, lists_s, files = pinned(Path(tmp) / "pinned", n)
-        c1 = _cpu()
-        ca_s, ca_files = with_ca(Path(tmp) / "ca", n)
-        c2 = _cpu()
-    load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
-    old_s, old_cpu, ca_cpu = keys_s + lists_s, c1 - c0, c2 - c1
-    print(f"{n} assets, {cores} cores (load average {load})")
-    print(f"  pinned, hard-linked lists: {old_s:8.2f} s, CPU {old_cpu:6.2f} s (keys "
-          f"{keys_s:.2f} s, trust lists {lists_s:.2f} s; {files} files in {n + 1} trust "
-          "folders)")  # fmt: skip
-    print(f"  floor CA:                  {ca_s:8.2f} s, CPU {ca_cpu:6.2f} s (CA, {n + 2} keys "
-          f"and requests, signing, CA + CRL copied; {ca_files} files in {n + 1} trust "
-          "folders)")  # fmt: skip
-    print(f"  ratio pinned / CA: {old_s / ca_s:.1f}x wall clock, {old_cpu / ca_cpu:.1f}x CPU; "
-          f"CA on {cores} idle cores: ~{ca_cpu / cores:.1f} s")  # fmt: skip
+    print("\n".join(compare(args.assets)))
 
 
 if __name__ == "__main__":

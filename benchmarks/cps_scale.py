@@ -24,6 +24,10 @@ the imports and the OPC UA standard address space copy-on-write); the smallest s
 also run with one interpreter per asset (`--baseline`, how a restart by hand starts one),
 and the memory ratio of the two is printed.
 
+Then the credentials of the largest size are prepared both ways in the same run
+(`--credentials N`, 0: not): the floor CA's (what ``cps up`` does) and the pinned lists of
+before (`cps_certificates.compare`), wall clock and CPU seconds each.
+
 Objects beyond the 37 built-in cores are ids only here: nothing is transported.
 """
 
@@ -238,6 +242,9 @@ def main() -> int:
     ap.add_argument("--settle", type=float, default=15.0,
                     help="seconds a converged floor idles before it is measured")
     ap.add_argument("--workdir")
+    ap.add_argument("--credentials", type=int, default=None, metavar="N",
+                    help="also prepare N assets' credentials both ways, the floor CA and the "
+                         "pinned lists of before (default: the largest size; 0: not)")
     ap.add_argument("--no-baseline", dest="baseline", action="store_false",
                     help="skip the smallest size with one interpreter per asset")
     args = ap.parse_args()
@@ -295,6 +302,12 @@ def main() -> int:
                   f"status latency {r['status_median_ms'] / a['status_median_ms']:.1f}x, "
                   f"PSS per asset "
                   f"{r['pss_total_mb'] / r['n'] / (a['pss_total_mb'] / a['n']):.2f}x")  # fmt: skip
+    n_cred = max(sizes) if args.credentials is None else args.credentials
+    if n_cred > 0:  # what the floor's certificates cost, against the way before, same run
+        from cps_certificates import compare
+
+        print(f"credentials of {n_cred} assets, both ways:")
+        print("\n".join(compare(n_cred)), flush=True)
     print(json.dumps(rows))
     return 0
 

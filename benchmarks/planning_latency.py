@@ -16,6 +16,10 @@ working floor):
   experiments (both legs, ``[operation] runs`` per state) on its warm worker processes;
 - **again**: a second order of every object: the TMS answers from its own cache.
 
+``--sampling adaptive`` gives the floor adaptive on-the-fly predictions (``[operation]
+sampling``: at most as many experiments in all, spent on the states racing for best and
+worst); the baseline part times both samplings of one object on the warm pool in any case.
+
 Targets (on 2 cores): published and again ≤ 2 s at p95, new ≤ 10 s at p95.
 
 Baseline in the same run: the on-the-fly prediction of one new object computed as the
@@ -123,11 +127,22 @@ def compute_baseline(obj: str, runs: int, seed: int) -> dict[str, float]:
         t0 = time.monotonic()
         warm = virtual_predictions(obj, runs, seed, executor=pool)
         warm_s = time.monotonic() - t0
+        t0 = time.monotonic()
+        adaptive = virtual_predictions(obj, runs, seed, executor=pool, sampling="adaptive")
+        adaptive_s = time.monotonic() - t0
     finally:
         pool.close()
     assert [p.as_dict() for p in cold] == [p.as_dict() for p in warm], "not the same bits"
+
+    def best(preds) -> str:
+        b = preds[0]
+        return (f"{b.face}/{b.conveyor}/{b.theta_deg} deg, {b.k} of {b.n} "
+                f"[{b.ci_low:.2f}, {b.ci_high:.2f}]")  # fmt: skip
+
     return {"spawned_s": cold_s, "warm_s": warm_s, "pool_start_s": start_s,
-            "ratio": cold_s / warm_s}  # fmt: skip
+            "ratio": cold_s / warm_s, "adaptive_s": adaptive_s,
+            "adaptive_runs": sum(p.n for p in adaptive), "exhaustive_runs": sum(p.n for p in warm),
+            "best_exhaustive": best(warm), "best_adaptive": best(adaptive)}  # fmt: skip
 
 
 def p95(values: list[float]) -> float:
@@ -151,8 +166,14 @@ def main() -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--workdir", help="default: a temporary folder")
     ap.add_argument("--timeout", type=float, default=300.0, help="per plan, s")
+    ap.add_argument("--sampling", choices=("exhaustive", "adaptive"), default=None,
+                    help="the floor's on-the-fly sampling ([operation] sampling; default: "
+                         "the floor file's)")  # fmt: skip
     args = ap.parse_args()
     floor = load_floor(args.floor)
+    if args.sampling is not None:
+        floor = dataclasses.replace(floor, operation=dataclasses.replace(
+            floor.operation, sampling=args.sampling))  # fmt: skip
     wd = Path(args.workdir or tempfile.mkdtemp(prefix="planning-"))
     wd.mkdir(parents=True, exist_ok=True)
     objects = [o for o, _ in floor.objects][: args.objects]
@@ -164,6 +185,10 @@ def main() -> int:
           f"spawned per request, {base['warm_s']:.1f} s on the warm pool "
           f"({base['ratio']:.2f}x; the pool's start-up, once per EM: "
           f"{base['pool_start_s']:.1f} s)", flush=True)  # fmt: skip
+    print(f"  sampled adaptively on the warm pool: {base['adaptive_s']:.1f} s, "
+          f"{base['adaptive_runs']} valid runs (exhaustive {base['exhaustive_runs']}); best "
+          f"state exhaustive {base['best_exhaustive']}, adaptive {base['best_adaptive']}",
+          flush=True)  # fmt: skip
     study = wd / "published.sqlite"
     if published and not study.exists():
         print(f"study of {len(published)} objects (both legs) -> {study}", flush=True)
@@ -202,7 +227,7 @@ def main() -> int:
     lat = run["latency_s"]
     print(
         f"\nplanning latency on {floor.name} ({len(objects)} objects, "
-        f"{len(floor.modules)} modules):"
+        f"{len(floor.modules)} modules, {floor.operation.sampling} on-the-fly sampling):"
     )
     summary = {}
     for kind, values in lat.items():
@@ -224,6 +249,7 @@ def main() -> int:
                 "objects": objects,
                 "published": published,
                 "runs": args.runs,
+                "sampling": floor.operation.sampling,
                 "seed": args.seed,
                 "baseline": base,
                 "summary": summary,

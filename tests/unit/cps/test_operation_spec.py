@@ -23,13 +23,14 @@ def test_operation_round_trips_and_a_relative_study_is_the_floor_files(tmp_path)
     (tmp_path / "s.sqlite").write_bytes(b"")
     path = _with(tmp_path, '[operation]\npolicy = "predictive"\nstudy = "s.sqlite"\nruns = 3\n'
                            'capacity = 1\nsensor = "camera"\nlearn = false\n'
+                           'sampling = "adaptive"\n'
                            '[operation.groups]\nout = ["TU_C", "TU_D"]\n')
     spec = load_floor(path)
     op = spec.operation
     assert (op.policy, op.runs, op.capacity, op.group("out"), op.group("TU_C")) == (
         "predictive", 3, 1, ("TU_C", "TU_D"), None)
     assert op.study == str((tmp_path / "s.sqlite").resolve()) and op.sensor == "camera"
-    assert op.learn is False
+    assert op.learn is False and op.sampling == "adaptive"
     (tmp_path / "again.toml").write_text(floor_toml(spec))
     assert load_floor(tmp_path / "again.toml") == spec
 
@@ -49,6 +50,7 @@ def test_the_default_is_predictive_without_a_study():
     ('[operation]\ncapacity = -1\n', "capacity must be >= 0"),
     ('[operation]\nsensor = "lidar"\n', "operation.sensor must be one of truth, camera"),
     ('[operation]\nlearn = "yes"\n', "learn must be true or false"),
+    ('[operation]\nsampling = "random"\n', "operation.sampling must be one of exhaustive"),
     ('[operation.groups]\nout = ["TU_Z"]\n', "must list transfer units"),
     ('[operation.groups]\nTU_A = ["TU_B"]\n', "is also an asset id"),
 ])

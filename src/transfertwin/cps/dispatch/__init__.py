@@ -36,9 +36,11 @@ if TYPE_CHECKING:
     from transfertwin.cps.dispatch._needs import object_needs
     from transfertwin.cps.dispatch._orders import OrderBook, order_view
     from transfertwin.cps.dispatch._predict import (
+        ADAPTIVE_MAX_FACTOR,
         DEFAULT_STATE,
         ON_THE_FLY_THETA_STEP,
         StatePrediction,
+        adaptive_options,
         campaign_advice,
         campaign_predictions,
         learning_alone_states,
@@ -49,6 +51,7 @@ if TYPE_CHECKING:
     )
 
 __all__ = [
+    "ADAPTIVE_MAX_FACTOR",
     "DEFAULT_STATE",
     "DOCK_S",
     "FACE_POOL",
@@ -60,6 +63,7 @@ __all__ = [
     "Bid",
     "OrderBook",
     "StatePrediction",
+    "adaptive_options",
     "campaign_advice",
     "campaign_predictions",
     "choose",

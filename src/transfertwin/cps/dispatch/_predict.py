@@ -30,9 +30,11 @@ from typing import Any
 from transfertwin.cps.apps import docking_model
 
 __all__ = [
+    "ADAPTIVE_MAX_FACTOR",
     "DEFAULT_STATE",
     "ON_THE_FLY_THETA_STEP",
     "StatePrediction",
+    "adaptive_options",
     "campaign_advice",
     "campaign_predictions",
     "learning_alone_states",
@@ -171,23 +173,60 @@ def campaign_advice(folder: str | Path, objects: Sequence[str]) -> dict[str, str
     return out
 
 
+#: Adaptive on-the-fly sampling: a state gets at most this many times `runs`.
+ADAPTIVE_MAX_FACTOR = 3
+
+
+def adaptive_options(runs: int) -> tuple[tuple[str, object], ...]:
+    """The adaptive settings of an on-the-fly prediction with `runs` runs per state on
+    average: every state ``runs // 2`` (at least 1) runs first, then batches of as many
+    on the leader and two challengers of the best and of the worst race
+    (`transfertwin.study.adaptive.AdaptivePolicy`, its other settings the study's)."""
+    from transfertwin.study.adaptive import AdaptivePolicy
+
+    half = max(1, runs // 2)
+    return tuple(AdaptivePolicy(first_runs=half, batch_runs=half).describe().items())
+
+
 def virtual_predictions(obj: str, runs: int, seed: int, scene=None, workers: int = 1,
-                        leg: str = "operation",
-                        executor=None) -> list[StatePrediction]:  # fmt: skip
+                        leg: str = "operation", executor=None,
+                        sampling: str = "exhaustive") -> list[StatePrediction]:  # fmt: skip
     """Run the study's procedure for `obj` now (every state of the `ON_THE_FLY_THETA_STEP`
-    grid, `runs` runs each of `leg` — by default a floor's whole operation, so that both
-    legs are predicted —, docking errors from the fitted generator; in this process, on
-    `workers` worker processes, or on `executor`, e.g. a started `WarmPool`); best first.
-    Deterministic in `seed` (the same rows whatever runs them)."""
+    grid, of `leg` — by default a floor's whole operation, so that both legs are
+    predicted —, docking errors from the fitted generator; in this process, on `workers`
+    worker processes, or on `executor`, e.g. a started `WarmPool`); best first.
+    Deterministic in `seed` (the same rows whatever runs them).
+
+    `sampling` ``"exhaustive"``: `runs` runs each state. ``"adaptive"``: bounded by the same
+    number of experiments in all (states × `runs`), spent where they can change the best
+    (and worst) state: a first round on every state, then rounds on the race's leaders and
+    challengers (`transfertwin.study.adaptive.run_adaptive`, `adaptive_options`), up to
+    `ADAPTIVE_MAX_FACTOR` × `runs` runs on a state; a race still open when the budget is
+    spent ends there (the ranking then stands on the runs made)."""
     from transfertwin.store import MemoryResultStore
     from transfertwin.study.experiment import StudyPlan, run_study
 
-    kwargs = {} if scene is None else {"scene": scene}
-    plan = StudyPlan((obj,), ON_THE_FLY_THETA_STEP, runs, seed, docking_model(), leg=leg,
+    kwargs: dict[str, Any] = {} if scene is None else {"scene": scene}
+    if sampling == "adaptive":
+        kwargs |= {"sampling": "adaptive", "sampling_options": adaptive_options(runs)}
+        most = ADAPTIVE_MAX_FACTOR * runs
+    elif sampling == "exhaustive":
+        most = runs
+    else:
+        raise ValueError(f"sampling must be exhaustive or adaptive, got {sampling!r}")
+    plan = StudyPlan((obj,), ON_THE_FLY_THETA_STEP, most, seed, docking_model(), leg=leg,
                      **kwargs)  # fmt: skip
     store = MemoryResultStore()
-    run_study(plan, store, workers=workers, executor=executor)
-    return rank_states(store.rows(), obj, f"virtual experiments ({runs} runs per state)", leg)
+    if sampling == "adaptive":
+        from transfertwin.study.adaptive import run_adaptive
+
+        budget = len(plan.states()) * runs
+        run_adaptive(plan, store, workers=workers, max_experiments=budget, executor=executor)
+        source = f"adaptive virtual experiments ({store.count()} runs, at most {budget})"
+    else:
+        run_study(plan, store, workers=workers, executor=executor)
+        source = f"virtual experiments ({runs} runs per state)"
+    return rank_states(store.rows(), obj, source, leg)
 
 
 def twin_words(pred: Mapping[str, object]) -> str:

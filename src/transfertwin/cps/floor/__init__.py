@@ -20,6 +20,7 @@ if TYPE_CHECKING:
     from transfertwin.cps.floor._floor_file import (
         LOGICAL_ASSETS,
         POLICIES,
+        SAMPLINGS,
         SENSORS,
         FloorSpec,
         ModuleSpec,
@@ -43,6 +44,7 @@ __all__ = [
     "PLANT_SEED_FILE",
     "POLICIES",
     "PROVENANCE",
+    "SAMPLINGS",
     "SENSORS",
     "AssetConfig",
     "FloorSpec",

@@ -45,6 +45,9 @@ logical = ["TMS", "EM", "PropS", "KG"]    # optional; these four by default
 policy = "predictive"                     # the default; or "nearest-idle"
 study = "out/quick.sqlite"                # a study store with the twin's per-state shares
 runs = 4                                  # runs per state of on-the-fly virtual experiments
+sampling = "exhaustive"                   # every state `runs` times (the default); or
+                                          # "adaptive": where they can change the best state,
+                                          # at most 28 x runs in all
 capacity = 1                              # objects a unit may hold (0, the default: no limit)
 sensor = "camera"                         # the module's depth camera forms the OTS and feeds
                                           # the delivery's controller ("truth": the default)
@@ -109,6 +112,10 @@ LOGICAL_ASSETS = {
 POLICIES = ("nearest-idle", "predictive")
 #: What the transport modules see objects with: the simulation's truth, or their camera.
 SENSORS = ("truth", "camera")
+#: How the Experiment Manager samples an on-the-fly prediction's states: every state
+#: ``runs`` times, or adaptively (runs where they can change the best state, at most as many
+#: in all; `cps.dispatch.virtual_predictions`).
+SAMPLINGS = ("exhaustive", "adaptive")
 
 _TU_CAPS = (Capability.TRANSFER, Capability.SENSE)
 _TM_CAPS = (Capability.TRANSPORT, Capability.TRANSFER, Capability.SENSE)
@@ -169,6 +176,7 @@ class OperationSpec:
     sensor: str = "truth"
     learn: bool = True
     twin: bool = True
+    sampling: str = "exhaustive"
 
     def group(self, name: str) -> tuple[str, ...] | None:
         """The units of destination group `name` (None: no such group)."""
@@ -380,6 +388,9 @@ def _check(floor: FloorSpec) -> None:
     if op.sensor not in SENSORS:
         raise InputError(f"{where}: operation.sensor must be one of {', '.join(SENSORS)}, "
                          f"got {op.sensor!r}")  # fmt: skip
+    if op.sampling not in SAMPLINGS:
+        raise InputError(f"{where}: operation.sampling must be one of {', '.join(SAMPLINGS)}, "
+                         f"got {op.sampling!r}")  # fmt: skip
     _check_bind(floor, where)
     for group, units in op.groups:
         if group in floor.units or group in seen:

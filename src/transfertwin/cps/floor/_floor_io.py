@@ -105,7 +105,8 @@ def _operation(table: object, name: str) -> OperationSpec:
     where = f"floor {name}: [operation]"
     if not isinstance(table, dict):
         raise InputError(f"{where} must be a table")
-    known = {"policy", "study", "runs", "groups", "capacity", "sensor", "learn", "twin"}
+    known = {"policy", "study", "runs", "groups", "capacity", "sensor", "learn", "twin",
+             "sampling"}
     if unknown := sorted(set(table) - known):
         raise InputError(f"{where}: unknown key {unknown[0]!r}; known: {', '.join(sorted(known))}")
     study = table.get("study")
@@ -125,7 +126,8 @@ def _operation(table: object, name: str) -> OperationSpec:
             raise InputError(f"{where}: {key} must be true or false, got {value!r}")
     return OperationSpec(str(table.get("policy", "predictive")), study, runs,
                          tuple((g, tuple(u)) for g, u in groups.items()), capacity,
-                         str(table.get("sensor", "truth")), learn, twin)  # fmt: skip
+                         str(table.get("sensor", "truth")), learn, twin,
+                         str(table.get("sampling", "exhaustive")))  # fmt: skip
 
 
 def load_floor(path: Path | str, *, check_cores: bool = True) -> FloorSpec:
@@ -184,7 +186,8 @@ def floor_toml(floor: FloorSpec) -> str:
     lines += ["", "[operation]", f"policy = {json.dumps(op.policy)}", f"runs = {op.runs}",
               f"capacity = {op.capacity}", f"sensor = {json.dumps(op.sensor)}",
               f"learn = {'true' if op.learn else 'false'}",
-              f"twin = {'true' if op.twin else 'false'}"]
+              f"twin = {'true' if op.twin else 'false'}",
+              f"sampling = {json.dumps(op.sampling)}"]
     if op.study is not None:
         lines.append(f"study = {json.dumps(op.study)}")
     if op.groups:

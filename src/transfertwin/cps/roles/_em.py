@@ -160,8 +160,9 @@ class ExperimentRole(Role):
             # (two threads on one object's compiled model crash MuJoCo); kept warm between
             # requests (started with the node), so a request pays for its experiments only
             pool = await self._warm_pool()
-            preds = await asyncio.to_thread(virtual_predictions, obj, runs, seed, load_scene(),
-                                            executor=pool)  # fmt: skip
+            preds = await asyncio.to_thread(
+                virtual_predictions, obj, runs, seed, load_scene(), executor=pool,
+                sampling=self.node.floor.operation.sampling)  # fmt: skip
         finally:
             await self.set("State", "idle")
         return json.dumps([p.as_dict() for p in preds])

@@ -123,7 +123,8 @@ def drive(wd: Path, orders: list[tuple[str, str]], inflight: int, timeout_s: flo
     from transfertwin.cps.opcua import OperationRefused
 
     tms = Tms(wd)
-    units = {a["id"] for a in tms.info["assets"] if a["class"] == "transfer_unit"}
+    units = {a["id"] for a in tms.info["assets"]  # the floor's units: not the plant's
+             if a["class"] == "transfer_unit" and a.get("kind") != "physical"}  # fmt: skip
     pending = list(orders)
     running: dict[str, str] = {}  # object -> operation
     refused, located, retried = [], 0, 0

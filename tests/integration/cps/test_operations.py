@@ -135,7 +135,8 @@ def test_an_object_the_store_lacks_is_predicted_by_the_experiment_manager(floor)
     status = _wait_finished(floor, _tms(floor, "OrderTo", "o2", free), timeout_s=900)
     plan = status["plan"]
     assert "prediction" in plan, status["history"]
-    assert plan["prediction"]["source"] == "virtual experiments (1 runs per state)"
+    # adaptive (the default) with one run a state: its first round is the whole budget
+    assert plan["prediction"]["source"] == "adaptive virtual experiments (28 runs, at most 28)"
     assert plan["prediction"]["n"] == 1 and plan["next_best"] is not None
     assert any("asking the Experiment Manager" in what for _, what in status["history"])
     if status["result"].get("loaded_state") is not None:  # it was loaded: in that state

@@ -45,9 +45,9 @@ logical = ["TMS", "EM", "PropS", "KG"]    # optional; these four by default
 policy = "predictive"                     # the default; or "nearest-idle"
 study = "out/quick.sqlite"                # a study store with the twin's per-state shares
 runs = 4                                  # runs per state of on-the-fly virtual experiments
-sampling = "exhaustive"                   # every state `runs` times (the default); or
-                                          # "adaptive": where they can change the best state,
-                                          # at most 28 x runs in all
+sampling = "adaptive"                     # the default: at most 28 x runs experiments in
+                                          # all, where they can change the best state; or
+                                          # "exhaustive": every state `runs` times
 capacity = 1                              # objects a unit may hold (0, the default: no limit)
 sensor = "camera"                         # the module's depth camera forms the OTS and feeds
                                           # the delivery's controller ("truth": the default)
@@ -176,7 +176,7 @@ class OperationSpec:
     sensor: str = "truth"
     learn: bool = True
     twin: bool = True
-    sampling: str = "exhaustive"
+    sampling: str = "adaptive"
 
     def group(self, name: str) -> tuple[str, ...] | None:
         """The units of destination group `name` (None: no such group)."""

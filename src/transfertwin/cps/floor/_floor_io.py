@@ -127,7 +127,7 @@ def _operation(table: object, name: str) -> OperationSpec:
     return OperationSpec(str(table.get("policy", "predictive")), study, runs,
                          tuple((g, tuple(u)) for g, u in groups.items()), capacity,
                          str(table.get("sensor", "truth")), learn, twin,
-                         str(table.get("sampling", "exhaustive")))  # fmt: skip
+                         str(table.get("sampling", "adaptive")))  # fmt: skip
 
 
 def load_floor(path: Path | str, *, check_cores: bool = True) -> FloorSpec:

@@ -93,3 +93,32 @@ def test_a_cancelled_run_is_no_fault_and_the_order_stays_to_resume(tmp_path: Pat
         asyncio.run(role._run(op_id))
     assert role.ops[op_id]["state"] != "finished"
     assert role.book.running() == 1
+
+
+def test_an_order_no_module_can_take_says_why_it_waits_once(tmp_path: Path) -> None:
+    """Every module carries an object (failed deliveries taken back): the queued order's
+    history says so, with what to do, once however long it waits (no silent queue)."""
+    role, node, op_id = _order(tmp_path)
+    modules = [m.asset_id for m in node.floor.modules]
+    others = [o for o, _ in node.floor.objects if o != "o2"]
+    for obj, m in zip(others, modules, strict=False):  # each module holds an object
+        role.book.ledger.move(obj, m)
+
+    async def online(obj: str | None = None) -> list[dict[str, Any]]:
+        return [{"id": m, "online": True, "admits": True, "state": "idle"} for m in modules]
+
+    role._modules = online  # type: ignore[method-assign]
+
+    async def scenario() -> None:
+        task = asyncio.ensure_future(role._allocate(op_id))
+        await asyncio.sleep(1.3)  # three rounds of the auction
+        assert not task.done()
+        task.cancel()
+        with pytest.raises(asyncio.CancelledError):
+            await task
+
+    asyncio.run(scenario())
+    said = [h[1] for h in role.ops[op_id]["history"] if h[1].startswith("waiting:")]
+    held = "; ".join(f"{m} carries {o}" for o, m in zip(others, modules, strict=False))
+    assert said == [f"waiting: every transport module carries an object ({held}): order "
+                    "those onward or locate them"]

@@ -210,6 +210,9 @@ class TmsRole(Role):
             if self.policy != "predictive":
                 targets = targets[:1]
             if not targets:
+                held = "; ".join(f"{t} holds {', '.join(self.book.ledger.objects_at(t))}"
+                                 for t in op["targets"] if t != op["source"])  # fmt: skip
+                self._waiting(op, f"the destination is occupied ({held}): order that away")
                 await asyncio.sleep(0.5)
                 continue
             order = json.dumps({"operation": op_id, "object": op["object"],
@@ -233,7 +236,30 @@ class TmsRole(Role):
                 record = {"bids": {b.module: dict(b.eta_s) for b in bids},
                           "winner": module, "target": target, "cost_s": round(cost, 3)}
                 return module, target, record
+            if not eligible:
+                await self._why_no_module(op)
             await asyncio.sleep(0.5)
+
+    async def _why_no_module(self, op: dict[str, Any]) -> None:
+        """Say in `op`'s history why no module bids when every online module that could
+        take it carries an object (it waits until one is ordered onward or located)."""
+        if op["source"] not in self.node.floor.units:
+            return  # the carrier itself moves it on once it is idle
+        online = [m["id"] for m in await self._modules(op["object"]) or [] if m["online"]]
+        held = {m: self.book.carried_by(m) for m in online}
+        if online and all(held.values()):
+            self._waiting(op, "every transport module carries an object (" + "; ".join(
+                f"{m} carries {', '.join(o)}" for m, o in held.items()) + "): order those "
+                "onward or locate them")  # fmt: skip
+
+    def _waiting(self, op: dict[str, Any], why: str) -> None:
+        """Put why `op` waits in its history and the log, once per reason."""
+        if op.get("waiting") == why:
+            return
+        op["waiting"] = why
+        op["history"].append([time.time(), f"waiting: {why}"])
+        self.book.save()
+        log.info("TMS: %s waiting: %s", op["operation"], why)
 
     async def _after(self, op_id: str) -> bool:
         """Wait for the order `op_id` chains after; then take the object from where it is

@@ -19,7 +19,6 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from scipy import ndimage
 
 from transfertwin._errors import InputError
 from transfertwin.navigation._geometry import Rect, compose
@@ -146,6 +145,8 @@ class ShopFloor:
     def clearance(self) -> np.ndarray:
         """Distance (H, W) from each cell centre to the nearest occupied cell, m (less half a
         cell, so that it bounds the distance to the solid from below)."""
+        from scipy import ndimage  # here: a unit that asks only for its docking goal skips it
+
         d = ndimage.distance_transform_edt(~self.grid) * self.resolution_m
         return np.maximum(d - self.resolution_m / 2.0, 0.0)
 

@@ -34,7 +34,14 @@ if TYPE_CHECKING:
         default_floor,
     )
     from transfertwin.navigation._follow import FollowConfig, FollowResult, follow_path, localise
-    from transfertwin.navigation._geometry import Rect, compose, invert, relative, to_world, wrap_angle
+    from transfertwin.navigation._geometry import (
+        Rect,
+        compose,
+        invert,
+        relative,
+        to_world,
+        wrap_angle,
+    )
     from transfertwin.navigation._laser import LaserConfig, Scan, cast_rays, scan
     from transfertwin.navigation._lines import (
         LineSegment,

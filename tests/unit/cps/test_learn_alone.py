@@ -55,14 +55,14 @@ def test_a_floor_file_says_twin_false_and_it_needs_learning():
 
 def test_learning_alone_ranks_the_default_state_then_the_grid_without_a_twin() -> None:
     """What the TMS ranks with ``twin = false``: the default state first (loaded as
-    nearest-idle loads it), then the 28 states of the grid, none with a prediction, and the
+    nearest-idle loads it), then the other 27 states of the grid, none with a prediction, and the
     posterior of each is Laplace's on both legs (the TMS once passed the grid's state
     objects here and every order of the arm hung)."""
     from transfertwin.cps.dispatch import DEFAULT_STATE, learning_alone_states
 
     states = learning_alone_states()
     assert {k: states[0][k] for k in DEFAULT_STATE} == DEFAULT_STATE
-    assert len(states) == 1 + 28 and {s["source"] for s in states} == {"none"}
-    assert len({(s["face"], s["conveyor"], s["theta_deg"]) for s in states}) == 29
+    assert len(states) == 28 and {s["source"] for s in states} == {"none"}
+    assert len({(s["face"], s["conveyor"], s["theta_deg"]) for s in states}) == 28
     best = rerank(states, {})[0]
     assert {k: best[k] for k in DEFAULT_STATE} == DEFAULT_STATE and best["p"] == 0.25

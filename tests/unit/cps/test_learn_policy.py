@@ -57,7 +57,18 @@ def test_documented_constants_by_value() -> None:
     assert _LAPLACE == (0.5, 2.0)  # "Laplace's (m = ½, w = 2)"
     assert LEGS == ("pick-up", "delivery")
     assert ON_THE_FLY_THETA_STEP == 30  # "the 28 states of the 30° grid"
-    assert DEFAULT_STATE == {"face": "front", "conveyor": "both", "theta_deg": 0}
+    assert DEFAULT_STATE == {"face": "front", "conveyor": "left", "theta_deg": 0}
+
+
+def test_the_default_state_is_one_the_twin_can_predict() -> None:
+    """The state an object is loaded in without the twin is in Eq. 6.7's set and in the
+    on-the-fly grid, so every twin arm ranks it beside the states it could move to."""
+    from transfertwin.ots import experiment_states, filter_theta_step, state_index
+
+    state_index(**DEFAULT_STATE)  # raises for a state outside the set
+    grid = filter_theta_step(experiment_states(), ON_THE_FLY_THETA_STEP)
+    assert (DEFAULT_STATE["face"], DEFAULT_STATE["conveyor"], DEFAULT_STATE["theta_deg"]) in {
+        (s.face, s.conveyor, s.theta_deg) for s in grid}
 
 
 def test_the_fallback_changes_once_the_failed_pick_up_is_counted() -> None:

@@ -26,6 +26,7 @@ if TYPE_CHECKING:
     from transfertwin.cps.apps._environment import Environment, ScaledClock
     from transfertwin.cps.apps._floor import HOME_POSE, FloorRobot, LegResult
     from transfertwin.cps.apps._hand_over import (
+        DEFAULT_STATE,
         DELIVERY_RETRIES,
         PICKUP_RETRIES,
         HandOverRetries,
@@ -63,6 +64,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CAMPAIGN_MEASURES",
+    "DEFAULT_STATE",
     "DELIVERY_RETRIES",
     "HOME_POSE",
     "PICKUP_RETRIES",

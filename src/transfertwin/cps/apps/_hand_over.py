@@ -131,8 +131,17 @@ class HandOverRetries:
             host.op["load"] = self.load_state
 
 
+#: The state an object is loaded in without the twin (nearest-idle; learning alone's first
+#: order): the front face on the left conveyor at θ = 0, the first of Eq. 6.7's states at
+#: θ = 0 in the study's order. It is a pre-transfer state of the twin's set, so the twin
+#: predicts it and a ranking can keep it (until 2026-11-28 it was (front, both, 0), which
+#: Eq. 6.7 does not admit: at |θ| ≤ 25° an object lies on one conveyor).
+DEFAULT_STATE = {"face": "front", "conveyor": "left", "theta_deg": 0}
+
+
 def state_text(state) -> str:
-    """A load state in one line."""
+    """A load state in one line (none: the default state, `DEFAULT_STATE`)."""
     if not state:
-        return "as before (front/both/0 deg)"
+        s = DEFAULT_STATE
+        return f"as before ({s['face']}/{s['conveyor']}/{s['theta_deg']} deg)"
     return f"{state['face']}/{state['conveyor']}/{state['theta_deg']} deg"

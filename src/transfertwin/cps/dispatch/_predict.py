@@ -27,7 +27,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from transfertwin.cps.apps import docking_model
+from transfertwin.cps.apps import DEFAULT_STATE, docking_model
 
 __all__ = [
     "ADAPTIVE_MAX_FACTOR",
@@ -44,8 +44,6 @@ __all__ = [
     "virtual_predictions",
 ]
 
-#: The state an object is loaded in without the twin (the demo's: front face, θ = 0).
-DEFAULT_STATE = {"face": "front", "conveyor": "both", "theta_deg": 0}
 #: θ grid of on-the-fly experiments: 28 states per object (the quick study's grid).
 ON_THE_FLY_THETA_STEP = 30
 
@@ -203,21 +201,21 @@ def virtual_predictions(obj: str, runs: int, seed: int, scene=None, workers: int
     challengers (`transfertwin.study.adaptive.run_adaptive`, `adaptive_options`), up to
     `ADAPTIVE_MAX_FACTOR` × `runs` runs on a state; a race still open when the budget is
     spent ends there (the ranking then stands on the runs made)."""
+    from transfertwin.cps.floor import SAMPLINGS
     from transfertwin.store import MemoryResultStore
     from transfertwin.study.experiment import StudyPlan, run_study
 
+    if sampling not in SAMPLINGS:
+        raise ValueError(f"sampling must be one of {', '.join(SAMPLINGS)}, got {sampling!r}")
+    adaptive = sampling == "adaptive"
     kwargs: dict[str, Any] = {} if scene is None else {"scene": scene}
-    if sampling == "adaptive":
+    if adaptive:
         kwargs |= {"sampling": "adaptive", "sampling_options": adaptive_options(runs)}
-        most = ADAPTIVE_MAX_FACTOR * runs
-    elif sampling == "exhaustive":
-        most = runs
-    else:
-        raise ValueError(f"sampling must be exhaustive or adaptive, got {sampling!r}")
+    most = ADAPTIVE_MAX_FACTOR * runs if adaptive else runs
     plan = StudyPlan((obj,), ON_THE_FLY_THETA_STEP, most, seed, docking_model(), leg=leg,
                      **kwargs)  # fmt: skip
     store = MemoryResultStore()
-    if sampling == "adaptive":
+    if adaptive:
         from transfertwin.study.adaptive import run_adaptive
 
         budget = len(plan.states()) * runs

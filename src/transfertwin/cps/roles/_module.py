@@ -29,6 +29,7 @@ import numpy as np
 
 from transfertwin.cps.aas import Capability
 from transfertwin.cps.apps import (
+    DEFAULT_STATE,
     HOME_POSE,
     FloorRobot,
     docking_model,
@@ -397,11 +398,11 @@ class ModuleRole(Role):
         from transfertwin.ots import POSITIONS
         from transfertwin.perception import open_sensor
 
-        load = (self.op or {}).get("load") or {}
-        xy = POSITIONS[str(load.get("conveyor", "both"))]
+        load = (self.op or {}).get("load") or DEFAULT_STATE
+        xy = POSITIONS[str(load["conveyor"])]
         seed = zlib.crc32(f"{self._op_id}:{self.attempt}".encode())
         return open_sensor(self.env.system, expected_xy=xy,
-                           theta_rad=math.radians(float(load.get("theta_deg", 0.0))),
+                           theta_rad=math.radians(float(load["theta_deg"])),
                            seed=seed)  # fmt: skip
 
     async def take_back(self, unit: str, to_unit: bool = False) -> bool:

@@ -11,6 +11,7 @@ import asyncio
 import logging
 
 from transfertwin.cps.apps import (
+    DEFAULT_STATE,
     HandOverRetries,
     Leg,
     StepResult,
@@ -46,8 +47,7 @@ def _load_args(state: dict[str, object] | None) -> tuple[str, float, float]:
     """(face, θ deg, lateral offset m) that put an object on a unit's belts so that it
     crosses onto the module in `state`: the conveyor's lateral position of the study's
     states (Eq. 6.3), the unit's belts being in line with the module's."""
-    if not state:
-        return "front", 0.0, 0.0
+    state = state or DEFAULT_STATE
     return (str(state["face"]), float(state["theta_deg"]),
             float(POSITIONS[str(state["conveyor"])][1]))  # fmt: skip
 
@@ -62,7 +62,7 @@ class VirtualTransport:
     """
 
     #: The pre-transfer state the object is loaded in at the source ({face, conveyor,
-    #: theta_deg}; None: front face, θ = 0, centred, as the demo always did).
+    #: theta_deg}; None: `DEFAULT_STATE`).
     load_state: dict[str, object] | None = None
     #: The module's depth camera forms the OTS and checks the ledger (floor: sensor =
     #: "camera"); the face the object lies on, for that check.

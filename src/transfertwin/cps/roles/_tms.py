@@ -183,12 +183,13 @@ class TmsRole(Role):
             self._movers = (time.monotonic(), found)
         return found
 
-    async def _eligible(self, op: dict[str, Any]) -> list[str]:
-        """Online, idle, unclaimed modules that may take `op`: the carrier alone for an
-        object on a module; else those that carry nothing (objects travel one at a time)."""
+    def _eligible(self, op: dict[str, Any], modules: list[dict[str, Any]]) -> list[str]:
+        """Of `modules` (`_modules`), the online, idle, unclaimed ones that may take `op`:
+        the carrier alone for an object on a module; else those that carry nothing
+        (objects travel one at a time)."""
         carrier = op["source"] if op["source"] not in self.node.floor.units else None
         out = []
-        for m in await self._modules(op["object"]) or []:
+        for m in modules:
             if carrier is not None and m["id"] != carrier:
                 continue
             if carrier is None and self.book.carried_by(m["id"]):
@@ -217,7 +218,8 @@ class TmsRole(Role):
                 continue
             order = json.dumps({"operation": op_id, "object": op["object"],
                                 "source": op["source"], "targets": targets})  # fmt: skip
-            eligible = await self._eligible(op)
+            modules = await self._modules(op["object"]) or []
+            eligible = self._eligible(op, modules)
 
             async def ask(m: str, order: str = order) -> Bid | None:
                 try:
@@ -237,15 +239,16 @@ class TmsRole(Role):
                           "winner": module, "target": target, "cost_s": round(cost, 3)}
                 return module, target, record
             if not eligible:
-                await self._why_no_module(op)
+                self._why_no_module(op, modules)
             await asyncio.sleep(0.5)
 
-    async def _why_no_module(self, op: dict[str, Any]) -> None:
-        """Say in `op`'s history why no module bids when every online module that could
-        take it carries an object (it waits until one is ordered onward or located)."""
+    def _why_no_module(self, op: dict[str, Any], modules: list[dict[str, Any]]) -> None:
+        """Say in `op`'s history why no module of `modules` (the auction round's read of
+        the graph) bids when every online one carries an object (it waits until one is
+        ordered onward or located)."""
         if op["source"] not in self.node.floor.units:
             return  # the carrier itself moves it on once it is idle
-        online = [m["id"] for m in await self._modules(op["object"]) or [] if m["online"]]
+        online = [m["id"] for m in modules if m["online"]]
         held = {m: self.book.carried_by(m) for m in online}
         if online and all(held.values()):
             self._waiting(op, "every transport module carries an object (" + "; ".join(

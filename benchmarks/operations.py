@@ -331,6 +331,7 @@ def run_arm(args, floor, name: str, policy: str, floor_file: str, study: Path | 
     up = tt("cps", "up", "--floor", floor_file, "--workdir", str(pwd), "--detach",
             "--time-scale", "0", "--seed", str(args.seed), "--plant-seed", str(plant_seed),
             "--plant-kind", args.plant_kind, "--policy", policy,
+            *(["--plant-mismatch-off", args.mismatch_off] if args.mismatch_off else []),
             *(["--study", str(study)] if study else []),
             "--lease", str(args.lease), "--start-timeout", "600", timeout=900)  # fmt: skip
     if up.returncode != 0:
@@ -442,6 +443,9 @@ def main() -> int:
         "--cold-orders", type=int, default=3, help="cold start: orders per object (default 3)"
     )
     ap.add_argument("--plant-kind", choices=("in-class", "mismatch"), default="in-class")
+    ap.add_argument("--mismatch-off", default="", metavar="PART,...",
+                    help="with --plant-kind mismatch: parts of the mismatch switched off on "
+                         "every arm's plant (an ablation, cps up --plant-mismatch-off)")
     ap.add_argument("--plant-seeds", default="7", help="comma-separated (default 7)")
     ap.add_argument("--plant-seed", type=int, help="one plant seed (as --plant-seeds N)")
     ap.add_argument("--arms", help="comma-separated subset of " +
@@ -523,7 +527,8 @@ def main() -> int:
               for name, *_ in arms}  # fmt: skip
     metric = "each object's first order" if args.regime == "cold-start" else "every order"
     print(
-        f"\n{args.regime}: {len(orders)} orders on {floor.name}, {args.plant_kind} plant, "
+        f"\n{args.regime}: {len(orders)} orders on {floor.name}, {args.plant_kind} plant"
+        f"{' without ' + args.mismatch_off if args.mismatch_off else ''}, "
         f"seeds {seeds}; success share over {metric}"
     )
     print(f"{'arm':<18}" + "".join(f"{'seed ' + str(s):>24}" for s in seeds) + f"{'pooled':>26}")
@@ -564,9 +569,11 @@ def main() -> int:
                 f"{r['campaign_floor_s']:.0f} s); faults {r['faults']}; twin wrong per leg "
                 f"{tw}; failures {r['failed_by_reason'] or 'none'}"
             )
-    res = ROOT / "benchmarks" / "results" / f"operations-{args.regime}-{args.plant_kind}.json"
+    off = "-off-" + args.mismatch_off.replace(",", "-") if args.mismatch_off else ""
+    res = ROOT / "benchmarks" / "results" / f"operations-{args.regime}-{args.plant_kind}{off}.json"
     res.write_text(json.dumps({
         "regime": args.regime, "plant_kind": args.plant_kind, "plant_seeds": seeds,
+        "mismatch_off": args.mismatch_off.split(",") if args.mismatch_off else [],
         "floor": floor.name, "orders": len(orders), "seed": args.seed, "runs": args.runs,
         "arms": [a[0] for a in arms], "per_seed": {str(s): v for s, v in per_seed.items()},
         "pooled": {k: list(v) for k, v in pooled.items()}, "differences": diffs,

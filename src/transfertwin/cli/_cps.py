@@ -246,6 +246,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="with --plant-seed: the plant of the twin's own model class with hidden "
                         "values (in-class, the default), or that plant with structural "
                         "differences the twin cannot represent (mismatch)")  # fmt: skip
+    p.add_argument("--plant-mismatch-off", default="", metavar="PART,...",
+                   help="with --plant-kind mismatch: parts of the mismatch switched back to the "
+                        "in-class plant's (shape, mass, belts, contact, appendage, compliant, "
+                        "sag), to ablate them on a floor")  # fmt: skip
     p.add_argument("--floor", metavar="FLOOR",
                    help="a floor file (examples/floor-demo.toml), default 'demo', the built-in "
                         "floor; each asset on its own loopback address")

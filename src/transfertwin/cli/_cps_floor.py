@@ -39,6 +39,19 @@ def _floor_spec(name: str):
     return default_floor_spec() if name == "demo" else load_floor(name)
 
 
+def _mismatch_off(text: str, kind: str) -> tuple[str, ...]:
+    """``--plant-mismatch-off``'s parts (checked against `MISMATCH_PARTS`); InputError."""
+    from transfertwin.plant import MISMATCH_PARTS
+
+    parts = tuple(p.strip() for p in text.split(",") if p.strip())
+    bad = sorted(set(parts) - set(MISMATCH_PARTS))
+    if bad or (parts and kind != "mismatch"):
+        raise InputError(f"--plant-mismatch-off takes parts of the mismatch plant (with "
+                         f"--plant-kind mismatch): some of {', '.join(MISMATCH_PARTS)}; "
+                         f"got {text!r}")  # fmt: skip
+    return parts
+
+
 def _floor_to_run(args: argparse.Namespace):
     """The floor `cps up` runs: `--floor` (or the built-in one) with `--policy`/`--study`,
     every unit and module on the emulated plant with `--plant-seed` (InputError on a flag
@@ -57,6 +70,7 @@ def _floor_to_run(args: argparse.Namespace):
     floor = _with_operation(_floor_spec(args.floor), args.policy, args.study)
     if args.plant_kind != "in-class" and args.plant_seed is None:
         raise InputError("--plant-kind needs --plant-seed (the plant's hidden parameters)")
+    args.plant_mismatch_off = _mismatch_off(args.plant_mismatch_off, args.plant_kind)
     if args.plant_seed is not None:  # every unit and module on the emulated plant
         from transfertwin.cps import check_plant_seed
 
@@ -105,7 +119,8 @@ def cmd_up_floor(args: argparse.Namespace) -> int:
     configs = prepare_floor(floor, wd, insecure=args.insecure, seed=args.seed,
                             time_scale=args.time_scale, docking=args.docking,
                             lease_s=args.lease, plant_seed=args.plant_seed,
-                            plant_kind=args.plant_kind)  # fmt: skip
+                            plant_kind=args.plant_kind,
+                            plant_mismatch_off=args.plant_mismatch_off)  # fmt: skip
     write_floor_info(wd, configs, floor)
     if args.prepare_only:  # each bundle goes to its host and starts there
         print(f"floor {floor.name} prepared: {len(configs)} bundles in {wd / 'assets'}; start "
@@ -172,6 +187,7 @@ def cmd_up_local(args: argparse.Namespace) -> int:
     local = LocalFloor(floor, wd, insecure=args.insecure, seed=args.seed,
                        time_scale=args.time_scale, docking=args.docking, lease_s=args.lease,
                        plant_seed=args.plant_seed, plant_kind=args.plant_kind,
+                       plant_mismatch_off=args.plant_mismatch_off,
                        online_timeout_s=args.start_timeout)  # fmt: skip
 
     async def serve() -> None:

@@ -97,6 +97,7 @@ def prepare_floor(
     base_host: str = "127.0.0.2",
     plant_seed: int | None = None,
     plant_kind: str = "in-class",
+    plant_mismatch_off: tuple[str, ...] = (),
 ) -> dict[str, AssetConfig]:
     """Write the floor's work folder and every asset's bundle; returns asset id -> its
     configuration (absolute paths; the bundle's file holds them relative to the bundle).
@@ -104,7 +105,8 @@ def prepare_floor(
     A work folder used before keeps its credentials, certificates and every asset's state
     (the ledger, operation ids, possessions): a floor started again goes on where it was.
     A floor with assets on the emulated plant (``hal = "plant"``) needs `plant_seed` (and
-    `plant_kind`, 'in-class' or 'mismatch', `FLOOR_PLANT_KINDS`); it is
+    `plant_kind`, 'in-class' or 'mismatch', `FLOOR_PLANT_KINDS`, and the mismatch parts
+    switched off, `plant_mismatch_off`, for an ablation); it is
     written to ``W/plant.secret`` (owner-only) and copied into those assets' bundles only.
     The floor's study store is copied into the Experiment Manager's bundle, which answers
     the TMS's questions from it. Without `lease_s` the floor gets the default lease for its
@@ -120,7 +122,7 @@ def prepare_floor(
     seed_file = None
     if floor.uses_plant():
         seed_file = write_plant_seed(workdir / PLANT_SEED_FILE, plant_seed,
-                                     plant_kind).resolve()
+                                     plant_kind, plant_mismatch_off).resolve()
     write_atomic(workdir / "floor.toml", floor_toml(floor))
     study = floor.operation.study
     # an asset's copy of the floor names no file of another host (the study is the EM's)

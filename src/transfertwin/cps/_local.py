@@ -43,21 +43,21 @@ class LocalFloor:
     Args:
         floor: The floor.
         workdir: Its work folder (prepared here; one used before keeps its state).
-        insecure, seed, time_scale, docking, lease_s, plant_seed, plant_kind, base_host: As
-            `prepare_floor` takes them.
+        insecure, seed, time_scale, docking, lease_s, plant_seed, plant_kind,
+            plant_mismatch_off, base_host: As `prepare_floor` takes them.
         online_timeout_s: How long entering waits until the graph holds every asset's lease.
     """
 
     def __init__(self, floor: FloorSpec, workdir: Path, *, insecure: bool = False,
                  seed: int = 0, time_scale: float = 1.0, docking: str = "sampled",
                  lease_s: float | None = None, plant_seed: int | None = None,
-                 plant_kind: str = "in-class",
+                 plant_kind: str = "in-class", plant_mismatch_off: tuple[str, ...] = (),
                  base_host: str = "127.0.0.2", online_timeout_s: float = 60.0) -> None:  # fmt: skip
         self.floor = floor
         self.workdir = Path(workdir)
         self._prepare = dict(insecure=insecure, seed=seed, time_scale=time_scale,
                              docking=docking, lease_s=lease_s, plant_seed=plant_seed,
-                             plant_kind=plant_kind,
+                             plant_kind=plant_kind, plant_mismatch_off=plant_mismatch_off,
                              base_host=base_host)  # fmt: skip
         self._online_timeout_s = online_timeout_s
         self.configs: dict[str, AssetConfig] = {}

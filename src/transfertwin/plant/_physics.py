@@ -14,7 +14,7 @@ Only the unit's process holds it, behind its HAL; nothing that process publishes
 from __future__ import annotations
 
 from transfertwin._errors import InputError
-from transfertwin.plant._mismatch import draw_mismatch_scene, without_parts
+from transfertwin.plant._mismatch import MISMATCH_PARTS, draw_mismatch_scene, without_parts
 from transfertwin.plant._plant import _mismatch_object, _system
 from transfertwin.plant._truth import draw_object, draw_scene
 from transfertwin.sim import VirtualTransferSystem
@@ -35,18 +35,27 @@ class PlantPhysics:
         seed: The plant seed (non-negative integer; never published).
         kind: 'in-class' (default) or 'mismatch' (`FLOOR_PLANT_KINDS`): the plant
             `EmulatedPlant(seed, kind)` runs its experiments on.
+        mismatch_off: Parts of the mismatch (`MISMATCH_PARTS`) switched back to the
+            in-class plant's, as `EmulatedPlant`'s ``mismatch_off`` (an ablation).
     """
 
-    __slots__ = ("__kind", "__mismatch", "__scene", "__seed")
+    __slots__ = ("__kind", "__mismatch", "__off", "__scene", "__seed")
 
-    def __init__(self, seed: int, kind: str = "in-class") -> None:
+    def __init__(self, seed: int, kind: str = "in-class",
+                 mismatch_off: tuple[str, ...] = ()) -> None:  # fmt: skip
         if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
             raise InputError(f"the plant seed must be a non-negative integer, got {seed!r}")
         if kind not in FLOOR_PLANT_KINDS:
             raise InputError(f"a floor's plant kind must be one of "
                              f"{', '.join(FLOOR_PLANT_KINDS)}, got {kind!r}")  # fmt: skip
+        bad = sorted(set(mismatch_off) - set(MISMATCH_PARTS))
+        if bad or (mismatch_off and kind != "mismatch"):
+            raise InputError(f"the mismatch parts to switch off must be some of "
+                             f"{', '.join(MISMATCH_PARTS)} (on a mismatch plant), got "
+                             f"{', '.join(mismatch_off)}")  # fmt: skip
         self.__seed = seed
         self.__kind = kind
+        self.__off = frozenset(mismatch_off)
         self.__scene = draw_scene(seed)
         self.__mismatch = draw_mismatch_scene(seed) if kind == "mismatch" else None
 
@@ -71,5 +80,5 @@ class PlantPhysics:
         mismatch = None
         if self.__mismatch is not None:
             mismatch = without_parts(_mismatch_object(self.__seed, object_id),
-                                     self.__mismatch, frozenset())  # fmt: skip
+                                     self.__mismatch, self.__off)  # fmt: skip
         return _system(draw_object(self.__seed, object_id), self.__scene, 0, mismatch)

@@ -35,3 +35,41 @@ def test_the_mismatch_plants_physics_differ_from_the_in_class_plants() -> None:
     assert differs
     with pytest.raises(InputError, match="in-class, mismatch"):
         PlantPhysics(7, "bullet")  # another engine: not a floor's
+
+
+def test_the_secret_file_names_the_mismatch_parts_switched_off(tmp_path) -> None:
+    """An ablation on a floor: the parts after the kind, read back in order."""
+    from transfertwin.cps.floor import read_plant_off
+
+    path = write_plant_seed(tmp_path / "d.secret", 7, "mismatch", ("sag", "contact"))
+    assert path.read_text() == "7 mismatch off=contact,sag\n"
+    assert (read_plant_seed(path), read_plant_kind(path), read_plant_off(path)) == (
+        7, "mismatch", ("contact", "sag"))
+    assert read_plant_off(write_plant_seed(tmp_path / "e.secret", 7, "mismatch")) == ()
+
+
+def test_a_part_switched_off_is_the_in_class_plants_in_the_modules_physics() -> None:
+    """Mass off: the core's inertia and centre of mass are the in-class plant's again,
+    while the rest of the mismatch (its bodies and geometry) stays."""
+    whole = PlantPhysics(7, "mismatch").system("o1").model
+    no_mass = PlantPhysics(7, "mismatch", ("mass",)).system("o1").model
+    in_class = PlantPhysics(7).system("o1").model
+    assert (no_mass.nbody, no_mass.ngeom) == (whole.nbody, whole.ngeom)
+    assert not np.allclose(no_mass.body_ipos, whole.body_ipos)
+    core = 1 + int(np.argmax(in_class.body_mass[1:]))
+    assert np.allclose(no_mass.body_ipos[core], in_class.body_ipos[core])
+    with pytest.raises(InputError, match="mismatch parts"):
+        PlantPhysics(7, "in-class", ("mass",))
+    with pytest.raises(InputError, match="mismatch parts"):
+        PlantPhysics(7, "mismatch", ("colour",))
+
+
+def test_cps_up_refuses_unknown_parts_in_one_line() -> None:
+    from transfertwin.cli._cps_floor import _mismatch_off
+
+    assert _mismatch_off(" shape, sag ", "mismatch") == ("shape", "sag")
+    assert _mismatch_off("", "in-class") == ()
+    with pytest.raises(InputError, match="--plant-mismatch-off"):
+        _mismatch_off("colour", "mismatch")
+    with pytest.raises(InputError, match="--plant-mismatch-off"):
+        _mismatch_off("shape", "in-class")

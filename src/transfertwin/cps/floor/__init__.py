@@ -33,6 +33,7 @@ if TYPE_CHECKING:
         PLANT_SEED_FILE,
         check_plant_seed,
         read_plant_kind,
+        read_plant_off,
         read_plant_seed,
         write_plant_seed,
     )
@@ -59,6 +60,7 @@ __all__ = [
     "load_floor",
     "parse_floor",
     "read_plant_kind",
+    "read_plant_off",
     "read_plant_seed",
     "write_asset_config",
     "write_plant_seed",

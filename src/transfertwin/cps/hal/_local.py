@@ -20,7 +20,7 @@ import functools
 import logging
 from typing import TYPE_CHECKING
 
-from transfertwin.cps.floor import read_plant_kind, read_plant_seed
+from transfertwin.cps.floor import read_plant_kind, read_plant_off, read_plant_seed
 from transfertwin.cps.hal._gateway import GatewayError, GatewayLink, gateway_refusal
 from transfertwin.cps.hal._gateway_module import GatewayWorld
 
@@ -56,7 +56,8 @@ def environment_for(cfg: AssetConfig, scene: SceneConfig):
     from transfertwin.plant import PlantPhysics
 
     seed_file = cfg.hal.plant_seed_file
-    physics = PlantPhysics(read_plant_seed(seed_file), read_plant_kind(seed_file))
+    physics = PlantPhysics(read_plant_seed(seed_file), read_plant_kind(seed_file),
+                           read_plant_off(seed_file))  # fmt: skip
 
     class PlantEnvironment(Environment):
         """`Environment` whose systems are the plant's (hidden scene, hidden objects)."""

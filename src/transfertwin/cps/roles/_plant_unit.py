@@ -39,7 +39,12 @@ from transfertwin.cps.aas import (
     demo_descriptors,
     physical_twin,
 )
-from transfertwin.cps.floor import check_plant_seed, read_plant_kind, read_plant_seed
+from transfertwin.cps.floor import (
+    check_plant_seed,
+    read_plant_kind,
+    read_plant_off,
+    read_plant_seed,
+)
 from transfertwin.cps.hal import load_scene
 from transfertwin.cps.opcua import OperationRefused
 from transfertwin.cps.roles._unit import UnitRole
@@ -122,17 +127,20 @@ class PhysicalPlant:
     Args:
         seed: The plant seed (draws every hidden parameter; not published).
         kind: The plant's kind ('in-class' or 'mismatch', `FLOOR_PLANT_KINDS`).
+        mismatch_off: Mismatch parts switched off (`EmulatedPlant`'s, an ablation).
     """
 
     __slots__ = ("__lock", "__plant")
 
-    def __init__(self, seed: int, kind: str = "in-class") -> None:
+    def __init__(self, seed: int, kind: str = "in-class",
+                 mismatch_off: tuple[str, ...] = ()) -> None:  # fmt: skip
         from transfertwin.plant import FLOOR_PLANT_KINDS, EmulatedPlant
 
         if kind not in FLOOR_PLANT_KINDS:
             raise InputError(f"a floor's plant kind must be one of "
                              f"{', '.join(FLOOR_PLANT_KINDS)}, got {kind!r}")  # fmt: skip
-        self.__plant = EmulatedPlant(check_plant_seed(seed), kind)
+        self.__plant = EmulatedPlant(check_plant_seed(seed), kind,
+                                     mismatch_off=tuple(mismatch_off))  # fmt: skip
         self.__lock = threading.Lock()
 
     def __reduce__(self) -> None:  # type: ignore[override]
@@ -155,17 +163,20 @@ def _station(asset_id: str) -> str:
     return asset_id.removesuffix("_P")
 
 
-_PLANTS: dict[tuple[int, str], PhysicalPlant] = {}
+_PLANTS: dict[tuple[int, str, tuple[str, ...]], PhysicalPlant] = {}
 _PLANTS_LOCK = threading.Lock()
 
 
-def plant_for(seed: int, kind: str = "in-class") -> PhysicalPlant:
-    """This process's plant of `seed` and `kind` (drawn once; fitting its docking model
-    takes a few seconds): every physical unit served here runs its cycles on it."""
+def plant_for(seed: int, kind: str = "in-class",
+              mismatch_off: tuple[str, ...] = ()) -> PhysicalPlant:  # fmt: skip
+    """This process's plant of `seed`, `kind` and `mismatch_off` (drawn once; fitting its
+    docking model takes a few seconds): every physical unit served here runs its cycles
+    on it."""
+    key = (seed, kind, tuple(sorted(mismatch_off)))
     with _PLANTS_LOCK:
-        if (seed, kind) not in _PLANTS:
-            _PLANTS[seed, kind] = PhysicalPlant(seed, kind)
-        return _PLANTS[seed, kind]
+        if key not in _PLANTS:
+            _PLANTS[key] = PhysicalPlant(*key)
+        return _PLANTS[key]
 
 
 class PlantUnitRole(UnitRole):
@@ -176,6 +187,7 @@ class PlantUnitRole(UnitRole):
         super().__init__(node)
         self._seed = read_plant_seed(node.cfg.hal.plant_seed_file)
         self._kind = read_plant_kind(node.cfg.hal.plant_seed_file)
+        self._off = read_plant_off(node.cfg.hal.plant_seed_file)
         self._cycling = False
 
     def operations(self) -> tuple[OperationSpec, ...]:
@@ -189,7 +201,7 @@ class PlantUnitRole(UnitRole):
         await self.set("DockedTransportModule", self.state.data["docked"])
         self.node.server.on_client_write(self._written)
         # drawn before it is asked
-        self.node.spawn(asyncio.to_thread(plant_for, self._seed, self._kind))
+        self.node.spawn(asyncio.to_thread(plant_for, self._seed, self._kind, self._off))
 
     async def _set_belt(self, belt: str, speed: float) -> bool:
         if self._cycling:
@@ -202,7 +214,7 @@ class PlantUnitRole(UnitRole):
 
         if self._cycling:
             raise _refused(f"{self.aid} is running an experiment cycle")
-        plant = await asyncio.to_thread(plant_for, self._seed, self._kind)
+        plant = await asyncio.to_thread(plant_for, self._seed, self._kind, self._off)
         if _station(self.aid) not in plant.stations:
             raise _refused(f"the plant has no station for {self.aid}")
         request = PlantRequest(obj, face, conveyor, int(theta_deg), _station(self.aid))

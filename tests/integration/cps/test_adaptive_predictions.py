@@ -35,5 +35,5 @@ def test_adaptive_predictions_are_bounded_focused_and_repeatable():
 
 
 def test_an_unknown_sampling_is_refused():
-    with pytest.raises(ValueError, match="exhaustive or adaptive"):
+    with pytest.raises(ValueError, match="one of exhaustive, adaptive"):
         virtual_predictions("o1", 1, 0, sampling="random")

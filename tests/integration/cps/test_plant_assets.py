@@ -346,8 +346,9 @@ def test_the_cps_touches_the_plant_only_through_its_public_methods(monkeypatch):
     touched: list[str] = []
 
     class Recording:
-        def __init__(self, seed: int, kind: str = "in-class") -> None:
-            self._real = EmulatedPlant(seed, kind)
+        def __init__(self, seed: int, kind: str = "in-class", *,
+                     mismatch_off: tuple[str, ...] = ()) -> None:  # fmt: skip
+            self._real = EmulatedPlant(seed, kind, mismatch_off=mismatch_off)
 
         def __getattr__(self, name: str):
             touched.append(name)

@@ -43,8 +43,9 @@ class LocalFloor:
     Args:
         floor: The floor.
         workdir: Its work folder (prepared here; one used before keeps its state).
-        insecure, seed, time_scale, docking, lease_s, plant_seed, plant_kind,
-            plant_mismatch_off, base_host: As `prepare_floor` takes them.
+        insecure, seed, time_scale, docking, lease_s, plant_seed, plant_kind: As
+            `prepare_floor` takes them.
+        plant_mismatch_off, base_host: As `prepare_floor` takes them.
         online_timeout_s: How long entering waits until the graph holds every asset's lease.
     """
 

@@ -40,15 +40,14 @@ def _floor_spec(name: str):
 
 
 def _mismatch_off(text: str, kind: str) -> tuple[str, ...]:
-    """``--plant-mismatch-off``'s parts (checked against `MISMATCH_PARTS`); InputError."""
-    from transfertwin.plant import MISMATCH_PARTS
+    """``--plant-mismatch-off``'s parts (`check_mismatch_off`); InputError."""
+    from transfertwin.plant import check_mismatch_off
 
     parts = tuple(p.strip() for p in text.split(",") if p.strip())
-    bad = sorted(set(parts) - set(MISMATCH_PARTS))
-    if bad or (parts and kind != "mismatch"):
-        raise InputError(f"--plant-mismatch-off takes parts of the mismatch plant (with "
-                         f"--plant-kind mismatch): some of {', '.join(MISMATCH_PARTS)}; "
-                         f"got {text!r}")  # fmt: skip
+    try:
+        check_mismatch_off(parts, kind)
+    except InputError as exc:
+        raise InputError(f"--plant-mismatch-off (with --plant-kind mismatch): {exc}") from None
     return parts
 
 

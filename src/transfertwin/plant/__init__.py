@@ -7,7 +7,7 @@ calibration, study or validation code can import it; `transfertwin.rehearsal` dr
 `reveal_truth` hands the hidden values to what scores a rehearsal afterwards (its report).
 """
 
-from transfertwin.plant._mismatch import MISMATCH_PARTS, PLANT_KINDS
+from transfertwin.plant._mismatch import MISMATCH_PARTS, PLANT_KINDS, check_mismatch_off
 from transfertwin.plant._physics import FLOOR_PLANT_KINDS, PlantPhysics
 from transfertwin.plant._plant import PLANT_COLUMNS, EmulatedPlant, MassReading, PlantRequest
 from transfertwin.plant._recording import CAMERA_RESOLUTION, PlantRecording
@@ -29,6 +29,7 @@ __all__ = [
     "PlantRecording",
     "PlantRequest",
     "PlantTruth",
+    "check_mismatch_off",
     "read_plant_seed",
     "reveal_truth",
     "write_plant_seed",

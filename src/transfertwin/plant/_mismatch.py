@@ -64,6 +64,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from transfertwin._errors import InputError
 from transfertwin.plant._truth import PLANT_TAG
 
 __all__: list[str] = []  # private to transfertwin.plant
@@ -78,6 +79,15 @@ PLANT_KINDS = ("in-class", "mismatch", "bullet")
 #: (solver and contact model), appendage (the loose strip on its joints), compliant (the
 #: elastic part on its ball joint), sag (sagging, compliant belt decks).
 MISMATCH_PARTS = ("shape", "mass", "belts", "contact", "appendage", "compliant", "sag")
+
+
+def check_mismatch_off(parts: tuple[str, ...], kind: str) -> frozenset[str]:
+    """The mismatch parts to switch off, as a set; InputError unless each is one of
+    `MISMATCH_PARTS` and the plant is a mismatch plant (none is always allowed)."""
+    if sorted(set(parts) - set(MISMATCH_PARTS)) or (parts and kind != "mismatch"):
+        raise InputError(f"mismatch parts to switch off: {', '.join(MISMATCH_PARTS)} "
+                         f"(on a mismatch plant), got {', '.join(parts)}")  # fmt: skip
+    return frozenset(parts)
 
 #: Slats per belt deck of a sagging belt.
 SAG_SEGMENTS = 4

@@ -14,7 +14,11 @@ Only the unit's process holds it, behind its HAL; nothing that process publishes
 from __future__ import annotations
 
 from transfertwin._errors import InputError
-from transfertwin.plant._mismatch import MISMATCH_PARTS, draw_mismatch_scene, without_parts
+from transfertwin.plant._mismatch import (
+    check_mismatch_off,
+    draw_mismatch_scene,
+    without_parts,
+)
 from transfertwin.plant._plant import _mismatch_object, _system
 from transfertwin.plant._truth import draw_object, draw_scene
 from transfertwin.sim import VirtualTransferSystem
@@ -48,14 +52,9 @@ class PlantPhysics:
         if kind not in FLOOR_PLANT_KINDS:
             raise InputError(f"a floor's plant kind must be one of "
                              f"{', '.join(FLOOR_PLANT_KINDS)}, got {kind!r}")  # fmt: skip
-        bad = sorted(set(mismatch_off) - set(MISMATCH_PARTS))
-        if bad or (mismatch_off and kind != "mismatch"):
-            raise InputError(f"the mismatch parts to switch off must be some of "
-                             f"{', '.join(MISMATCH_PARTS)} (on a mismatch plant), got "
-                             f"{', '.join(mismatch_off)}")  # fmt: skip
         self.__seed = seed
         self.__kind = kind
-        self.__off = frozenset(mismatch_off)
+        self.__off = check_mismatch_off(mismatch_off, kind)
         self.__scene = draw_scene(seed)
         self.__mismatch = draw_mismatch_scene(seed) if kind == "mismatch" else None
 

@@ -34,11 +34,11 @@ from transfertwin.objects import ProxySpec, builtin_ids, load_builtin, proxy_mod
 from transfertwin.ots import state_index
 from transfertwin.plant._bullet import BulletTransferSystem
 from transfertwin.plant._mismatch import (
-    MISMATCH_PARTS,
     PLANT_KINDS,
     SAG_SEGMENTS,
     MismatchObject,
     MismatchScene,
+    check_mismatch_off,
     draw_mismatch_object,
     draw_mismatch_scene,
     mismatched_hulls,
@@ -416,11 +416,7 @@ class EmulatedPlant:
             raise InputError(f"--plant-seed must be a non-negative integer, got {seed!r}")
         if kind not in PLANT_KINDS:
             raise InputError(f"--plant-kind must be one of {', '.join(PLANT_KINDS)}, got {kind!r}")
-        bad = sorted(set(mismatch_off) - set(MISMATCH_PARTS))
-        if bad or (mismatch_off and kind != "mismatch"):
-            raise InputError(f"mismatch parts to switch off: {', '.join(MISMATCH_PARTS)} "
-                             f"(on a mismatch plant), got {', '.join(mismatch_off)}")  # fmt: skip
-        self.__off = frozenset(mismatch_off)
+        self.__off = check_mismatch_off(mismatch_off, kind)
         self.__seed = seed
         self.__kind = kind
         self.__scene: SceneTruth = draw_scene(seed)

@@ -313,11 +313,19 @@ def campaign(pwd: Path, args) -> float:
     seconds (the E^P's transfer time on the plant's clock)."""
     run = tt("cps", "campaign", "start", "--workdir", str(pwd), "--wait",
              "--experiments", str(args.campaign_experiments), "--seed", str(args.seed),
+             "--object-prior", args.campaign_object_prior,
+             "--min-face-rows", str(args.campaign_min_face_rows),
+             "--tune-trials", str(args.campaign_tune_trials),
              timeout=args.timeout)  # fmt: skip
     if run.returncode != 0:
         raise SystemExit(f"the campaign failed: {run.stderr.strip() or run.stdout[-400:]}")
     st = tt("cps", "campaign", "status", "--workdir", str(pwd), "--json")
     doc = json.loads(st.stdout) if st.returncode == 0 else {}
+    s = doc.get("summary") or {}
+    if s:
+        print(f"  campaign: F0.5 on held-out E^P {s.get('f05_before', float('nan')):.3f} "
+              f"before, {s.get('f05_after', float('nan')):.3f} after; folder "
+              f"{doc.get('folder')}", flush=True)  # fmt: skip
     return float(doc.get("floor_s") or doc.get("campaign_floor_s") or 0.0)
 
 
@@ -456,6 +464,12 @@ def main() -> int:
         help="add the calibrated arms (a campaign on each of their floors)",
     )
     ap.add_argument("--campaign-experiments", type=int, default=40)
+    ap.add_argument("--campaign-object-prior", choices=("plain", "shipped"), default="plain",
+                    help="the campaign's object prior (cps campaign start --object-prior)")
+    ap.add_argument("--campaign-min-face-rows", type=int, default=1,
+                    help="rows a face needs before the campaign searches its depth")
+    ap.add_argument("--campaign-tune-trials", type=int, default=0,
+                    help="the campaign's TPE trials over mu and the gap (default 0)")
     ap.add_argument("--seed", type=int, default=0, help="orders, study and floor seed")
     ap.add_argument("--runs", type=int, default=4, help="study runs per state (default 4)")
     ap.add_argument("--study", help="an existing study store of the floor's cores")

@@ -26,7 +26,8 @@ EXIT_FAILED = 3
 #: Request keys a flag of `start` sets (flag dest → JSON key).
 _FLAGS = {"objects": "objects", "experiments": "experiments", "runs": "runs",
           "validation_runs": "validation_runs", "theta_step": "theta_step", "seed": "seed",
-          "workers": "workers", "tune_trials": "tune_trials", "design": "design"}  # fmt: skip
+          "workers": "workers", "tune_trials": "tune_trials", "design": "design",
+          "object_prior": "object_prior", "min_face_rows": "min_face_rows"}  # fmt: skip
 
 
 def status_line(st: dict) -> str:
@@ -129,6 +130,11 @@ def register(csub: argparse._SubParsersAction) -> None:
     p.add_argument("--design", choices=("space-filling", "random"),
                    help="the calibration states: space-filling (default; a Latin hypercube "
                         "over face and θ per object) or random (the study's)")  # fmt: skip
+    p.add_argument("--object-prior", choices=("plain", "shipped"),
+                   help="what object calibration moves from: the plain body (default) or "
+                        "each face's shipped feature")  # fmt: skip
+    p.add_argument("--min-face-rows", type=int, help="training rows a face needs before its "
+                                                     "depth is searched (default 1)")
     p.add_argument("--wait", action="store_true", help="follow the progress until it ends")
     p.set_defaults(func=cmd_start)
     CAMPAIGN.add(sub, "state, progress, floor time and result of the campaign")

@@ -80,7 +80,8 @@ def cmd_rehearse(args: argparse.Namespace) -> int:
             theta_step=args.theta_step, holdout=args.holdout,
             test_experiments=args.test_experiments, depths_mm=_depths(args.depths_mm),
             proxy_positions=parse_positions(args.proxy_positions, "--proxy-positions"),
-            tune_trials=args.tune_trials, seed=args.seed, workers=worker_count(args.workers),
+            tune_trials=args.tune_trials, object_prior=args.object_prior,
+            min_face_rows=args.min_face_rows, seed=args.seed, workers=worker_count(args.workers),
             scene=scene, ablate=tuple(args.ablate or ()), operations=args.operations,
             plant_kind=args.plant_kind,
             mismatch_off=tuple(p.strip() for p in args.mismatch_off.split(",") if p.strip()),
@@ -206,6 +207,20 @@ def register(sub: argparse._SubParsersAction) -> None:
         type=int,
         default=0,
         help="TPE trials over mu and gap after the object calibration (default 0)",
+    )
+    p.add_argument(
+        "--object-prior",
+        choices=("plain", "shipped"),
+        default="plain",
+        help="what object calibration moves from: the plain body (default, the study's) or "
+        "each face's shipped feature",
+    )
+    p.add_argument(
+        "--min-face-rows",
+        type=int,
+        default=1,
+        help="training rows a face needs before its depth is searched; fewer: it keeps its "
+        "prior (default 1)",
     )
     p.add_argument(
         "--ablate",

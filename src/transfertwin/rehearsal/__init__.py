@@ -8,6 +8,7 @@ measures the twin's predictions in operation (Sec. 7.2).
 
 from transfertwin.rehearsal._config import (
     COUNTER_MEASURES,
+    OBJECT_PRIORS,
     TWIN_FEATURE_SOLREF,
     RehearsalConfig,
     parse_ablations,
@@ -33,6 +34,7 @@ __all__ = [
     "CURVE_KEYS",
     "DESIGNS",
     "HANDLING_S",
+    "OBJECT_PRIORS",
     "POLICIES",
     "RECOVERY_S",
     "REHEARSAL_KEYS",

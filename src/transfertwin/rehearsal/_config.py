@@ -15,6 +15,7 @@ from transfertwin.sim import SceneConfig
 
 __all__ = [
     "COUNTER_MEASURES",
+    "OBJECT_PRIORS",
     "TWIN_FEATURE_SOLREF",
     "RehearsalConfig",
     "config_record",
@@ -35,6 +36,10 @@ COUNTER_MEASURES = ("mass", "stability", "compliance")
 #: marked compliant: nominal values of a soft part (the middle of the emulated plant's prior,
 #: 30-80 ms and 0.5-1.0), not fitted.
 TWIN_FEATURE_SOLREF = (0.05, 0.75)
+
+#: What object calibration moves away from: the plain body of uniform density (the study's
+#: family prior) or each face's shipped feature (what the uncalibrated twin simulates).
+OBJECT_PRIORS = ("plain", "shipped")
 
 
 def parse_ablations(values: Sequence[str]) -> tuple[str, ...]:
@@ -102,6 +107,11 @@ class RehearsalConfig:
             with the depths (fractions of its length, 0.5 the centre, which is added);
             (0.5,), the default: centred protrusions, depth only.
         tune_trials: TPE trials over μ and the gap (0: object calibration only).
+        object_prior: What object calibration moves away from (`OBJECT_PRIORS`): 'plain'
+            (the plain body; a fitted proxy replaces the core's shipped features) or
+            'shipped' (each face's shipped feature, kept unless its rows say otherwise).
+        min_face_rows: Training rows a face needs before object calibration searches its
+            depth; a face with fewer keeps its prior (1: every face tried is searched).
         seed: Master seed of the twin's side (design, split, simulations).
         workers: Worker processes.
         scene: The twin's starting scene (profile), before counter-measures.
@@ -129,6 +139,8 @@ class RehearsalConfig:
     depths_mm: tuple[float, ...] = (8.0, 16.0, 24.0, 32.0)
     proxy_positions: tuple[float, ...] = (0.5,)
     tune_trials: int = 0
+    object_prior: str = "plain"
+    min_face_rows: int = 1
     seed: int = 0
     workers: int = 1
     scene: SceneConfig = field(default_factory=SceneConfig)
@@ -166,6 +178,12 @@ class RehearsalConfig:
                 raise InputError(f"--{name.replace('_', '-')} must be at least 1")
         if self.tune_trials < 0:
             raise InputError("--tune-trials must be >= 0")
+        if self.object_prior not in OBJECT_PRIORS:
+            raise InputError(f"--object-prior must be one of {', '.join(OBJECT_PRIORS)}, "
+                             f"got {self.object_prior!r}")  # fmt: skip
+        if isinstance(self.min_face_rows, bool) or not isinstance(self.min_face_rows, int) \
+                or self.min_face_rows < 1:  # fmt: skip
+            raise InputError(f"--min-face-rows must be an integer >= 1, got {self.min_face_rows!r}")
         if not (0 < self.holdout < 1):
             raise InputError(f"--holdout must be in (0, 1), got {self.holdout}")
         if isinstance(self.test_experiments, bool) or self.test_experiments < 0:
@@ -204,4 +222,8 @@ def config_record(cfg: RehearsalConfig) -> dict[str, object]:
         del out["mismatch_off"]
     if cfg.design == "random":
         del out["design"]
+    if cfg.object_prior == "plain":
+        del out["object_prior"]
+    if cfg.min_face_rows == 1:
+        del out["min_face_rows"]
     return out

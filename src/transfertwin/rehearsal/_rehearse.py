@@ -36,7 +36,7 @@ import numpy as np
 
 from transfertwin._atomic import write_atomic
 from transfertwin._errors import InputError
-from transfertwin.objects import PROXY_SUFFIX, ProxySpec, write_proxy
+from transfertwin.objects import PROXY_SUFFIX, ProxySpec, builtin_features, write_proxy
 from transfertwin.ots import experiment_states, filter_theta_step
 from transfertwin.plant import (
     PLANT_COLUMNS,
@@ -212,7 +212,8 @@ def _calibrate_objects(
         fit = fit_proxy(
             run.train, oid, depths_m=[d / 1000 for d in cfg.depths_mm], base=base,
             positions=cfg.proxy_positions, work_dir=obj_dir / "candidates", scene=scene,
-            on_progress=run.progress, **run.calib,
+            on_progress=run.progress, min_rows=cfg.min_face_rows,
+            prior=builtin_features(oid) if cfg.object_prior == "shipped" else (), **run.calib,
         )  # fmt: skip
         run.virtual += sum(f.probabilities.size for f in fit.faces) * cfg.runs
         spec = ProxySpec(oid, oid, fit.spec.protrusions,
@@ -226,6 +227,8 @@ def _calibrate_objects(
             "depth_mm": {p.face: round(p.depth_m * 1000, 3) for p in fit.spec.protrusions},
             **fit_info,
         }
+        if cfg.object_prior != "plain" or cfg.min_face_rows != 1:  # which faces moved
+            fits[oid]["faces_searched"] = [f.face for f in fit.faces]
         if set(cfg.proxy_positions) != {0.5}:  # searched: where along x (0.5 the centre)
             fits[oid]["x_frac"] = {p.face: p.x_frac for p in fit.spec.protrusions}
     return object_map, fits

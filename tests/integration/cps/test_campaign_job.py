@@ -108,6 +108,8 @@ def test_a_journal_of_another_campaign_is_refused(tmp_path) -> None:
         ('{"workers": 1}', "'workers' must be an integer in 2..256"),
         ('{"theta_step": 7}', "--theta-step must divide 360"),
         ('{"budget": 3}', "unknown key(s) budget"),
+        ('{"object_prior": "scan"}', "--object-prior must be one of plain, shipped"),
+        ('{"min_face_rows": 0}', "'min_face_rows' must be an integer in 1..10000"),
     ],
 )
 def test_bad_requests_say_what_is_wrong(text: str, message: str) -> None:
@@ -120,6 +122,12 @@ def test_the_same_request_is_the_same_campaign() -> None:
     b = CampaignRequest.parse(json.dumps(json.loads(REQUEST), indent=3), ["o1", "o23"])
     c = CampaignRequest.parse(REQUEST.replace('"seed": 3', '"seed": 4'), ["o1", "o23"])
     assert a.campaign_id == b.campaign_id != c.campaign_id
+    # the object prior's keys count only where they are not the defaults
+    d = CampaignRequest.parse(REQUEST[:-1] + ', "object_prior": "plain"}', ["o1", "o23"])
+    e = CampaignRequest.parse(REQUEST[:-1] + ', "object_prior": "shipped", "min_face_rows": 3}',
+                              ["o1", "o23"])  # fmt: skip
+    assert d.campaign_id == a.campaign_id != e.campaign_id
+    assert (e.config().object_prior, e.config().min_face_rows) == ("shipped", 3)
 
 
 def test_a_unit_that_cannot_run_e_p_is_left_out_and_the_others_run_its_share(tmp_path) -> None:

@@ -106,3 +106,38 @@ def test_the_fit_finds_a_planted_protrusion_position(tmp_path) -> None:
     assert choose_joint(joint, y, np.flatnonzero(mask))["back"] == 2
     # a strong pull towards the centre: the data cannot pay for the move
     assert choose_joint(joint, y, np.flatnonzero(mask), position_penalty=1.0)["back"] != 2
+
+
+def test_a_shipped_prior_is_kept_without_evidence_and_searched_around(tmp_path) -> None:
+    """With the shipped features as the prior, a face with fewer than `min_rows` rows keeps
+    its feature unsearched; a face with enough rows searches the prior's depth first, then
+    the others by their distance from it (the penalty grows with that distance)."""
+    import pytest
+
+    from transfertwin._errors import InputError
+    from transfertwin.objects import builtin_features
+
+    prior = builtin_features("o1")  # front 4 mm, back 18 mm
+    real = [r for r in read_results(calibration_csv_path()) if r["object_id"] == "o1"]
+    rows = [r for r in real if r["face"] == "back"][:3] + [
+        r for r in real if r["face"] == "front"][:1]  # fmt: skip
+    fit = fit_proxy(rows, "o1", depths_m=[0.03], work_dir=tmp_path / "c", scene=SceneConfig(),
+                    runs=1, workers=1, prior=prior, min_rows=2)  # fmt: skip
+    (face,) = fit.faces  # front has one row: not searched
+    assert face.face == "back" and list(face.depths_m) == [0.018, 0.03, 0.0]
+    assert face.probabilities.shape == (1, 3, 3)
+    depth = {p.face: p.depth_m for p in fit.spec.protrusions}
+    assert depth["front"] == 0.004  # the prior, kept
+    assert depth["back"] == face.depths_m[face.chosen]
+    assert {p.name for p in (tmp_path / "c").iterdir()} == {
+        "o1~back18.proxy.json", "o1~back30.proxy.json", "o1~back0.proxy.json"}  # fmt: skip
+    # no face with enough rows: the proxy is the prior itself, nothing simulated
+    none = fit_proxy(rows, "o1", depths_m=[0.03], work_dir=tmp_path / "d", scene=SceneConfig(),
+                     runs=1, workers=1, prior=prior, min_rows=4)  # fmt: skip
+    assert none.faces == () and none.spec.protrusions == tuple(sorted(prior, key=lambda p: p.face))
+    with pytest.raises(InputError, match="not searched around a prior"):
+        fit_proxy(rows, "o1", depths_m=[0.03], work_dir=tmp_path / "e", scene=SceneConfig(),
+                  prior=prior, positions=(0.3, 0.5))  # fmt: skip
+    with pytest.raises(InputError, match="min_rows"):
+        fit_proxy(rows, "o1", depths_m=[0.03], work_dir=tmp_path / "e", scene=SceneConfig(),
+                  prior=prior, min_rows=0)  # fmt: skip

@@ -91,3 +91,16 @@ def test_the_record_leaves_out_the_plant_seed() -> None:
     record = config_record(cfg)
     assert "plant_seed" not in record and 918273 not in record.values()
     assert record["seed"] == 0  # the twin's own master seed stays
+
+
+def test_the_object_prior_is_checked_and_recorded_only_when_it_is_not_the_plain_body() -> None:
+    base = {"plant_seed": 1, "objects": ("o3",), "calibration_experiments": 20}
+    record = config_record(RehearsalConfig(**base))
+    assert "object_prior" not in record and "min_face_rows" not in record
+    cfg = RehearsalConfig(**base, object_prior="shipped", min_face_rows=3)
+    assert (config_record(cfg)["object_prior"], config_record(cfg)["min_face_rows"]) == (
+        "shipped", 3)  # fmt: skip
+    with pytest.raises(InputError, match="--object-prior"):
+        RehearsalConfig(**base, object_prior="scan")
+    with pytest.raises(InputError, match="--min-face-rows"):
+        RehearsalConfig(**base, min_face_rows=0)

@@ -54,7 +54,8 @@ STATUS = "campaign.json"
 CAMPAIGN_MEASURES = ("stability", "compliance")
 
 _KEYS = {"objects", "experiments", "runs", "validation_runs", "theta_step", "seed",
-         "workers", "holdout", "depths_mm", "tune_trials", "design"}  # fmt: skip
+         "workers", "holdout", "depths_mm", "tune_trials", "design", "object_prior",
+         "min_face_rows"}  # fmt: skip
 
 
 class CampaignStoppedError(Exception):
@@ -96,6 +97,9 @@ class CampaignRequest:
         design: The calibration states: 'space-filling' (default: a Latin hypercube over
             face and θ per object, so that an object's few tries cover both faces and the
             circle) or 'random' (the study's).
+        object_prior: What object calibration moves from ('plain' or 'shipped', the
+            rehearsal's `object_prior`).
+        min_face_rows: Training rows a face needs before its depth is searched.
     """
 
     objects: tuple[str, ...]
@@ -109,6 +113,8 @@ class CampaignRequest:
     depths_mm: tuple[float, ...] = (8.0, 16.0, 24.0, 32.0)
     tune_trials: int = 0
     design: str = "space-filling"
+    object_prior: str = "plain"
+    min_face_rows: int = 1
     text: str = field(default="", compare=False)
 
     @classmethod
@@ -149,17 +155,25 @@ class CampaignRequest:
             _int(d, "validation_runs", 4, 1, 1000), _int(d, "theta_step", 30, 1, 360),
             _int(d, "seed", 0, 0, 2**32 - 1), _int(d, "workers", 2, 2, 256), float(holdout),
             tuple(float(v) for v in depths), _int(d, "tune_trials", 0, 0, 1000),
-            str(d.get("design", "space-filling")), text,
+            str(d.get("design", "space-filling")), str(d.get("object_prior", "plain")),
+            _int(d, "min_face_rows", 1, 1, 10_000), text,
         )  # fmt: skip
         req.config()  # the rehearsal's own checks (θ step, hold-out split, depths)
         return req
 
     def as_dict(self) -> dict[str, Any]:
-        return {"objects": list(self.objects), "experiments": self.experiments,
-                "runs": self.runs, "validation_runs": self.validation_runs,
-                "theta_step": self.theta_step, "seed": self.seed, "workers": self.workers,
-                "holdout": self.holdout, "depths_mm": list(self.depths_mm),
-                "tune_trials": self.tune_trials, "design": self.design}  # fmt: skip
+        """The request as JSON keys; the object prior's keys only where they are not the
+        defaults (so that an older request keeps its campaign id)."""
+        out = {"objects": list(self.objects), "experiments": self.experiments,
+               "runs": self.runs, "validation_runs": self.validation_runs,
+               "theta_step": self.theta_step, "seed": self.seed, "workers": self.workers,
+               "holdout": self.holdout, "depths_mm": list(self.depths_mm),
+               "tune_trials": self.tune_trials, "design": self.design}  # fmt: skip
+        if self.object_prior != "plain":
+            out["object_prior"] = self.object_prior
+        if self.min_face_rows != 1:
+            out["min_face_rows"] = self.min_face_rows
+        return out
 
     @property
     def campaign_id(self) -> str:
@@ -177,6 +191,7 @@ class CampaignRequest:
             runs=self.runs, validation_runs=self.validation_runs, theta_step=self.theta_step,
             holdout=self.holdout, depths_mm=self.depths_mm, tune_trials=self.tune_trials,
             seed=self.seed, workers=self.workers, design=self.design,
+            object_prior=self.object_prior, min_face_rows=self.min_face_rows,
         )  # fmt: skip
 
 

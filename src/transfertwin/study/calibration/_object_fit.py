@@ -10,6 +10,14 @@ with the same seeds (common random numbers), which gives P(success) per row and 
 The chosen shift and depths minimise the Brier score plus penalties that grow with the
 distance from the prior (`choose_joint`: jointly, as the shift couples the faces).
 
+Opt-in, a face's prior is a feature the twin already holds (`prior`: e.g. a built-in
+core's shipped resting features, `transfertwin.objects.builtin_features`) instead of the
+plain body: that face's candidates are the prior's depth first, then the other depths by
+their distance from it, so the penalty grows with the distance from what the twin knew; a
+face with fewer than `min_rows` real rows keeps its prior, unsearched (few tries do not
+overturn it), and so does a face without rows. Without a prior every face starts plain,
+as before.
+
 Opt-in, the protrusion's position along the object's x axis (`Protrusion.x_frac`, a
 fraction of its length; the prior 0.5 is the centre) is searched with the depths: each
 nonzero depth is tried at every position of the grid (depth 0 has no feature and so no
@@ -25,6 +33,7 @@ docked belts, not the real object's shape or mass distribution.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -110,15 +119,18 @@ def _candidate(
     depth_m: float,
     shift_m: float,
     x_frac: float = 0.5,
+    shape: Protrusion | None = None,
 ) -> tuple[str, str]:
     """(object id, file) of one candidate proxy: `base` with a protrusion on `face` (at
-    `x_frac` along x) and its centre of mass shifted by `shift_m`."""
+    `x_frac` along x; with `shape`, that feature's footprint at `depth_m`) and its centre of
+    mass shifted by `shift_m`."""
     name = f"{object_id}~{face}{round(depth_m * 1000, 2):g}"
     if x_frac != 0.5:
         name += f"~x{round(x_frac, 4):g}"
     if shift_m != 0:
         name += f"~com{round(shift_m * 1000, 2):+g}"
-    prot = Protrusion(face, depth_m, x_frac=x_frac)
+    prot = (Protrusion(face, depth_m, x_frac=x_frac) if shape is None
+            else dataclasses.replace(shape, depth_m=depth_m))  # fmt: skip
     spec = ProxySpec(name, base, (prot,), com_shift_m=shift_m)
     return name, str(write_proxy(spec, work_dir / f"{name}{PROXY_SUFFIX}"))
 
@@ -162,6 +174,16 @@ def _face_grid(depths: np.ndarray, positions: np.ndarray) -> tuple[np.ndarray, n
     return np.array([d for d, _ in pairs]), np.array([x for _, x in pairs])
 
 
+def _prior_grid(depths: np.ndarray, prior: Protrusion) -> tuple[np.ndarray, np.ndarray]:
+    """A face's candidates (K,) around its `prior` feature: the prior's depth first, then the
+    other depths by their distance from it (shallower first on a tie); all at the prior's
+    position along x."""
+    d0 = float(prior.depth_m)
+    others = sorted({float(d) for d in depths} - {d0}, key=lambda d: (abs(d - d0), d))
+    grid = np.array([d0, *others])
+    return grid, np.full(len(grid), float(prior.x_frac))
+
+
 def fit_proxy(
     rows: Sequence[Mapping[str, object]],
     object_id: str,
@@ -180,6 +202,8 @@ def fit_proxy(
     position_penalty: float = 0.02,
     on_progress: Callable[[int, int], None] | None = None,
     executor: Executor | None = None,
+    prior: Sequence[Protrusion] = (),
+    min_rows: int = 1,
 ) -> ProxyFit:
     """Fit the centre-of-mass shift and the protrusion depth (and, opt-in, its position
     along x) of each face of `object_id` to its real rows, jointly.
@@ -207,6 +231,10 @@ def fit_proxy(
         executor: Runs the experiments instead of `workers` local processes (e.g. a
             started `RayExecutor`; candidate files in `work_dir` must then be readable
             where the experiments run).
+        prior: Each face's prior feature (at most one per face; empty: the plain body).
+            With a prior the positions are not searched.
+        min_rows: Real rows a face needs before its depth is searched; a face with fewer
+            keeps its prior (1: every face tried is searched, as before).
     """
     mine = [r for r in rows if str(r["object_id"]) == object_id]
     if not mine:
@@ -216,31 +244,43 @@ def fit_proxy(
         raise InputError("the real table needs an experiment_id column")
     if runs < 1:
         raise InputError(f"runs must be at least 1, got {runs}")
+    if isinstance(min_rows, bool) or not isinstance(min_rows, int) or min_rows < 1:
+        raise InputError(f"min_rows must be an integer of at least 1, got {min_rows!r}")
+    priors = {p.face: p for p in prior}
+    if len(priors) != len(prior):
+        raise InputError(f"prior of {object_id}: at most one feature per face")
     depths = np.unique(np.r_[0.0, np.asarray(depths_m, dtype=float)])
     shifts = _shift_grid(shifts_m)
     check_positions(positions)
     xs = _position_grid(positions)
     searched = len(xs) > 1
-    grid_d, grid_x = _face_grid(depths, xs)
+    if searched and priors:
+        raise InputError("protrusion positions are not searched around a prior feature")
     base = base or object_id
     check_shifts(base, shifts)  # InputError now, not in a worker
     body = _base_model(base)
     work_dir.mkdir(parents=True, exist_ok=True)
-    faces = sorted({str(r["face"]) for r in mine})
+    tried = sorted({str(r["face"]) for r in mine})
+    faces = [f for f in tried if sum(r["face"] == f for r in mine) >= min_rows]
+    kept = tuple(p for f, p in sorted(priors.items()) if f not in faces)
+    mine = [r for r in mine if r["face"] in faces]
     face_rows = {f: [r for r in mine if r["face"] == f] for f in faces}
+    grids = {f: _prior_grid(depths, priors[f]) if f in priors else _face_grid(depths, xs)
+             for f in faces}  # fmt: skip
     specs, where = [], {}
     for face in faces:
+        grid_d, grid_x = grids[face]
         for j, shift in enumerate(shifts):
             for k, (depth, x) in enumerate(zip(grid_d, grid_x, strict=True)):
                 name, ref = _candidate(work_dir, object_id, base, face, float(depth),
-                                       float(shift), float(x))  # fmt: skip
+                                       float(shift), float(x), priors.get(face))  # fmt: skip
                 for run in range(runs):
                     batch = replay_specs(face_rows[face], scene=scene, run=run, seed=seed,
                                          object_map={object_id: ref})  # fmt: skip
                     for i, s in enumerate(batch):
                         where[(name, s.run, s.seed)] = (face, j, k, i)
                     specs += batch
-    wins = {f: np.zeros((len(shifts), len(grid_d), len(face_rows[f]))) for f in faces}
+    wins = {f: np.zeros((len(shifts), len(grids[f][0]), len(face_rows[f]))) for f in faces}
     for done, row in enumerate(run_rows(specs, workers, executor), start=1):
         face, j, k, i = where[(str(row["object_id"]), int(row["run"]), int(row["seed"]))]
         wins[face][j, k, i] += 1 if row["status"] == "ok" and row["success"] == 1 else 0
@@ -251,26 +291,41 @@ def fit_proxy(
         n_face = len(face_rows[face])
         masks[face] = np.zeros(len(mine), dtype=bool)
         masks[face][start : start + n_face] = True
-        preds[face] = np.full((len(shifts), len(grid_d), len(mine)), np.nan)
+        preds[face] = np.full((len(shifts), len(grids[face][0]), len(mine)), np.nan)
         preds[face][:, :, masks[face]] = wins[face] / runs
         start += n_face
     y = np.array([int(r["success"]) for f in faces for r in face_rows[f]])
-    at = {f: grid_x for f in faces} if searched else None
-    joint = JointCandidates(shifts, {f: grid_d for f in faces}, preds, masks, at)
-    chosen = choose_joint(joint, y, np.arange(len(y)), penalty, shift_penalty, position_penalty)
+    at = {f: grids[f][1] for f in faces} if searched else None
+    joint = JointCandidates(shifts, {f: grids[f][0] for f in faces}, preds, masks, at)
+    chosen = (choose_joint(joint, y, np.arange(len(y)), penalty, shift_penalty, position_penalty)
+              if faces else {"shift": 0})  # fmt: skip
     fits = []
     for face in faces:
         ids = np.array([int(r["experiment_id"]) for r in face_rows[face]])
+        grid_d, grid_x = grids[face]
         fits.append(FaceFit(face, grid_d, wins[face] / runs, ids, y[masks[face]], chosen[face],
                             grid_x if searched else None))  # fmt: skip
     shift = float(shifts[chosen["shift"]])
     protrusions = tuple(
-        Protrusion(f.face, float(grid_d[f.chosen]), x_frac=float(grid_x[f.chosen])) for f in fits
+        sorted(
+            (*kept, *(_chosen_feature(f, priors.get(f.face)) for f in fits)),
+            key=lambda p: p.face,
+        )
     )
     spec = ProxySpec(object_id, base, protrusions, com_shift_m=shift)
     split = mass_split(body, spec)
     return ProxyFit(spec, tuple(fits), shifts, chosen["shift"], split.front_fraction,
                     split.uniform_front_fraction)  # fmt: skip
+
+
+def _chosen_feature(fit: FaceFit, prior: Protrusion | None) -> Protrusion:
+    """The chosen candidate of a face as a feature: the prior's shape at the chosen depth,
+    or a centred protrusion (at the searched position) without a prior."""
+    depth = float(fit.depths_m[fit.chosen])
+    if prior is not None:
+        return dataclasses.replace(prior, depth_m=depth)
+    x = 0.5 if fit.positions is None else float(fit.positions[fit.chosen])
+    return Protrusion(fit.face, depth, x_frac=x)
 
 
 def candidates_path(folder: Path, object_id: str) -> Path:

@@ -315,7 +315,7 @@ def campaign(pwd: Path, args) -> float:
              "--experiments", str(args.campaign_experiments), "--seed", str(args.seed),
              "--object-prior", args.campaign_object_prior,
              "--min-face-rows", str(args.campaign_min_face_rows),
-             "--tune-trials", str(args.campaign_tune_trials),
+             "--tune-trials", str(args.campaign_tune_trials), "--runs", str(args.campaign_runs),
              timeout=args.timeout)  # fmt: skip
     if run.returncode != 0:
         raise SystemExit(f"the campaign failed: {run.stderr.strip() or run.stdout[-400:]}")
@@ -464,12 +464,14 @@ def main() -> int:
         help="add the calibrated arms (a campaign on each of their floors)",
     )
     ap.add_argument("--campaign-experiments", type=int, default=40)
-    ap.add_argument("--campaign-object-prior", choices=("plain", "shipped"), default="plain",
+    ap.add_argument("--campaign-object-prior", choices=("plain", "shipped"), default="shipped",
                     help="the campaign's object prior (cps campaign start --object-prior)")
     ap.add_argument("--campaign-min-face-rows", type=int, default=1,
                     help="rows a face needs before the campaign searches its depth")
     ap.add_argument("--campaign-tune-trials", type=int, default=0,
                     help="the campaign's TPE trials over mu and the gap (default 0)")
+    ap.add_argument("--campaign-runs", type=int, default=4,
+                    help="the campaign's runs per state and replayed row (default 4)")
     ap.add_argument("--seed", type=int, default=0, help="orders, study and floor seed")
     ap.add_argument("--runs", type=int, default=4, help="study runs per state (default 4)")
     ap.add_argument("--study", help="an existing study store of the floor's cores")

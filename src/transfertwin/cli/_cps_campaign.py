@@ -117,7 +117,7 @@ def register(csub: argparse._SubParsersAction) -> None:
                                      "o1,o3 (default: all)")  # fmt: skip
     p.add_argument("--experiments", type=int, help="K physical calibration experiments (E^P) "
                    "on the floor's physical units (default 40)")  # fmt: skip
-    p.add_argument("--runs", type=int, help="runs per state and per replayed row (default 2)")
+    p.add_argument("--runs", type=int, help="runs per state and per replayed row (default 4)")
     p.add_argument("--validation-runs", type=int,
                    help="physical and virtual experiments (E^P, E^V) per object's best "
                    "and worst state (default 4)")  # fmt: skip
@@ -131,8 +131,8 @@ def register(csub: argparse._SubParsersAction) -> None:
                    help="the calibration states: space-filling (default; a Latin hypercube "
                         "over face and θ per object) or random (the study's)")  # fmt: skip
     p.add_argument("--object-prior", choices=("plain", "shipped"),
-                   help="what object calibration moves from: the plain body (default) or "
-                        "each face's shipped feature")  # fmt: skip
+                   help="what object calibration moves from: each face's shipped feature "
+                        "(default) or the plain body (the study's)")  # fmt: skip
     p.add_argument("--min-face-rows", type=int, help="training rows a face needs before its "
                                                      "depth is searched (default 1)")
     p.add_argument("--wait", action="store_true", help="follow the progress until it ends")

@@ -122,12 +122,13 @@ def test_the_same_request_is_the_same_campaign() -> None:
     b = CampaignRequest.parse(json.dumps(json.loads(REQUEST), indent=3), ["o1", "o23"])
     c = CampaignRequest.parse(REQUEST.replace('"seed": 3', '"seed": 4'), ["o1", "o23"])
     assert a.campaign_id == b.campaign_id != c.campaign_id
-    # the object prior's keys count only where they are not the defaults
-    d = CampaignRequest.parse(REQUEST[:-1] + ', "object_prior": "plain"}', ["o1", "o23"])
-    e = CampaignRequest.parse(REQUEST[:-1] + ', "object_prior": "shipped", "min_face_rows": 3}',
+    # the object prior: the shipped features by default
+    d = CampaignRequest.parse(REQUEST[:-1] + ', "object_prior": "shipped"}', ["o1", "o23"])
+    e = CampaignRequest.parse(REQUEST[:-1] + ', "object_prior": "plain", "min_face_rows": 3}',
                               ["o1", "o23"])  # fmt: skip
     assert d.campaign_id == a.campaign_id != e.campaign_id
-    assert (e.config().object_prior, e.config().min_face_rows) == ("shipped", 3)
+    assert (a.config().object_prior, a.config().min_face_rows) == ("shipped", 1)
+    assert (e.config().object_prior, e.config().min_face_rows) == ("plain", 3)
 
 
 def test_a_unit_that_cannot_run_e_p_is_left_out_and_the_others_run_its_share(tmp_path) -> None:

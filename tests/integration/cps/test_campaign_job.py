@@ -70,6 +70,17 @@ def test_a_campaign_stops_resumes_from_its_journal_and_publishes_predictions(tmp
     assert doc["counter_measures"] == ["stability", "compliance"]
     assert doc["training"] + doc["held_out"] == 6
     assert "plant_seed" not in doc["config"]
+    assert doc["config"]["object_prior"] == "shipped"  # the default
+    from transfertwin.objects import builtin_features
+
+    for obj, entry in doc["objects"].items():  # a face no training row tried keeps its feature
+        cal = entry["calibration"]
+        if not cal["calibrated"]:
+            continue
+        shipped = {p.face: round(p.depth_m * 1000, 3) for p in builtin_features(obj)}
+        assert set(cal["depth_mm"]) == set(shipped), (obj, cal)
+        for face in set(shipped) - set(cal["faces_searched"]):
+            assert cal["depth_mm"][face] == shipped[face], (obj, face, cal)
     assert not (folder / "plant.secret").exists()  # the floor's plant is not the rehearsal's
     preds = json.loads((folder / "predictions.json").read_text())
     assert preds["campaign"] == request.campaign_id and preds["leg"] == "operation"

@@ -24,7 +24,10 @@ apart. Variants:
 Prints per folder and pooled over the folders: each variant's Brier score and F0.5 (the
 rehearsal's: the mean over runs of each run's F0.5) on the unseen rows, and its paired
 differences from the uncalibrated twin with percentile-bootstrap 95 % intervals (rows
-resampled together): better, worse or undecided. Writes ``--out`` (JSON) if given.
+resampled together): better, worse or undecided; and its within-object concordance (of the
+pairs of one object's rows where one succeeded and one failed, the share where the twin gave
+the success the higher share: what ranking an object's states needs), objects resampled.
+Writes ``--out`` (JSON) and beside it the predictions (``.npz``) if given.
 """
 
 from __future__ import annotations
@@ -96,8 +99,25 @@ def scores(p_runs: np.ndarray, y: np.ndarray, idx: np.ndarray) -> tuple[np.ndarr
     return brier, f05
 
 
-def report(name: str, preds: dict[str, np.ndarray], y: np.ndarray) -> dict:
-    """Print and return each variant's scores and its paired differences from the baseline."""
+def concordance(p_runs: np.ndarray, y: np.ndarray, objects: np.ndarray) -> dict[str, tuple]:
+    """Per object, (concordant, pairs): of the pairs of its rows where one succeeded and the
+    other failed, those where the success had the higher predicted share (a tie counts ½).
+    The policy ranks an object's states: this, not the Brier score, is what it needs."""
+    p = p_runs.mean(axis=0)
+    out = {}
+    for obj in np.unique(objects):
+        mine = objects == obj
+        win, lose = p[mine & (y == 1)], p[mine & (y == 0)]
+        if win.size and lose.size:
+            diff = win[:, None] - lose[None, :]
+            out[str(obj)] = (float((diff > 0).sum() + 0.5 * (diff == 0).sum()), diff.size)
+    return out
+
+
+def report(name: str, preds: dict[str, np.ndarray], y: np.ndarray,
+           objects: np.ndarray | None = None) -> dict:  # fmt: skip
+    """Print and return each variant's scores and its paired differences from the baseline
+    (with `objects`, also the within-object concordance, objects resampled)."""
     rng = np.random.default_rng([0, 0x50524952])
     full = np.arange(len(y))[None, :]
     idx = rng.integers(0, len(y), (BOOTSTRAP, len(y)))
@@ -127,6 +147,29 @@ def report(name: str, preds: dict[str, np.ndarray], y: np.ndarray) -> dict:
                      f"{df[1]:+.3f}] {entry['f05_verdict']}")  # fmt: skip
         print(line, flush=True)
         out["variants"][var] = entry
+    if objects is not None:
+        conc = {v: concordance(p, y, objects) for v, p in preds.items()}
+        names = sorted(conc["uncalibrated"])
+        pick = np.random.default_rng([0, 0x434F4E43]).integers(0, len(names),
+                                                               (BOOTSTRAP, len(names)))
+
+        def share(c: dict, idx: np.ndarray) -> np.ndarray:
+            k = np.array([c[o][0] for o in names])[idx].sum(axis=-1)
+            n = np.array([c[o][1] for o in names])[idx].sum(axis=-1)
+            return k / n
+
+        base = share(conc["uncalibrated"], pick)
+        for var, c in conc.items():
+            c0 = float(share(c, np.arange(len(names))))
+            line = f"  {var:<13} within-object concordance {c0:.3f} ({len(names)} objects)"
+            out["variants"][var]["concordance"] = c0
+            if var != "uncalibrated":
+                d = np.quantile(share(c, pick) - base, (0.025, 0.975))
+                v = "undecided" if d[0] <= 0 <= d[1] else ("better" if d[0] > 0 else "worse")
+                out["variants"][var] |= {"concordance_minus_uncalibrated": [float(x) for x in d],
+                                         "concordance_verdict": v}  # fmt: skip
+                line += f"   − uncalibrated [{d[0]:+.3f}, {d[1]:+.3f}] {v}"
+            print(line, flush=True)
     return out
 
 
@@ -161,6 +204,7 @@ def main() -> int:
     sets = ("campaign", "plant") if seeds else ("campaign",)
     pooled = {s: {v[0]: [] for v in variants} for s in sets}
     pooled_y: dict[str, list[np.ndarray]] = {s: [] for s in sets}
+    pooled_o: dict[str, list[np.ndarray]] = {s: [] for s in sets}
     doc: dict = {"folders": {}}
     for n, folder in enumerate(args.folders):
         cfg = json.loads((folder / "rehearsal.json").read_text())["config"]
@@ -197,16 +241,24 @@ def main() -> int:
             y = np.array([int(r["success"]) for r in unseen[s]])
             label = {"campaign": "campaign's held-out and validation E^P",
                      "plant": "fresh plant E^P (unbiased)"}[s]  # fmt: skip
-            doc["folders"][str(folder)][s] = report(f"{folder}, {label}", preds[s], y)
+            objs = np.array([f"{n}:{r['object_id']}" for r in unseen[s]])
+            doc["folders"][str(folder)][s] = report(f"{folder}, {label}", preds[s], y, objs)
             pooled_y[s].append(y)
+            pooled_o[s].append(objs)
     if len(args.folders) > 1:
         doc["pooled"] = {
             s: report(f"pooled, {s}", {v: np.concatenate(p, axis=1) for v, p in
-                                       pooled[s].items()}, np.concatenate(pooled_y[s]))
+                                       pooled[s].items()}, np.concatenate(pooled_y[s]),
+                      np.concatenate(pooled_o[s]))
             for s in sets
         }  # fmt: skip
     if args.out:
         args.out.write_text(json.dumps(doc, indent=2) + "\n")
+        arrays = {f"{s}_{v}": np.concatenate(p, axis=1) for s in sets
+                  for v, p in pooled[s].items()}  # fmt: skip
+        arrays |= {f"{s}_y": np.concatenate(pooled_y[s]) for s in sets}
+        arrays |= {f"{s}_objects": np.concatenate(pooled_o[s]) for s in sets}
+        np.savez(args.out.with_suffix(".npz"), **arrays)
     return 0
 
 

@@ -27,7 +27,8 @@ EXIT_FAILED = 3
 _FLAGS = {"objects": "objects", "experiments": "experiments", "runs": "runs",
           "validation_runs": "validation_runs", "theta_step": "theta_step", "seed": "seed",
           "workers": "workers", "tune_trials": "tune_trials", "design": "design",
-          "object_prior": "object_prior", "min_face_rows": "min_face_rows"}  # fmt: skip
+          "object_prior": "object_prior", "min_face_rows": "min_face_rows",
+          "sampling": "sampling"}  # fmt: skip
 
 
 def status_line(st: dict) -> str:
@@ -135,6 +136,9 @@ def register(csub: argparse._SubParsersAction) -> None:
                         "(default) or the plain body (the study's)")  # fmt: skip
     p.add_argument("--min-face-rows", type=int, help="training rows a face needs before its "
                                                      "depth is searched (default 1)")
+    p.add_argument("--sampling", choices=("adaptive", "exhaustive"),
+                   help="how the prediction spends its runs: adaptive (default, as the "
+                        "on-the-fly predictions) or exhaustive (every state alike)")  # fmt: skip
     p.add_argument("--wait", action="store_true", help="follow the progress until it ends")
     p.set_defaults(func=cmd_start)
     CAMPAIGN.add(sub, "state, progress, floor time and result of the campaign")

@@ -8,6 +8,7 @@ measures the twin's predictions in operation (Sec. 7.2).
 
 from transfertwin.rehearsal._config import (
     COUNTER_MEASURES,
+    FULLSTATE_SAMPLINGS,
     OBJECT_PRIORS,
     TWIN_FEATURE_SOLREF,
     RehearsalConfig,
@@ -33,6 +34,7 @@ __all__ = [
     "COUNTER_MEASURES",
     "CURVE_KEYS",
     "DESIGNS",
+    "FULLSTATE_SAMPLINGS",
     "HANDLING_S",
     "OBJECT_PRIORS",
     "POLICIES",

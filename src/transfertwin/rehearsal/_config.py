@@ -15,6 +15,7 @@ from transfertwin.sim import SceneConfig
 
 __all__ = [
     "COUNTER_MEASURES",
+    "FULLSTATE_SAMPLINGS",
     "OBJECT_PRIORS",
     "TWIN_FEATURE_SOLREF",
     "RehearsalConfig",
@@ -40,6 +41,9 @@ TWIN_FEATURE_SOLREF = (0.05, 0.75)
 #: What object calibration moves away from: the plain body of uniform density (the study's
 #: family prior) or each face's shipped feature (what the uncalibrated twin simulates).
 OBJECT_PRIORS = ("plain", "shipped")
+
+#: How the full-state prediction spends its runs (`RehearsalConfig.fullstate_sampling`).
+FULLSTATE_SAMPLINGS = ("exhaustive", "adaptive")
 
 
 def parse_ablations(values: Sequence[str]) -> tuple[str, ...]:
@@ -112,6 +116,10 @@ class RehearsalConfig:
             'shipped' (each face's shipped feature, kept unless its rows say otherwise).
         min_face_rows: Training rows a face needs before object calibration searches its
             depth; a face with fewer keeps its prior (1: every face tried is searched).
+        fullstate_sampling: How the full-state prediction spends its `runs` a state
+            (`FULLSTATE_SAMPLINGS`): 'exhaustive' (every state alike, the study's) or
+            'adaptive' (the same budget, spent on each object's leaders and challengers,
+            as the floor's on-the-fly predictions).
         seed: Master seed of the twin's side (design, split, simulations).
         workers: Worker processes.
         scene: The twin's starting scene (profile), before counter-measures.
@@ -141,6 +149,7 @@ class RehearsalConfig:
     tune_trials: int = 0
     object_prior: str = "plain"
     min_face_rows: int = 1
+    fullstate_sampling: str = "exhaustive"
     seed: int = 0
     workers: int = 1
     scene: SceneConfig = field(default_factory=SceneConfig)
@@ -178,6 +187,9 @@ class RehearsalConfig:
                 raise InputError(f"--{name.replace('_', '-')} must be at least 1")
         if self.tune_trials < 0:
             raise InputError("--tune-trials must be >= 0")
+        if self.fullstate_sampling not in FULLSTATE_SAMPLINGS:
+            raise InputError(f"fullstate sampling must be one of "
+                             f"{', '.join(FULLSTATE_SAMPLINGS)}, got {self.fullstate_sampling!r}")
         if self.object_prior not in OBJECT_PRIORS:
             raise InputError(f"--object-prior must be one of {', '.join(OBJECT_PRIORS)}, "
                              f"got {self.object_prior!r}")  # fmt: skip
@@ -226,4 +238,6 @@ def config_record(cfg: RehearsalConfig) -> dict[str, object]:
         del out["object_prior"]
     if cfg.min_face_rows == 1:
         del out["min_face_rows"]
+    if cfg.fullstate_sampling == "exhaustive":
+        del out["fullstate_sampling"]
     return out

@@ -234,6 +234,39 @@ def _calibrate_objects(
     return object_map, fits
 
 
+#: Adaptive full-state prediction: a state gets at most this many times `runs` (as the
+#: floor's on-the-fly predictions, `transfertwin.cps.dispatch.ADAPTIVE_MAX_FACTOR`).
+ADAPTIVE_MAX_FACTOR = 3
+
+
+def _adaptive_fullstate(run: _Run, object_map: Mapping[str, str], docking,
+                        scene: SceneConfig) -> list[dict[str, object]]:  # fmt: skip
+    """The full-state prediction as the floor's on-the-fly one makes it (Alg. 1–4 with the
+    study's adaptive sampling): the budget of `runs` runs a state in all, a first round on
+    every state, then rounds on each object's leaders and challengers, up to
+    `ADAPTIVE_MAX_FACTOR` × `runs` on a state; rows with the calibrated objects' ids."""
+    from transfertwin.store import MemoryResultStore
+    from transfertwin.study.adaptive import AdaptivePolicy, run_adaptive
+    from transfertwin.study.experiment import StudyPlan
+
+    cfg = run.cfg
+    half = max(1, cfg.runs // 2)
+    options = tuple(AdaptivePolicy(first_runs=half, batch_runs=half).describe().items())
+    refs = {oid: object_map[oid] for oid in cfg.objects}
+    plan = StudyPlan(tuple(refs.values()), cfg.theta_step, ADAPTIVE_MAX_FACTOR * cfg.runs,
+                     cfg.seed, docking, scene=scene, leg=run.leg, sampling="adaptive",
+                     sampling_options=options)  # fmt: skip
+    store = MemoryResultStore()
+    budget = len(plan.states()) * len(refs) * cfg.runs
+    run_adaptive(plan, store, workers=cfg.workers, max_experiments=budget,
+                 on_progress=run.progress)  # fmt: skip
+    back = {ref: oid for oid, ref in refs.items()}
+    rows = [dict(r) for r in store.rows()]
+    for r in rows:  # the store names an object by its reference (a proxy's file)
+        r["object_id"] = back.get(str(r["object_id"]), r["object_id"])
+    return rows
+
+
 def _twin(run: _Run, measures: frozenset[str], out: Path) -> dict[str, object]:
     """Calibrate, predict and validate one twin variant (`measures` switched on); writes its
     rows and proxies into `out` and returns its part of ``rehearsal.json`` (and, under
@@ -260,12 +293,15 @@ def _twin(run: _Run, measures: frozenset[str], out: Path) -> dict[str, object]:
     after_result = run.replay(run.test, scene, object_map)
     after = held_out_scores(after_result)
 
-    run.stage("full-state prediction")
+    run.stage(f"full-state prediction ({cfg.fullstate_sampling})")
     docking = _docking_model(run.plant_rows)
-    grid = [(o, *s) for o in cfg.objects for s in _state_grid(cfg.theta_step)]
-    specs = _virtual_specs(object_map, grid, cfg.runs, docking, scene, cfg.seed, run.leg)
-    full_rows = _collect(run_rows(specs, cfg.workers), len(specs), run.progress)
-    run.virtual += len(specs)
+    if cfg.fullstate_sampling == "adaptive":
+        full_rows = _adaptive_fullstate(run, object_map, docking, scene)
+    else:
+        grid = [(o, *s) for o in cfg.objects for s in _state_grid(cfg.theta_step)]
+        specs = _virtual_specs(object_map, grid, cfg.runs, docking, scene, cfg.seed, run.leg)
+        full_rows = _collect(run_rows(specs, cfg.workers), len(specs), run.progress)
+    run.virtual += len(full_rows)
     analysis = analyze(full_rows)
 
     run.stage(f"validation: {cfg.validation_runs} plant and virtual runs per best/worst state")

@@ -70,7 +70,8 @@ def test_a_campaign_stops_resumes_from_its_journal_and_publishes_predictions(tmp
     assert doc["counter_measures"] == ["stability", "compliance"]
     assert doc["training"] + doc["held_out"] == 6
     assert "plant_seed" not in doc["config"]
-    assert doc["config"]["object_prior"] == "shipped"  # the default
+    assert doc["config"]["object_prior"] == "shipped"  # the defaults
+    assert doc["config"]["fullstate_sampling"] == "adaptive"  # rows under the objects' ids:
     from transfertwin.objects import builtin_features
 
     for obj, entry in doc["objects"].items():  # a face no training row tried keeps its feature

@@ -55,7 +55,7 @@ CAMPAIGN_MEASURES = ("stability", "compliance")
 
 _KEYS = {"objects", "experiments", "runs", "validation_runs", "theta_step", "seed",
          "workers", "holdout", "depths_mm", "tune_trials", "design", "object_prior",
-         "min_face_rows"}  # fmt: skip
+         "min_face_rows", "sampling"}  # fmt: skip
 
 
 class CampaignStoppedError(Exception):
@@ -104,6 +104,10 @@ class CampaignRequest:
             body, the study's; a face no row tried becomes plain), the rehearsal's
             `object_prior`.
         min_face_rows: Training rows a face needs before its depth is searched.
+        sampling: How the prediction spends its `runs` a state: 'adaptive' (default, as
+            the floor's on-the-fly predictions: where it can change an object's best and
+            worst state, so that the states the twin ranks first are told apart) or
+            'exhaustive' (every state alike; most of an object's states then tie).
     """
 
     objects: tuple[str, ...]
@@ -119,6 +123,7 @@ class CampaignRequest:
     design: str = "space-filling"
     object_prior: str = "shipped"
     min_face_rows: int = 1
+    sampling: str = "adaptive"
     text: str = field(default="", compare=False)
 
     @classmethod
@@ -160,7 +165,7 @@ class CampaignRequest:
             _int(d, "seed", 0, 0, 2**32 - 1), _int(d, "workers", 2, 2, 256), float(holdout),
             tuple(float(v) for v in depths), _int(d, "tune_trials", 0, 0, 1000),
             str(d.get("design", "space-filling")), str(d.get("object_prior", "shipped")),
-            _int(d, "min_face_rows", 1, 1, 10_000), text,
+            _int(d, "min_face_rows", 1, 1, 10_000), str(d.get("sampling", "adaptive")), text,
         )  # fmt: skip
         req.config()  # the rehearsal's own checks (θ step, hold-out split, depths)
         return req
@@ -171,7 +176,8 @@ class CampaignRequest:
                 "theta_step": self.theta_step, "seed": self.seed, "workers": self.workers,
                 "holdout": self.holdout, "depths_mm": list(self.depths_mm),
                 "tune_trials": self.tune_trials, "design": self.design,
-                "object_prior": self.object_prior, "min_face_rows": self.min_face_rows}  # fmt: skip
+                "object_prior": self.object_prior, "min_face_rows": self.min_face_rows,
+                "sampling": self.sampling}  # fmt: skip
 
     @property
     def campaign_id(self) -> str:
@@ -190,6 +196,7 @@ class CampaignRequest:
             holdout=self.holdout, depths_mm=self.depths_mm, tune_trials=self.tune_trials,
             seed=self.seed, workers=self.workers, design=self.design,
             object_prior=self.object_prior, min_face_rows=self.min_face_rows,
+            fullstate_sampling=self.sampling,
         )  # fmt: skip
 
 

@@ -234,28 +234,22 @@ def _calibrate_objects(
     return object_map, fits
 
 
-#: Adaptive full-state prediction: a state gets at most this many times `runs` (as the
-#: floor's on-the-fly predictions, `transfertwin.cps.dispatch.ADAPTIVE_MAX_FACTOR`).
-ADAPTIVE_MAX_FACTOR = 3
-
-
 def _adaptive_fullstate(run: _Run, object_map: Mapping[str, str], docking,
                         scene: SceneConfig) -> list[dict[str, object]]:  # fmt: skip
     """The full-state prediction as the floor's on-the-fly one makes it (Alg. 1–4 with the
     study's adaptive sampling): the budget of `runs` runs a state in all, a first round on
     every state, then rounds on each object's leaders and challengers, up to
-    `ADAPTIVE_MAX_FACTOR` × `runs` on a state; rows with the calibrated objects' ids."""
+    `ADAPTIVE_MAX_FACTOR` × `runs` on a state (`adaptive_options`, the settings of the
+    floor's on-the-fly predictions); rows with the calibrated objects' ids."""
     from transfertwin.store import MemoryResultStore
-    from transfertwin.study.adaptive import AdaptivePolicy, run_adaptive
+    from transfertwin.study.adaptive import ADAPTIVE_MAX_FACTOR, adaptive_options, run_adaptive
     from transfertwin.study.experiment import StudyPlan
 
     cfg = run.cfg
-    half = max(1, cfg.runs // 2)
-    options = tuple(AdaptivePolicy(first_runs=half, batch_runs=half).describe().items())
     refs = {oid: object_map[oid] for oid in cfg.objects}
     plan = StudyPlan(tuple(refs.values()), cfg.theta_step, ADAPTIVE_MAX_FACTOR * cfg.runs,
                      cfg.seed, docking, scene=scene, leg=run.leg, sampling="adaptive",
-                     sampling_options=options)  # fmt: skip
+                     sampling_options=adaptive_options(cfg.runs))  # fmt: skip
     store = MemoryResultStore()
     budget = len(plan.states()) * len(refs) * cfg.runs
     run_adaptive(plan, store, workers=cfg.workers, max_experiments=budget,

@@ -36,11 +36,9 @@ if TYPE_CHECKING:
     from transfertwin.cps.dispatch._needs import object_needs
     from transfertwin.cps.dispatch._orders import OrderBook, order_view
     from transfertwin.cps.dispatch._predict import (
-        ADAPTIVE_MAX_FACTOR,
         DEFAULT_STATE,
         ON_THE_FLY_THETA_STEP,
         StatePrediction,
-        adaptive_options,
         campaign_advice,
         campaign_predictions,
         learning_alone_states,
@@ -49,6 +47,7 @@ if TYPE_CHECKING:
         twin_words,
         virtual_predictions,
     )
+    from transfertwin.study.adaptive import ADAPTIVE_MAX_FACTOR, adaptive_options
 
 __all__ = [
     "ADAPTIVE_MAX_FACTOR",

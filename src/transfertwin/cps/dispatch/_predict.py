@@ -30,11 +30,9 @@ from typing import Any
 from transfertwin.cps.apps import DEFAULT_STATE, docking_model
 
 __all__ = [
-    "ADAPTIVE_MAX_FACTOR",
     "DEFAULT_STATE",
     "ON_THE_FLY_THETA_STEP",
     "StatePrediction",
-    "adaptive_options",
     "campaign_advice",
     "campaign_predictions",
     "learning_alone_states",
@@ -171,21 +169,6 @@ def campaign_advice(folder: str | Path, objects: Sequence[str]) -> dict[str, str
     return out
 
 
-#: Adaptive on-the-fly sampling: a state gets at most this many times `runs`.
-ADAPTIVE_MAX_FACTOR = 3
-
-
-def adaptive_options(runs: int) -> tuple[tuple[str, object], ...]:
-    """The adaptive settings of an on-the-fly prediction with `runs` runs per state on
-    average: every state ``runs // 2`` (at least 1) runs first, then batches of as many
-    on the leader and two challengers of the best and of the worst race
-    (`transfertwin.study.adaptive.AdaptivePolicy`, its other settings the study's)."""
-    from transfertwin.study.adaptive import AdaptivePolicy
-
-    half = max(1, runs // 2)
-    return tuple(AdaptivePolicy(first_runs=half, batch_runs=half).describe().items())
-
-
 def virtual_predictions(obj: str, runs: int, seed: int, scene=None, workers: int = 1,
                         leg: str = "operation", executor=None,
                         sampling: str = "exhaustive") -> list[StatePrediction]:  # fmt: skip
@@ -203,6 +186,7 @@ def virtual_predictions(obj: str, runs: int, seed: int, scene=None, workers: int
     spent ends there (the ranking then stands on the runs made)."""
     from transfertwin.cps.floor import SAMPLINGS
     from transfertwin.store import MemoryResultStore
+    from transfertwin.study.adaptive import ADAPTIVE_MAX_FACTOR, adaptive_options
     from transfertwin.study.experiment import StudyPlan, run_study
 
     if sampling not in SAMPLINGS:

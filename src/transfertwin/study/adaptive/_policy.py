@@ -26,7 +26,7 @@ from scipy.stats import beta as beta_dist
 from transfertwin._errors import InputError
 from transfertwin.study.fullstate import clopper_pearson_array
 
-__all__ = ["INTERVAL_KINDS", "AdaptivePolicy"]
+__all__ = ["ADAPTIVE_MAX_FACTOR", "INTERVAL_KINDS", "AdaptivePolicy", "adaptive_options"]
 
 #: Values of `AdaptivePolicy.interval`.
 INTERVAL_KINDS = ("beta", "clopper-pearson")
@@ -106,3 +106,17 @@ class AdaptivePolicy:
         if unknown:
             raise InputError(f"unknown adaptive setting(s): {', '.join(unknown)}")
         return cls(**dict(data))  # type: ignore[arg-type]
+
+
+#: A bounded adaptive prediction (a floor's on-the-fly one, a calibration campaign's): a
+#: state gets at most this many times the average `runs` a state.
+ADAPTIVE_MAX_FACTOR = 3
+
+
+def adaptive_options(runs: int) -> tuple[tuple[str, object], ...]:
+    """The adaptive settings of a bounded prediction with `runs` runs per state on
+    average: every state ``runs // 2`` (at least 1) runs first, then batches of as many
+    on the leader and two challengers of the best and of the worst race (`AdaptivePolicy`,
+    its other settings the study's)."""
+    half = max(1, runs // 2)
+    return tuple(AdaptivePolicy(first_runs=half, batch_runs=half).describe().items())

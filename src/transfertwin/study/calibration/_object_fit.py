@@ -261,10 +261,11 @@ def fit_proxy(
     body = _base_model(base)
     work_dir.mkdir(parents=True, exist_ok=True)
     tried = sorted({str(r["face"]) for r in mine})
-    faces = [f for f in tried if sum(r["face"] == f for r in mine) >= min_rows]
-    kept = tuple(p for f, p in sorted(priors.items()) if f not in faces)
-    mine = [r for r in mine if r["face"] in faces]
-    face_rows = {f: [r for r in mine if r["face"] == f] for f in faces}
+    by_face = {f: [r for r in mine if r["face"] == f] for f in tried}
+    face_rows = {f: rs for f, rs in by_face.items() if len(rs) >= min_rows}  # searched
+    faces = list(face_rows)
+    kept = tuple(p for f, p in sorted(priors.items()) if f not in face_rows)
+    mine = [r for rs in face_rows.values() for r in rs]
     grids = {f: _prior_grid(depths, priors[f]) if f in priors else _face_grid(depths, xs)
              for f in faces}  # fmt: skip
     specs, where = [], {}

@@ -7,7 +7,7 @@ predict rows it never saw better than one whose proxies move from the plain body
 Each FOLDER is a finished calibration campaign's (``cps campaign``; it holds
 ``plant_journal.jsonl``, every E^P it ran on the floor's units, and ``rehearsal.json``, its
 request). Its calibration E^P are split as the campaign split them; every variant's proxies
-are fitted on the training rows only (`fit_proxy`, the campaign's scene, depths and seeds)
+are fitted on the training rows only (the rehearsal's object calibration, as the campaign ran it)
 and every variant replays the same rows it never saw: the campaign's held-out rows and its
 validation E^P (4 per object's best and worst state, chosen by the campaign's own twin, the
 ``plain/1`` variant's: a set that favours it). With ``--plant-seeds`` (one per folder, the
@@ -68,24 +68,24 @@ def journal_rows(folder: Path) -> tuple[list[dict], list[dict]]:
     return out[0], out[1]
 
 
-def fit_variant(train: list[dict], objects, prior: str, min_rows: int, cfg: dict,
-                scene, work: Path) -> dict[str, str]:  # fmt: skip
-    """Object id → proxy file of one variant, fitted on `train`."""
-    from transfertwin.objects import PROXY_SUFFIX, ProxySpec, builtin_features, write_proxy
-    from transfertwin.study.calibration import fit_proxy
+def fit_variant(train: list[dict], prior: str, min_rows: int, cfg: dict, scene,
+                work: Path) -> dict[str, str]:  # fmt: skip
+    """Object id → proxy file of one variant, fitted on `train` by the rehearsal's own object
+    calibration (`_calibrate_objects`, as the campaign ran it: its objects, depths, runs and
+    seed; the campaign's counter-measures, no scale)."""
+    from transfertwin.cps.apps import CAMPAIGN_MEASURES
+    from transfertwin.rehearsal import RehearsalConfig
+    from transfertwin.rehearsal._rehearse import _calibrate_objects, _Run
 
-    out = {}
-    for oid in objects:
-        if not any(r["object_id"] == oid for r in train):
-            out[oid] = oid
-            continue
-        fit = fit_proxy(train, oid, depths_m=[d / 1000 for d in cfg["depths_mm"]],
-                        work_dir=work / "candidates", scene=scene, runs=cfg["runs"],
-                        seed=cfg["seed"], workers=cfg["workers"], min_rows=min_rows,
-                        prior=builtin_features(oid) if prior == "shipped" else ())  # fmt: skip
-        spec = ProxySpec(oid, oid, fit.spec.protrusions)
-        out[oid] = str(write_proxy(spec, work / f"{oid}{PROXY_SUFFIX}"))
-    return out
+    rcfg = RehearsalConfig(
+        plant_seed=0, objects=tuple(cfg["objects"]),
+        calibration_experiments=cfg["calibration_experiments"], runs=cfg["runs"],
+        holdout=cfg["holdout"], depths_mm=tuple(cfg["depths_mm"]), seed=cfg["seed"],
+        workers=cfg["workers"], object_prior=prior, min_face_rows=min_rows,
+    )  # fmt: skip
+    run = _Run(rcfg, None, [], train, [], lambda stage: None, lambda done, total: None)
+    object_map, _ = _calibrate_objects(run, frozenset(CAMPAIGN_MEASURES), scene, work)
+    return object_map
 
 
 def scores(p_runs: np.ndarray, y: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -230,7 +230,7 @@ def main() -> int:
         for var, prior, min_rows in variants:
             work = args.work / folder.name / var.replace("/", "-")
             omap = (None if prior is None else
-                    fit_variant(train, cfg["objects"], prior, min_rows, cfg, scene, work))
+                    fit_variant(train, prior, min_rows, cfg, scene, work))
             for s in sets:
                 result = calibrate(unseen[s], runs=cfg["runs"], scene=scene, object_map=omap,
                                    seed=cfg["seed"], workers=cfg["workers"])  # fmt: skip

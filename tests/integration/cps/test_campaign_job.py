@@ -122,6 +122,7 @@ def test_a_journal_of_another_campaign_is_refused(tmp_path) -> None:
         ('{"budget": 3}', "unknown key(s) budget"),
         ('{"object_prior": "scan"}', "--object-prior must be one of plain, shipped"),
         ('{"min_face_rows": 0}', "'min_face_rows' must be an integer in 1..10000"),
+        ('{"sampling": "greedy"}', "fullstate sampling must be one of exhaustive, adaptive"),
     ],
 )
 def test_bad_requests_say_what_is_wrong(text: str, message: str) -> None:

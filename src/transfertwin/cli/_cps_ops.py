@@ -13,7 +13,7 @@ import time
 from transfertwin._errors import InputError
 from transfertwin.cli._cps_client import add_access, call_asset, floor_access, text_table
 
-__all__ = ["cmd_kpis", "cmd_orders", "cmd_query", "register"]
+__all__ = ["cmd_kpis", "cmd_orders", "cmd_query", "kpi_lines", "register"]
 
 
 def _ask(args: argparse.Namespace, op: str) -> object:
@@ -64,34 +64,45 @@ def _calibration_cost(args: argparse.Namespace, k: dict) -> dict:
                             len(k["utilisation"]["modules"]))
 
 
-def cmd_kpis(args: argparse.Namespace) -> int:
-    """Print the floor's KPIs (operations per hour, success share and its interval, lead
-    time, utilisation, failures by reason)."""
-    k = _calibration_cost(args, _ask(args, "Kpis"))
-    if args.json:
-        print(json.dumps(k, indent=2))
-        return 0
+def kpi_lines(k: dict) -> list[str]:
+    """The KPIs `k` (the TMS's ``Kpis``, with the campaigns' cost) as `cps kpis` prints
+    them. Faults (a module lost mid-operation, an error) are no transfer outcomes: they
+    are counted on a line of their own and are in neither the failures nor the share."""
     low, high = k["success_share_ci95"]
     share = ("n/a" if k["success_share"] is None else
              f"{k['success_share']:.3f} [{low:.3f}, {high:.3f}] (Clopper-Pearson 95 %)")
     lead = k["mean_lead_time_s"]
-    print(f"policy {k['policy']}: {k['orders']} orders, {k['delivered']} delivered, "
-          f"{k['failed']} failed, {k['in_progress']} in progress")
-    print(f"operations per hour {k['operations_per_hour']:.1f} (wall clock); per floor hour "
-          f"{k['operations_per_floor_hour'] or 0:.1f} (modelled)")
-    print(f"success share {share}; mean lead time {'n/a' if lead is None else f'{lead:.1f} s'}")
+    lines = [f"policy {k['policy']}: {k['orders']} orders, {k['delivered']} delivered, "
+             f"{k['failed']} failed, {k.get('faults', 0)} faults, {k['in_progress']} in progress",
+             f"operations per hour {k['operations_per_hour']:.1f} (wall clock); per floor hour "
+             f"{k['operations_per_floor_hour'] or 0:.1f} (modelled)",
+             f"success share {share}; mean lead time {'n/a' if lead is None else f'{lead:.1f} s'}"]
     for kind in ("modules", "units"):
         util = ", ".join(f"{a} {u:.0%}" for a, u in k["utilisation"][kind].items())
-        print(f"utilisation of the {kind}: {util}")
+        lines.append(f"utilisation of the {kind}: {util}")
     reasons = ", ".join(f"{r}: {n}" for r, n in k["failed_by_reason"].items()) or "none"
-    print(f"failed by reason: {reasons}")
+    lines.append(f"failed by reason: {reasons}")
+    if k.get("faults"):
+        faults = ", ".join(f"{r}: {n}" for r, n in k.get("faults_by_reason", {}).items())
+        lines.append(f"faults (not transfer outcomes, not in the share): {faults}")
     if k.get("calibration_floor_s"):
         per = k["operations_per_floor_hour_with_calibration"]
-        print(f"calibration campaigns: {k['calibration_floor_s']:.0f} s of floor time; per "
-              f"floor hour with it {per or 0:.1f}")  # fmt: skip
+        lines.append(f"calibration campaigns: {k['calibration_floor_s']:.0f} s of floor time; "
+                     f"per floor hour with it {per or 0:.1f}")  # fmt: skip
     if k.get("predictions_unanswered"):
-        print(f"orders planned without a prediction (the Experiment Manager did not answer): "
-              f"{k['predictions_unanswered']}")
+        lines.append("orders planned without a prediction (the Experiment Manager did not "
+                     f"answer): {k['predictions_unanswered']}")
+    return lines
+
+
+def cmd_kpis(args: argparse.Namespace) -> int:
+    """Print the floor's KPIs (operations per hour, success share and its interval, lead
+    time, utilisation, failures by reason, faults apart)."""
+    k = _calibration_cost(args, _ask(args, "Kpis"))
+    if args.json:
+        print(json.dumps(k, indent=2))
+        return 0
+    print("\n".join(kpi_lines(k)))
     return 0
 
 

@@ -80,6 +80,26 @@ def test_a_fault_is_counted_apart_from_the_transfer_outcomes():
                                      "TM_1 went offline (lease expired) while transferring": 1}
 
 
+def test_cps_kpis_prints_the_faults_apart_from_the_failures():
+    """`cps kpis` without --json says how many orders ended in a fault and why (found by
+    hand: a module killed mid-transfer was in the JSON only, the text said 0 failed)."""
+    from transfertwin.cli._cps_ops import kpi_lines
+
+    lapsed = _op(2, 0.0, 1.0, 50.0, "failed while transferring", failed_step="transferring")
+    lapsed["result"].update(reason="TM_1 went offline (lease expired) while transferring",
+                            fault=True)
+    k = {"policy": "predictive", **kpis([_op(1, 0.0, 1.0, 10.0, "delivered"), lapsed],
+                                        ["TM_1"], ["TU_A"], now=100.0)}
+    lines = kpi_lines(k)
+    assert lines[0] == ("policy predictive: 2 orders, 1 delivered, 0 failed, 1 faults, "
+                        "0 in progress")
+    assert ("faults (not transfer outcomes, not in the share): TM_1 went offline (lease "
+            "expired) while transferring: 1") in lines
+    k_clean = {"policy": "predictive", **kpis([_op(1, 0.0, 1.0, 10.0, "delivered")],
+                                              ["TM_1"], ["TU_A"], now=100.0)}
+    assert not any(line.startswith("faults") for line in kpi_lines(k_clean))
+
+
 def test_calibration_floor_time_is_a_cost_shared_by_the_modules() -> None:
     k = {"delivered": 6, "floor_makespan_s": 1800.0, "operations_per_floor_hour": 12.0}
     out = with_calibration(k, 1200.0, modules=2)  # 1800 s + 1200 s / 2 modules

@@ -310,3 +310,22 @@ def test_a_servers_user_table_holds_no_password_and_checks_them(pki, tmp_path):
     assert users.get_user(None, name, password + "x", own) is None
     viewer, viewer_password = pki.credentials.for_role("viewer")
     assert users.get_user(None, viewer, viewer_password, own).name == "viewer"
+
+
+def test_a_client_asks_for_a_session_the_server_grants(tu_a, pki, caplog):
+    """A client asks for the session timeout the servers grant: asyncua's default hour was
+    revised to 10 min with a warning on every connection, on every `cps` command's
+    stderr (seen walking the tutorial)."""
+    import logging
+
+    from transfertwin.cps.opcua._client import SESSION_TIMEOUT_MS
+
+    assert tu_a.server._server.iserver.max_session_timeout_ms == SESSION_TIMEOUT_MS
+
+    async def scenario():
+        async with connect(tu_a.endpoint, "TU_A", role="viewer", **pki.client_kw()) as s:
+            await s.read("OperationalData", "BeltSpeedLeft")
+
+    with caplog.at_level(logging.WARNING, logger="asyncua"):
+        _run(scenario())
+    assert not [r for r in caplog.records if "session timeout" in r.getMessage()]

@@ -25,6 +25,10 @@ __all__ = ["AssetClient", "UntrustedServer", "connect", "trust_list"]
 
 
 _DENIED = ua.StatusCodes.BadUserAccessDenied
+#: The session timeout a client asks for: asyncua's servers grant at most 10 min
+#: (``max_session_timeout_ms``), and a client asking for its default hour was revised
+#: down with a warning on every connection (every `cps` command's stderr showed it).
+SESSION_TIMEOUT_MS = 600_000
 
 
 class AssetClient:
@@ -207,6 +211,7 @@ async def connect(
     # A probe may take as long as any request, and runs at most every 10 s.
     watchdog = max(10.0, timeout_s) if watchdog_s is None else watchdog_s
     client = Client(url=endpoint, timeout=timeout_s, watchdog_intervall=watchdog)
+    client.session_timeout = SESSION_TIMEOUT_MS
     name = certificate or f"client-{role}"
     client.application_uri = f"urn:transfertwin:{name}"
     if not insecure:

@@ -128,3 +128,37 @@ def test_the_console_reads_values_as_fields_and_defaults_to_a_valid_order(
         assert "180.0°" in page.text_content("#aas-body")
         assert "modelled floor time" in page.text_content("#orders thead")
         browser.close()
+
+
+KPIS = {"policy": "predictive", "orders": 3, "finished": 3, "delivered": 1, "failed": 1,
+        "faults": 1, "in_progress": 0, "operations_per_hour": 12.0, "success_share": 0.5,
+        "success_share_ci95": [0.0126, 0.9874], "mean_lead_time_s": 30.0,
+        "utilisation": {"modules": {"TM_1": 0.4}, "units": {"TU_A": 0.1}},
+        "failed_by_reason": {"failed while transferring": 1},
+        "faults_by_reason": {"TM_1 went offline (lease expired) while transferring": 1},
+        }  # fmt: skip
+
+
+def test_the_console_shows_a_fault_apart_from_the_failures(console_factory, chromium_path):
+    """The KPI panel counts a module lost mid-operation as a fault with its reason, not as a
+    failure (the panel said nothing of faults: only the TMS's JSON counted them)."""
+    from playwright.sync_api import sync_playwright
+
+    console = console_factory()
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=chromium_path, args=["--no-sandbox"])
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.set_default_timeout(60_000)
+        page.route("**/api/config*", lambda r: r.fulfill(json=CONFIG))
+        page.route("**/api/assets", lambda r: r.fulfill(json=ASSETS))
+        body = f"event: live\ndata: {json.dumps({**LIVE, 'kpis': KPIS})}\n\n"
+        page.route("**/api/live*", lambda r: r.fulfill(
+            status=200, body=body, headers={"Content-Type": "text/event-stream"}))  # fmt: skip
+        page.goto(console.base + "/")
+        page.wait_for_function("() => !document.querySelector('#kpis').hidden")
+        text = page.text_content("#kpis")
+        assert "1 delivered, 1 failed, 1 faults, 0 in progress" in text, text
+        assert ("faults (not in the share): TM_1 went offline (lease expired) while "
+                "transferring: 1") in text, text
+        assert "failed: failed while transferring: 1" in text, text
+        browser.close()

@@ -207,15 +207,19 @@ function renderKpis(k) {
   const [lo, hi] = k.success_share_ci95 || [null, null];
   const util = (u) => Object.entries(u).map(([a, v]) => a + " " + pct(v)).join(", ");
   const failed = Object.entries(k.failed_by_reason || {}).map(([r, n]) => r + ": " + n).join(", ");
+  // a fault (a module lost mid-operation, an error) is no transfer outcome: apart, outside the share
+  const faults = Object.entries(k.faults_by_reason || {}).map(([r, n]) => r + ": " + n).join(", ");
   p.replaceChildren(
     el("span", { text: "policy " + k.policy + " · " + k.orders + " orders, " + k.delivered +
-      " delivered, " + k.failed + " failed, " + k.in_progress + " in progress" }), el("br"),
+      " delivered, " + k.failed + " failed, " + (k.faults || 0) + " faults, " + k.in_progress +
+      " in progress" }), el("br"),
     el("span", { id: "kpi-share", text: "success share " + pct(k.success_share) +
       (lo == null ? "" : " [" + pct(lo) + ", " + pct(hi) + "] (Clopper–Pearson 95 %)") +
       " · " + k.operations_per_hour.toFixed(1) + " operations/h · mean lead time " +
       (k.mean_lead_time_s == null ? "n/a" : k.mean_lead_time_s.toFixed(1) + " s") }), el("br"),
     el("span", { text: "modules: " + util(k.utilisation.modules) + " · units: " +
-      util(k.utilisation.units) + (failed ? " · failed: " + failed : "") }));
+      util(k.utilisation.units) + (failed ? " · failed: " + failed : "") +
+      (faults ? " · faults (not in the share): " + faults : "") }));
 }
 
 function renderOrders(orders) {

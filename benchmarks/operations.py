@@ -37,8 +37,11 @@ time (the campaign's included) with a bootstrap interval, the outcomes by leg an
 states the twin got wrong per leg (its predicted leg probability ≥ ½ and the leg failed,
 or < ½ and it succeeded); then, pooled over the seeds, each arm's share and the
 differences with their Newcombe intervals (better, worse, or undecided where the interval
-holds 0), and the issue's targets with a verdict (met / missed / undecided). Writes
-``benchmarks/results/operations-<regime>-<plant kind>.json``.
+holds 0), and the issue's targets with a verdict (met / missed / undecided); a difference
+is pooled over the seeds on which both arms ran (`_operations_report.py`). Writes
+``benchmarks/results/operations-<regime>-<plant kind>.json``; ``--pool A.json B.json ...``
+runs nothing and prints the report of several such outputs (a long run split by seed or
+arm) pooled.
 
 ``--camera`` runs the predictive policy a second time with the modules' depth cameras in
 the loop (steady regime, first seed only) and says whether its success share lies inside
@@ -59,6 +62,7 @@ from pathlib import Path
 import numpy as np
 
 from _floor_client import Tms, tt
+from _operations_report import load_runs, report
 
 ROOT = Path(__file__).resolve().parents[1]
 BOOTSTRAP = 4000
@@ -369,77 +373,9 @@ ARMS = (
     ("calibrated-only", "predictive", {"learn": False}, True),
     ("calibrated", "predictive", {}, True),
 )
-#: The differences reported: (arm, baseline).
-DIFFERENCES = (
-    ("learning-alone", "nearest-idle"), ("twin-only", "nearest-idle"),
-    ("predictive", "nearest-idle"), ("predictive", "learning-alone"),
-    ("calibrated-only", "nearest-idle"), ("calibrated", "learning-alone"),
-)  # fmt: skip
-
-
-def _counts(arm: dict, regime: str) -> tuple[int, int]:
-    """The arm's (delivered, n) of the regime's metric: all orders (steady) or each
-    object's first order (cold start)."""
-    return tuple(arm["first_1"]) if regime == "cold-start" else (arm["delivered"], arm["n"])
-
-
-def verdicts(pooled: dict[str, tuple[int, int]], regime: str, kind: str) -> list[dict]:
-    """The issue's targets on the pooled counts, each met / missed / undecided by its
-    Newcombe interval."""
-    from transfertwin.study.validation import newcombe_difference
-
-    out = []
-
-    def target(what: str, arm: str, base: str, margin: float, kind_: str) -> None:
-        if arm not in pooled or base not in pooled:
-            return
-        d = newcombe_difference(*pooled[arm], *pooled[base])
-        if kind_ == "better-by":  # better by at least `margin`, interval above 0
-            ok = d.estimate >= margin and d.low > 0
-            bad = d.high < margin
-        else:  # not worse by more than `margin`
-            ok = d.low > -margin
-            bad = d.high < -margin
-        out.append(
-            {
-                "target": what,
-                "difference": d.estimate,
-                "ci95": [d.low, d.high],
-                "verdict": "met" if ok else "missed" if bad else "undecided",
-            }
-        )
-
-    if regime == "cold-start" and kind == "mismatch":
-        target(
-            "cold start, mismatch: calibrated twin + learning beats learning alone by >= 0.10",
-            "calibrated",
-            "learning-alone",
-            0.10,
-            "better-by",
-        )
-        target(
-            "cold start, mismatch: the calibrated twin alone beats nearest-idle",
-            "calibrated-only",
-            "nearest-idle",
-            0.0,
-            "better-by",
-        )
-    if regime == "steady":
-        target(
-            "steady: twin + learning not worse than learning alone (margin 0.05)",
-            "calibrated" if "calibrated" in pooled else "predictive",
-            "learning-alone",
-            0.05,
-            "not-worse",
-        )
-    return out
-
-
 def main() -> int:
     from transfertwin.cps import load_floor
     from transfertwin.cps.floor import floor_toml
-    from transfertwin.study.validation import newcombe_difference
-
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--floor", default=str(ROOT / "examples" / "floor-large.toml"))
     ap.add_argument("--regime", choices=("steady", "cold-start"), default="steady")
@@ -485,7 +421,20 @@ def main() -> int:
     ap.add_argument("--lease", type=float, default=30.0,
                     help="the floor's lease, s (default 30: a 35-process floor on a loaded "
                          "2-core host misses 5 s heartbeats)")  # fmt: skip
+    ap.add_argument("--pool", nargs="+", metavar="JSON",
+                    help="run nothing: pool these outputs of earlier runs (one experiment "
+                         "split by seed or arm) and print their report")  # fmt: skip
     args = ap.parse_args()
+    if args.pool:
+        try:
+            regime, kind, off, per_seed = load_runs([Path(p) for p in args.pool])
+        except ValueError as exc:
+            print(f"operations.py: error: {exc}", file=sys.stderr)
+            return 2
+        report(per_seed, regime, kind, f"{regime}, {kind} plant"
+               f"{' without ' + ','.join(off) if off else ''}, pooled from "
+               f"{len(args.pool)} runs")  # fmt: skip
+        return 0
     seeds = [args.plant_seed] if args.plant_seed is not None else [
         int(s) for s in args.plant_seeds.split(",") if s.strip()]  # fmt: skip
     arms = [a for a in ARMS if args.campaign or not a[3]]
@@ -538,53 +487,9 @@ def main() -> int:
                 c.pop("boot")
                 out["predictive+camera"] = c
         per_seed[ps] = out
-    pooled = {name: tuple(map(sum, zip(*(_counts(per_seed[s][name], args.regime)
-                                          for s in seeds), strict=True)))
-              for name, *_ in arms}  # fmt: skip
-    metric = "each object's first order" if args.regime == "cold-start" else "every order"
-    print(
-        f"\n{args.regime}: {len(orders)} orders on {floor.name}, {args.plant_kind} plant"
-        f"{' without ' + args.mismatch_off if args.mismatch_off else ''}, "
-        f"seeds {seeds}; success share over {metric}"
-    )
-    print(f"{'arm':<18}" + "".join(f"{'seed ' + str(s):>24}" for s in seeds) + f"{'pooled':>26}")
-    for name, *_ in arms:
-        cells = []
-        for s in seeds:
-            k, n = _counts(per_seed[s][name], args.regime)
-            cells.append(f"{k}/{n} = {k / n:.3f}" if n else "-")
-        k, n = pooled[name]
-        from transfertwin.study.fullstate import clopper_pearson
-
-        ci = clopper_pearson(k, n) if n else None
-        pooled_txt = f"{k / n:.3f} [{ci.low:.3f}, {ci.high:.3f}]" if n else "-"
-        print(f"{name:<18}" + "".join(f"{c:>24}" for c in cells) + f"{pooled_txt:>26}")
-    diffs = {}
-    for arm, base in DIFFERENCES:
-        if arm in pooled and base in pooled and pooled[arm][1] and pooled[base][1]:
-            d = newcombe_difference(*pooled[arm], *pooled[base])
-            verdict = "better" if d.low > 0 else "worse" if d.high < 0 else "undecided"
-            diffs[f"{arm} - {base}"] = {"share": d.estimate, "ci95": [d.low, d.high],
-                                        "verdict": verdict}  # fmt: skip
-            print(
-                f"{arm} - {base}: {d.estimate:+.3f} [{d.low:+.3f}, {d.high:+.3f}] "
-                f"(Newcombe, pooled: {verdict})"
-            )
-    targets = verdicts(pooled, args.regime, args.plant_kind)
-    for t in targets:
-        lo, hi = t["ci95"]
-        print(
-            f"target: {t['target']}: {t['difference']:+.3f} [{lo:+.3f}, {hi:+.3f}]: {t['verdict']}"
-        )
-    for s in seeds:
-        for name, r in per_seed[s].items():
-            tw = {leg: f"{v['wrong']}/{v['predicted']}" for leg, v in r["twin_wrong"].items()}
-            print(
-                f"seed {s} {name}: ops/floor-hour {r['ops_per_floor_hour']:.1f} "
-                f"{[round(v, 1) for v in r['ops_ci95']]} (campaign "
-                f"{r['campaign_floor_s']:.0f} s); faults {r['faults']}; twin wrong per leg "
-                f"{tw}; failures {r['failed_by_reason'] or 'none'}"
-            )
+    title = (f"{args.regime}: {len(orders)} orders on {floor.name}, {args.plant_kind} plant"
+             f"{' without ' + args.mismatch_off if args.mismatch_off else ''}, seeds {seeds}")
+    figures = report(per_seed, args.regime, args.plant_kind, title)
     off = "-off-" + args.mismatch_off.replace(",", "-") if args.mismatch_off else ""
     res = ROOT / "benchmarks" / "results" / f"operations-{args.regime}-{args.plant_kind}{off}.json"
     res.write_text(json.dumps({
@@ -592,8 +497,7 @@ def main() -> int:
         "mismatch_off": args.mismatch_off.split(",") if args.mismatch_off else [],
         "floor": floor.name, "orders": len(orders), "seed": args.seed, "runs": args.runs,
         "arms": [a[0] for a in arms], "per_seed": {str(s): v for s, v in per_seed.items()},
-        "pooled": {k: list(v) for k, v in pooled.items()}, "differences": diffs,
-        "targets": targets}, indent=2) + "\n")  # fmt: skip
+        **figures}, indent=2) + "\n")  # fmt: skip
     print(f"wrote {res}")
     return 0
 

@@ -94,6 +94,19 @@ LIVE = {"online": {"TU_A": True, "TU_B": True, "TM_1": True, "o1": True}, "reaso
                     "TU_A (expected 225 s of modelled floor time)"}]}]}  # fmt: skip
 
 
+def _scripted_console(browser, live: dict):
+    """A page whose console config, asset list and live feed (`live`, one event) are
+    scripted; `goto` is the test's."""
+    page = browser.new_page(viewport={"width": 1400, "height": 900})
+    page.set_default_timeout(60_000)
+    page.route("**/api/config*", lambda r: r.fulfill(json=CONFIG))
+    page.route("**/api/assets", lambda r: r.fulfill(json=ASSETS))
+    body = f"event: live\ndata: {json.dumps(live)}\n\n"
+    page.route("**/api/live*", lambda r: r.fulfill(
+        status=200, body=body, headers={"Content-Type": "text/event-stream"}))  # fmt: skip
+    return page
+
+
 def test_the_console_reads_values_as_fields_and_defaults_to_a_valid_order(
     console_factory, chromium_path
 ):
@@ -102,17 +115,11 @@ def test_the_console_reads_values_as_fields_and_defaults_to_a_valid_order(
     console = console_factory()
     with sync_playwright() as p:
         browser = p.chromium.launch(executable_path=chromium_path, args=["--no-sandbox"])
-        page = browser.new_page(viewport={"width": 1400, "height": 900})
-        page.set_default_timeout(60_000)
-        page.route("**/api/config*", lambda r: r.fulfill(json=CONFIG))
-        page.route("**/api/assets", lambda r: r.fulfill(json=ASSETS))
+        page = _scripted_console(browser, LIVE)
         page.route("**/api/assets/TM_1/aas", lambda r: r.fulfill(json={
             "submodels": [{"id_short": "OperationalData", "elements": [
                 {"id_short": "PoseTheta", "kind": "property", "value": 3.14159,
                  "text": "180.0°"}]}], "read_utc": "2026-01-01T10:00:00+00:00"}))  # fmt: skip
-        body = f"event: live\ndata: {json.dumps(LIVE)}\n\n"
-        page.route("**/api/live*", lambda r: r.fulfill(
-            status=200, body=body, headers={"Content-Type": "text/event-stream"}))  # fmt: skip
         page.goto(console.base + "/")
         page.wait_for_function(
             "() => document.querySelector('#asset-TM_1 .c-live')"
@@ -147,13 +154,7 @@ def test_the_console_shows_a_fault_apart_from_the_failures(console_factory, chro
     console = console_factory()
     with sync_playwright() as p:
         browser = p.chromium.launch(executable_path=chromium_path, args=["--no-sandbox"])
-        page = browser.new_page(viewport={"width": 1400, "height": 900})
-        page.set_default_timeout(60_000)
-        page.route("**/api/config*", lambda r: r.fulfill(json=CONFIG))
-        page.route("**/api/assets", lambda r: r.fulfill(json=ASSETS))
-        body = f"event: live\ndata: {json.dumps({**LIVE, 'kpis': KPIS})}\n\n"
-        page.route("**/api/live*", lambda r: r.fulfill(
-            status=200, body=body, headers={"Content-Type": "text/event-stream"}))  # fmt: skip
+        page = _scripted_console(browser, {**LIVE, "kpis": KPIS})
         page.goto(console.base + "/")
         page.wait_for_function("() => !document.querySelector('#kpis').hidden")
         text = page.text_content("#kpis")

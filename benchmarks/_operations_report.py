@@ -14,7 +14,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-__all__ = ["DIFFERENCES", "counts", "load_runs", "pair", "report", "verdicts"]
+__all__ = ["DIFFERENCES", "counts", "load_runs", "pair", "pooled", "report", "verdicts"]
 
 #: The differences reported: (arm, baseline).
 DIFFERENCES = (
@@ -38,14 +38,18 @@ def counts(arm: dict, metric: str | None) -> tuple[int, int]:
     return (arm["delivered"], arm["n"]) if metric is None else tuple(arm[metric])
 
 
+def pooled(per_seed: dict[int, dict[str, dict]], arm: str, metric: str | None,
+           seeds: list[int]) -> tuple[int, int]:  # fmt: skip
+    """`arm`'s (delivered, n) summed over those of `seeds` on which it ran."""
+    got = [counts(per_seed[s][arm], metric) for s in seeds if arm in per_seed[s]]
+    return sum(k for k, _ in got), sum(n for _, n in got)
+
+
 def pair(per_seed: dict[int, dict[str, dict]], arm: str, base: str,
          metric: str | None) -> tuple[tuple[int, int], tuple[int, int], list[int]]:  # fmt: skip
     """`arm`'s and `base`'s counts pooled over the seeds on which both ran, and those seeds."""
     seeds = [s for s in sorted(per_seed) if arm in per_seed[s] and base in per_seed[s]]
-    a = [counts(per_seed[s][arm], metric) for s in seeds]
-    b = [counts(per_seed[s][base], metric) for s in seeds]
-    return (sum(k for k, _ in a), sum(n for _, n in a)), (
-        sum(k for k, _ in b), sum(n for _, n in b)), seeds
+    return pooled(per_seed, arm, metric, seeds), pooled(per_seed, base, metric, seeds), seeds
 
 
 #: The issue's targets: (words, arm, baseline, margin, kind, regime, plant kind or None).
@@ -100,14 +104,11 @@ def report(per_seed: dict[int, dict[str, dict]], regime: str, kind: str,
         print(f"{'arm':<18}" + "".join(f"{'seed ' + str(s):>18}" for s in seeds)
               + f"{'pooled':>34}")  # fmt: skip
         for name in names:
-            cells, k_all, n_all = [], 0, 0
+            cells = []
             for s in seeds:
-                if name not in per_seed[s]:
-                    cells.append("-")
-                    continue
-                k, n = counts(per_seed[s][name], metric)
-                k_all, n_all = k_all + k, n_all + n
+                k, n = counts(per_seed[s][name], metric) if name in per_seed[s] else (0, 0)
                 cells.append(f"{k}/{n} = {k / n:.3f}" if n else "-")
+            k_all, n_all = pooled(per_seed, name, metric, seeds)
             ci = clopper_pearson(k_all, n_all) if n_all else None
             text = f"{k_all}/{n_all} = {k_all / n_all:.3f} [{ci.low:.3f}, {ci.high:.3f}]" if ci \
                 else "-"  # fmt: skip

@@ -386,7 +386,7 @@ def main() -> int:
     ap.add_argument(
         "--cold-orders", type=int, default=3, help="cold start: orders per object (default 3)"
     )
-    ap.add_argument("--plant-kind", choices=("in-class", "mismatch"), default="in-class")
+    ap.add_argument("--plant-kind", choices=("in-class", "mismatch", "bullet"), default="in-class")
     ap.add_argument("--mismatch-off", default="", metavar="PART,...",
                     help="with --plant-kind mismatch: parts of the mismatch switched off on "
                          "every arm's plant (an ablation, cps up --plant-mismatch-off)")

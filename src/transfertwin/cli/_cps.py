@@ -242,10 +242,13 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="an emulated plant drawn from seed N (its parameters stay hidden): "
                         "every unit and module runs on it (hal = plant), and the plant's own "
                         "units (TU_<name>_P, kind physical) join beside them")  # fmt: skip
-    p.add_argument("--plant-kind", choices=("in-class", "mismatch"), default="in-class",
+    # `transfertwin.plant.FLOOR_PLANT_KINDS` (not imported here: the CLI starts without physics)
+    p.add_argument("--plant-kind", choices=("in-class", "mismatch", "bullet"), default="in-class",
                    help="with --plant-seed: the plant of the twin's own model class with hidden "
-                        "values (in-class, the default), or that plant with structural "
-                        "differences the twin cannot represent (mismatch)")  # fmt: skip
+                        "values (in-class, the default), that plant with structural "
+                        "differences the twin cannot represent (mismatch), or the in-class "
+                        "plant in another physics engine, PyBullet (bullet: no depth "
+                        "camera)")  # fmt: skip
     p.add_argument("--plant-mismatch-off", default="", metavar="PART,...",
                    help="with --plant-kind mismatch: parts of the mismatch switched back to the "
                         "in-class plant's (shape, mass, belts, contact, appendage, compliant, "

@@ -72,8 +72,10 @@ def _floor_to_run(args: argparse.Namespace):
     args.plant_mismatch_off = _mismatch_off(args.plant_mismatch_off, args.plant_kind)
     if args.plant_seed is not None:  # every unit and module on the emulated plant
         from transfertwin.cps import check_plant_seed
+        from transfertwin.plant import check_camera
 
         check_plant_seed(args.plant_seed)
+        check_camera(args.plant_kind, floor.operation.sensor, args.docking)
         if args.insecure:
             raise InputError("--plant-seed with --insecure: a plant floor is served only "
                              "with security (drop --insecure)")  # fmt: skip

@@ -8,13 +8,19 @@ calibration, study or validation code can import it; `transfertwin.rehearsal` dr
 """
 
 from transfertwin.plant._mismatch import MISMATCH_PARTS, PLANT_KINDS, check_mismatch_off
-from transfertwin.plant._physics import FLOOR_PLANT_KINDS, PlantPhysics
+from transfertwin.plant._physics import (
+    CAMERA_FREE_KINDS,
+    FLOOR_PLANT_KINDS,
+    PlantPhysics,
+    check_camera,
+)
 from transfertwin.plant._plant import PLANT_COLUMNS, EmulatedPlant, MassReading, PlantRequest
 from transfertwin.plant._recording import CAMERA_RESOLUTION, PlantRecording
 from transfertwin.plant._reveal import HiddenObject, HiddenScene, PlantTruth, reveal_truth
 from transfertwin.plant._secret import PLANT_SEED_FILE, read_plant_seed, write_plant_seed
 
 __all__ = [
+    "CAMERA_FREE_KINDS",
     "CAMERA_RESOLUTION",
     "FLOOR_PLANT_KINDS",
     "MISMATCH_PARTS",
@@ -29,6 +35,7 @@ __all__ = [
     "PlantRecording",
     "PlantRequest",
     "PlantTruth",
+    "check_camera",
     "check_mismatch_off",
     "read_plant_seed",
     "reveal_truth",

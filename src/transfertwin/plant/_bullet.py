@@ -3,10 +3,13 @@
 `BulletTransferSystem` is the system `transfertwin.sim.VirtualTransferSystem` is — TM^V,
 TU^V docked with a docking error, one object on convex hulls — built in PyBullet
 (Bullet 3, `pybullet.DIRECT`, one physics client per system) instead of MuJoCo, with the
-surface `transfertwin.study.experiment.run_experiment` drives: `reset`, `place`, `clock`
-(`now`, `start`, `wait`), `timestep_s`, `observe`, `object_rest_speed`, `object_qpos`,
-and the units' HALs `tm`/`tu` (`set_belt_speed`, `belt_speed`, `barriers`). An emulated
-plant of kind 'bullet' runs its experiments here: another engine's contact detection
+surface `transfertwin.study.experiment.run_experiment` and a floor module's `Environment`
+drive: `reset`, `dock`, `place`, `place_on_unit`, `clock` (`now`, `start`, `wait`) with
+its `step_listeners`, `time_s`, `timestep_s`, `observe`, `object_rest_speed`,
+`object_qpos`, and the units' HALs `tm`/`tu` (`set_belt_speed`, `belt_speed`, `barriers`);
+not MuJoCo's `model`/`data`, so no depth camera renders it. An emulated plant of kind
+'bullet' runs its experiments here, and a floor on it its transfers
+(`transfertwin.plant.PlantPhysics`): another engine's contact detection
 (GJK/EPA with persistent manifolds, collision margins), solver (sequential impulses with
 ERP, not soft constraints) and friction model (one friction pyramid per contact point,
 friction combined as the product of the two bodies' coefficients) is a structural
@@ -409,6 +412,9 @@ class BulletTransferSystem:
         self._pose_tu(x, y, yaw)
         self._guard_reset()
 
+    #: Where a pick-up starts (the unit's loading point): `place` relative to `tu_pose`.
+    place_on_unit = VirtualTransferSystem.place_on_unit
+
     def place(self, face: str, theta_rad: float, x_m: float, y_m: float) -> None:
         """Put the object with its AABB centre at (x, y), yaw θ on `face`, just above the
         belt (as `VirtualTransferSystem.place`)."""
@@ -506,6 +512,7 @@ class BulletTransferSystem:
         """F_O's position and quaternion (w, x, y, z) in F_T (7,), as MuJoCo's free joint."""
         rot, origin, _, _ = self._frame()
         return np.concatenate([origin, _wxyz(rot)])
+
 
     possessing_unit = VirtualTransferSystem.possessing_unit  # reads only `tu_pose`
 

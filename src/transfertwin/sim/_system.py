@@ -439,6 +439,12 @@ class VirtualTransferSystem:
         self.data.qpos[self._qadr : self._qadr + 7] = qpos
         mujoco.mj_forward(self.model, self.data)
 
+    @property
+    def time_s(self) -> float:
+        """Simulated seconds since the model was compiled (MuJoCo's ``data.time``), which
+        `clock.start` does not zero."""
+        return float(self.data.time)
+
     def possessing_unit(self, com_xy: np.ndarray) -> int:
         """0 (TM) or 1 (TU): the side of the gap's centre line the COM projects onto.
 

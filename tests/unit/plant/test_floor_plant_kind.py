@@ -33,8 +33,55 @@ def test_the_mismatch_plants_physics_differ_from_the_in_class_plants() -> None:
                or other.model.ngeom != same.model.ngeom
                or not np.allclose(other.model.body_inertia, same.model.body_inertia))  # fmt: skip
     assert differs
-    with pytest.raises(InputError, match="in-class, mismatch"):
-        PlantPhysics(7, "bullet")  # another engine: not a floor's
+    with pytest.raises(InputError, match="in-class, mismatch, bullet"):
+        PlantPhysics(7, "havok")
+
+
+def test_a_module_on_the_bullet_plant_picks_up_and_delivers_through_its_environment() -> None:
+    """The floor module's environment steps the PyBullet plant as it steps MuJoCo's: the
+    object put on the unit's loading point, a pick-up run by the study's controller on the
+    scaled clock, docked on at another unit, the delivery; the same inputs give the same
+    bits, and another plant seed other physics."""
+    from transfertwin.cps.apps import Environment
+    from transfertwin.ots import TransferDirection
+    from transfertwin.plant._bullet import BulletTransferSystem
+    from transfertwin.sim import DockingError, SceneConfig
+    from transfertwin.study.experiment import scene_controller
+
+    def operate(seed: int):
+        env = Environment(SceneConfig(), 0.0, PlantPhysics(seed, "bullet").system)
+        env.load_object_at_unit("o3", "TU_A", DockingError.from_mm_deg(-2.0, 1.0, 0.3))
+        system = env.system
+        assert isinstance(system, BulletTransferSystem)
+        assert system.observe()[0] == 1.0  # on the unit's belts
+        steps = []
+        env.on_step(lambda sys_, unit: steps.append(unit))
+        outcomes = []
+        for unit, direction in (("TU_A", TransferDirection.TU_TO_TM),
+                                ("TU_C", TransferDirection.TM_TO_TU)):  # fmt: skip
+            if unit == "TU_C":
+                env.dock(unit, DockingError.from_mm_deg(1.0, -1.5, -0.2))
+            ctl = scene_controller(env.scene, system.tm, system.tu, system, env.clock)
+            outcomes.append(ctl.transfer(direction, "front", None).y)
+        return outcomes, system.object_qpos(), steps, env.clock.now()
+
+    outcomes, qpos, steps, t = operate(7)
+    assert outcomes == [1, 1], outcomes  # picked up from TU_A, delivered at TU_C
+    assert steps and set(steps) <= {"TU_A", "TU_C"} and t > 0.5
+    again, qpos_again, _, _ = operate(7)
+    assert again == outcomes and np.array_equal(qpos, qpos_again)
+    assert not np.array_equal(operate(8)[1], qpos)
+
+
+def test_a_floor_on_the_bullet_plant_refuses_the_depth_camera_in_one_line() -> None:
+    from transfertwin.plant import check_camera
+
+    check_camera("bullet", "truth", "sampled")
+    check_camera("mismatch", "camera", "navigated")
+    with pytest.raises(InputError, match=r"operation\.sensor = camera"):
+        check_camera("bullet", "camera", "sampled")
+    with pytest.raises(InputError, match="--docking navigated"):
+        check_camera("bullet", "truth", "navigated")
 
 
 def test_the_secret_file_names_the_mismatch_parts_switched_off(tmp_path) -> None:

@@ -36,14 +36,14 @@ class ScaledClock:
     def start(self) -> None:
         """Zero the clock."""
         self._env.system.clock.start()
-        self._wall0, self._sim0 = time.monotonic(), float(self._env.system.data.time)
+        self._wall0, self._sim0 = time.monotonic(), self._env.system.time_s
 
     def wait(self, dt_s: float) -> None:
         """Step the physics by `dt_s`, then sync the docked unit and keep pace."""
         self._env.system.clock.wait(dt_s)
         scale = self._env.time_scale
         if scale > 0:
-            ahead = (float(self._env.system.data.time) - self._sim0) / scale - (
+            ahead = (self._env.system.time_s - self._sim0) / scale - (
                 time.monotonic() - self._wall0
             )
             if ahead > 0:
@@ -56,11 +56,19 @@ class Environment:
     Args:
         scene: Virtual system configuration.
         time_scale: Simulated seconds per wall second (0: as fast as possible).
+        systems: The system of an object (cached by the callee); default: the twin's virtual
+            system of the scene. A plant floor's module passes the plant's
+            (`transfertwin.plant.PlantPhysics.system`: MuJoCo, or PyBullet on a 'bullet'
+            plant), which steps through the same surface.
     """
 
-    def __init__(self, scene: SceneConfig, time_scale: float = 0.0) -> None:
+    def __init__(
+        self, scene: SceneConfig, time_scale: float = 0.0,
+        systems: Callable[[str], VirtualTransferSystem] | None = None,
+    ) -> None:  # fmt: skip
         self.scene = scene
         self.time_scale = time_scale
+        self._systems = systems or (lambda object_ref: system_for(object_ref, "m", scene))
         self.object_ref: str | None = None
         self.docked_unit: str | None = None
         self._system: VirtualTransferSystem | None = None
@@ -86,7 +94,7 @@ class Environment:
 
     def use(self, object_ref: str) -> VirtualTransferSystem:
         """Make the (cached) system of `object_ref` the environment's system."""
-        system = system_for(object_ref, "m", self.scene)
+        system = self._systems(object_ref)
         if self.after_step not in system.step_listeners:
             system.step_listeners.append(self.after_step)
         self._system = system

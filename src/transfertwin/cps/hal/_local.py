@@ -41,36 +41,26 @@ def load_scene():
     return SceneConfig()
 
 
-def environment_for(cfg: AssetConfig, scene: SceneConfig):
+def environment_for(cfg: AssetConfig, scene: SceneConfig, sensor: str = "truth"):
     """The simulated world of a transport module's process: the virtual scene's, or, with
     ``[hal] kind = "plant"``, the plant's hidden physics; with ``"remote"`` none (a
     `GatewayWorld`: the hardware behind the gateway is the world). Its `scene` stays the twin's
     (what the module's controller knows: belt speed, thresholds, timing); only the systems
-    it steps are the plant's."""
+    it steps are the plant's. A plant no depth camera renders (PyBullet's) is refused when
+    the floor's `sensor` or the module's docking needs the camera (InputError)."""
     from transfertwin.cps.apps import Environment  # the simulation: a module's process only
 
     if cfg.hal.kind == "virtual":
         return Environment(scene, cfg.time_scale)
     if cfg.hal.kind == "remote":  # the hardware is the world: nothing is simulated
         return GatewayWorld(scene)
-    from transfertwin.plant import PlantPhysics
+    from transfertwin.plant import PlantPhysics, check_camera
 
     seed_file = cfg.hal.plant_seed_file
-    physics = PlantPhysics(read_plant_seed(seed_file), read_plant_kind(seed_file),
-                           read_plant_off(seed_file))  # fmt: skip
-
-    class PlantEnvironment(Environment):
-        """`Environment` whose systems are the plant's (hidden scene, hidden objects)."""
-
-        def use(self, object_ref: str):
-            system = physics.system(object_ref)
-            if self.after_step not in system.step_listeners:
-                system.step_listeners.append(self.after_step)
-            self._system = system
-            self.object_ref = object_ref
-            return system
-
-    return PlantEnvironment(scene, cfg.time_scale)
+    kind = read_plant_kind(seed_file)
+    check_camera(kind, sensor, cfg.docking)
+    physics = PlantPhysics(read_plant_seed(seed_file), kind, read_plant_off(seed_file))
+    return Environment(scene, cfg.time_scale, physics.system)
 
 
 class GatewayHAL:

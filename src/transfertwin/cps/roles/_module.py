@@ -66,7 +66,8 @@ class ModuleRole(Role):
         if self.state.data.get("pose"):  # where it was (a docked pose touches the station)
             self.robot.pose = np.array(self.state.data["pose"], dtype=float)
             self.robot.docked_at = self.state.data.get("station")
-        self.env = environment_for(node.cfg, load_scene())  # virtual or the plant's physics
+        self.env = environment_for(node.cfg, load_scene(),  # virtual or the plant's physics
+                                   node.floor.operation.sensor)
         self.op: dict[str, Any] | None = None
         self.face = "front"  # the face the carried object lies on (its load plan's)
         self.attempt = 0  # the hand-over try of the running leg (0: the first)

@@ -126,7 +126,7 @@ class PhysicalPlant:
 
     Args:
         seed: The plant seed (draws every hidden parameter; not published).
-        kind: The plant's kind ('in-class' or 'mismatch', `FLOOR_PLANT_KINDS`).
+        kind: The plant's kind ('in-class', 'mismatch' or 'bullet', `FLOOR_PLANT_KINDS`).
         mismatch_off: Mismatch parts switched off (`EmulatedPlant`'s, an ablation).
     """
 

@@ -1,0 +1,69 @@
+"""A floor on the PyBullet plant (issue 37, item 4: the plant kinds in-class, mismatch and
+bullet): `cps up --plant-kind bullet` starts every module on the in-class plant simulated in
+another engine; an order's pick-up and delivery run there and end with a physical outcome
+(not a fault); a floor that needs the depth camera is refused in one line before anything
+is written (slow: a floor of 6 processes, ~40 s)."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+from pathlib import Path
+
+import pytest
+
+from tests.integration.cps._cli import tt, two_module_floor
+
+pytestmark = pytest.mark.slow
+
+FLOOR = two_module_floor("bullet", {"o3": "TU_A"}) + """
+[operation]
+policy = "nearest-idle"
+"""
+
+
+def _tms(wd: Path, op: str, *args):
+    from transfertwin.cli._cps_client import call_asset, load_info
+
+    info, creds = load_info(wd)
+    return asyncio.run(call_asset(info, creds, "TMS", op, *args, timeout_s=20))
+
+
+@pytest.fixture(scope="module")
+def floor(tmp_path_factory):
+    base = tmp_path_factory.mktemp("bullet")
+    (base / "floor.toml").write_text(FLOOR)
+    wd = base / "w"
+    up = tt("cps", "up", "--floor", str(base / "floor.toml"), "--workdir", str(wd), "--detach",
+            "--time-scale", "0", "--plant-seed", "7", "--plant-kind", "bullet", "--lease", "10",
+            "--start-timeout", "150", timeout=200)  # fmt: skip
+    assert up.returncode == 0, up.stderr
+    try:
+        yield wd
+    finally:
+        down = tt("cps", "down", "--workdir", str(wd))
+    assert down.returncode == 0 and "killed" not in down.stdout, down.stdout + down.stderr
+
+
+def test_an_order_runs_both_legs_on_the_bullet_plant(floor):
+    assert (floor / "plant.secret").read_text() == "7 bullet\n"  # the engine beside the seed
+    out = tt("cps", "order", "--workdir", str(floor), "--object", "o3", "--to", "TU_B",
+             timeout=300)  # fmt: skip
+    assert out.returncode in (0, 3), out.stderr
+    result = json.loads(_tms(floor, "OperationStatus", "op1"))["result"]
+    assert result["status"] in ("delivered", "failed at pick-up", "failed at delivery"), result
+    legs = result["legs"]
+    assert legs[0]["leg"] == "pick-up" and legs[0]["scanning"]["source"] == "ground truth"
+    if result["status"] == "delivered":  # picked up from TU_A's belts, handed to TU_B's
+        assert [leg["leg"] for leg in legs] == ["pick-up", "delivery"]
+        assert legs[1]["scanning"]["boxes"][0]["x"] < 0.0  # on the module, behind its tip
+
+
+def test_a_bullet_floor_that_needs_the_camera_is_refused_in_one_line(tmp_path):
+    wd = tmp_path / "w"
+    out = tt("cps", "up", "--workdir", str(wd), "--detach", "--plant-seed", "7",
+             "--plant-kind", "bullet", "--docking", "navigated")  # fmt: skip
+    assert out.returncode == 2, out.stderr
+    assert len(out.stderr.strip().splitlines()) == 1
+    assert "'bullet' plant has no depth camera" in out.stderr
+    assert not wd.exists()

@@ -30,7 +30,7 @@ from transfertwin.cli._cps_ops import register as register_ops
 from transfertwin.cli._paths import out_dir
 
 __all__ = ["cmd_asset", "cmd_down", "cmd_locate", "cmd_up_floor", "floor_document", "floor_status",
-           "next_step", "register"]  # fmt: skip
+           "register"]  # fmt: skip
 
 
 def _floor_spec(name: str):
@@ -632,17 +632,6 @@ def register(csub: argparse._SubParsersAction) -> None:
 ORDER_FAILED = 3
 
 
-def next_step(obj: str, location: str) -> str | None:
-    """What to do after an operation that left `obj` where the floor cannot say (its
-    `location` as the TMS gives it, "unknown, last seen at ..."): the TMS refuses every
-    order of it until someone says where it lies. None when the floor knows."""
-    if not location.startswith("unknown"):
-        return None
-    return (f"where {obj} lies is unknown to the floor; once you have found it, say so with "
-            f"'transfertwin cps locate --object {obj} --at UNIT' (a transfer unit, or the "
-            "transport module if it still carries it), then order it on")
-
-
 def floor_order(where: str, info: dict, creds, args: argparse.Namespace) -> int:
     """`cps order` on a process floor: submit to the TMS (the source found in its ledger
     when --from is left out), then follow the operation's history to its end, across a
@@ -699,9 +688,6 @@ def floor_order(where: str, info: dict, creds, args: argparse.Namespace) -> int:
                              "on on the floor ('cps status')")  # fmt: skip
         time.sleep(0.5)
     result = status["result"]
-    step = next_step(args.object, str(status["location"]))
-    if step:
-        print(f"{op}: {step}")
     line = f"{op} finished: {result['status']}; {args.object} is at {status['location']}"
     if result.get("reason"):
         line += f" ({result.get('failed_step')}: {result['reason']})"

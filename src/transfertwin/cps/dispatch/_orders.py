@@ -24,7 +24,7 @@ from transfertwin.cps.dispatch._learn import record
 from transfertwin.cps.floor import FloorSpec
 from transfertwin.cps.opcua import OperationRefused
 
-__all__ = ["OrderBook", "order_view"]
+__all__ = ["OrderBook", "locate_advice", "order_view"]
 
 log = logging.getLogger("transfertwin.cps")
 
@@ -231,6 +231,8 @@ class OrderBook:
             self.data.setdefault("stuck", {})[obj] = {"module": where, "operation": op_id}
         op.update(state="finished", phase="done" if ok else "failed", result=result,
                   location=self.where(obj), finished=time.time())  # fmt: skip
+        if obj in self.data["unknown"]:  # the operator's next step, wherever the history shows
+            op["history"].append([time.time(), locate_advice(obj)])
         op["history"].append([time.time(), op["phase"]])
         self.save()
         log.info("TMS: %s finished: %s; %s is at %s", op_id, result.get("status"), obj,
@@ -271,6 +273,7 @@ class OrderBook:
                     self.data["unknown"][obj] = {"last_seen": self.ledger.location(obj),
                                                  "operation": op_id}  # fmt: skip
                     self.pending |= {self.ledger.location(obj), obj}
+                    op["history"].append([time.time(), locate_advice(obj)])
             else:
                 self.finish(op_id, event["result"])
                 return True
@@ -297,6 +300,14 @@ class OrderBook:
     def running(self) -> int:
         """Operations not finished yet."""
         return sum(op["state"] != "finished" for op in self.ops.values())
+
+
+def locate_advice(obj: str) -> str:
+    """What the operator does after an operation that left `obj` where the floor cannot say:
+    the TMS refuses every order of it until someone says where it lies (`locate`)."""
+    return (f"where {obj} lies is unknown to the floor; once you have found it, say so with "
+            f"'transfertwin cps locate --object {obj} --at UNIT' (a transfer unit, or the "
+            "transport module if it still carries it), then order it on")
 
 
 #: Order states of `cps orders` by the operation's phase (the module's steps, Fig. 5.9a).

@@ -31,6 +31,17 @@ _FLAGS = {"objects": "objects", "experiments": "experiments", "runs": "runs",
           "sampling": "sampling"}  # fmt: skip
 
 
+def _delta(ci) -> str:
+    """The paired bootstrap interval of after − before and what it decides: calibration
+    helped or hurt only when the interval excludes 0 (a handful of held-out rows seldom
+    decides anything)."""
+    if not ci:
+        return ""
+    low, high = float(ci[0]), float(ci[1])
+    verdict = "better" if low > 0 else "worse" if high < 0 else "undecided"
+    return f" (after − before [{low:+.3f}, {high:+.3f}]: {verdict})"
+
+
 def status_line(st: dict) -> str:
     """One line: campaign, state, stage, E^P and floor time, and the result once done."""
     if not st.get("campaign"):
@@ -42,8 +53,10 @@ def status_line(st: dict) -> str:
               f"{st.get('floor_s', 0):.0f} s of floor time; folder {st.get('folder')}")  # fmt: skip
     s = st.get("summary")
     if s:
-        line += (f"; F0.5 on held-out E^P {s['f05_before']:.3f} before, {s['f05_after']:.3f} "
-                 f"after calibration; best/worst states that differ from the plant "
+        held = f" {s['held_out']}" if s.get("held_out") is not None else ""
+        line += (f"; F0.5 on{held} held-out E^P {s['f05_before']:.3f} before, "
+                 f"{s['f05_after']:.3f} after calibration{_delta(s.get('f05_delta_ci'))}; "
+                 f"best/worst states that differ from the plant "
                  f"{s['significant_best']}/{s['significant_worst']}")  # fmt: skip
     return line + (f"; error: {st['error']}" if st.get("error") else "")
 

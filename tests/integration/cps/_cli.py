@@ -15,8 +15,8 @@ from pathlib import Path
 
 import pytest
 
-__all__ = ["PLANT_SEED", "EarlyFloor", "RunningCps", "early_floor", "early_floors", "run_main",
-           "small_study", "tt", "two_module_floor"]
+__all__ = ["PLANT_SEED", "EarlyFloor", "RunningCps", "call_tms", "early_floor", "early_floors",
+           "run_main", "small_study", "tt", "two_module_floor"]
 
 #: Plant seed of the test run's shared CPS (conftest.py: `plant_cps`).
 PLANT_SEED = 913
@@ -56,6 +56,16 @@ y_m = 3.0
 standby = true
 """
     return head + "".join(f'\n[[object]]\nid = "{o}"\nat = "{at}"\n' for o, at in objects.items())
+
+
+def call_tms(wd: Path, op: str, *args):
+    """Call `op` of the TMS of the floor in `wd` as its operator (20 s timeout)."""
+    import asyncio
+
+    from transfertwin.cli._cps_client import call_asset, load_info
+
+    info, creds = load_info(wd)
+    return asyncio.run(call_asset(info, creds, "TMS", op, *args, timeout_s=20))
 
 
 def small_study(path: Path, obj: str) -> None:

@@ -6,13 +6,11 @@ is written (slow: a floor of 6 processes, ~40 s)."""
 
 from __future__ import annotations
 
-import asyncio
 import json
-from pathlib import Path
 
 import pytest
 
-from tests.integration.cps._cli import tt, two_module_floor
+from tests.integration.cps._cli import call_tms, tt, two_module_floor
 
 pytestmark = pytest.mark.slow
 
@@ -20,13 +18,6 @@ FLOOR = two_module_floor("bullet", {"o3": "TU_A"}) + """
 [operation]
 policy = "nearest-idle"
 """
-
-
-def _tms(wd: Path, op: str, *args):
-    from transfertwin.cli._cps_client import call_asset, load_info
-
-    info, creds = load_info(wd)
-    return asyncio.run(call_asset(info, creds, "TMS", op, *args, timeout_s=20))
 
 
 @pytest.fixture(scope="module")
@@ -50,7 +41,7 @@ def test_an_order_runs_both_legs_on_the_bullet_plant(floor):
     out = tt("cps", "order", "--workdir", str(floor), "--object", "o3", "--to", "TU_B",
              timeout=300)  # fmt: skip
     assert out.returncode in (0, 3), out.stderr
-    result = json.loads(_tms(floor, "OperationStatus", "op1"))["result"]
+    result = json.loads(call_tms(floor, "OperationStatus", "op1"))["result"]
     assert result["status"] in ("delivered", "failed at pick-up", "failed at delivery"), result
     legs = result["legs"]
     assert legs[0]["leg"] == "pick-up" and legs[0]["scanning"]["source"] == "ground truth"

@@ -6,13 +6,11 @@ the order's history and its persisted state) and expects it from then on."""
 
 from __future__ import annotations
 
-import asyncio
 import json
-from pathlib import Path
 
 import pytest
 
-from tests.integration.cps._cli import tt, two_module_floor
+from tests.integration.cps._cli import call_tms, tt, two_module_floor
 
 #: A floor of 6 processes on the plant and one order (~60 s): slow, run by .ci/run.
 pytestmark = pytest.mark.slow
@@ -21,13 +19,6 @@ FLOOR = two_module_floor("camera", {"o10": "TU_A"}) + """
 [operation]
 sensor = "camera"
 """
-
-
-def _tms(wd: Path, op: str, *args):
-    from transfertwin.cli._cps_client import call_asset, load_info
-
-    info, creds = load_info(wd)
-    return asyncio.run(call_asset(info, creds, "TMS", op, *args, timeout_s=20))
 
 
 def _scans(node) -> list[dict]:
@@ -52,7 +43,7 @@ def test_the_camera_learns_a_height_its_model_gets_wrong_and_expects_it(tmp_path
         order = tt("cps", "order", "--workdir", str(wd), "--object", "o10", "--to", "TU_B",
                    timeout=300)  # fmt: skip
         assert order.returncode in (0, 3), order.stderr
-        op = json.loads(_tms(wd, "OperationStatus", "op1"))
+        op = json.loads(call_tms(wd, "OperationStatus", "op1"))
         scans = _scans(op["result"])
         assert scans, op["result"]
         # no scan stopped the order: it went on to the transfer

@@ -8,13 +8,11 @@ state and plans the next order of the object with them."""
 
 from __future__ import annotations
 
-import asyncio
 import json
-from pathlib import Path
 
 import pytest
 
-from tests.integration.cps._cli import small_study, tt, two_module_floor
+from tests.integration.cps._cli import call_tms, small_study, tt, two_module_floor
 
 #: A floor of 6 processes on the plant and two orders (~90 s): slow, run by .ci/run.
 pytestmark = pytest.mark.slow
@@ -26,13 +24,6 @@ FLOOR = two_module_floor("hand-over", {"o6": "TU_A"}).replace(
 policy = "predictive"
 study = "study.sqlite"
 """
-
-
-def _tms(wd: Path, op: str, *args):
-    from transfertwin.cli._cps_client import call_asset, load_info
-
-    info, creds = load_info(wd)
-    return asyncio.run(call_asset(info, creds, "TMS", op, *args, timeout_s=20))
 
 
 @pytest.fixture(scope="module")
@@ -56,7 +47,7 @@ def test_a_failed_pick_up_is_tried_again_in_the_fallback_state_and_learnt_from(f
     first = tt("cps", "order", "--workdir", str(floor), "--object", "o6", "--to", "TU_B",
                timeout=300)  # fmt: skip
     assert first.returncode in (0, 3), first.stderr
-    op = json.loads(_tms(floor, "OperationStatus", "op1"))
+    op = json.loads(call_tms(floor, "OperationStatus", "op1"))
     plan, result = op["plan"], op["result"]
     assert plan["state"]["face"] == "front", plan  # the twin's choice, not the plant's
     assert plan["fallback"]["face"] == "back", plan  # a failed front pick-up counts on the face
@@ -84,7 +75,7 @@ def test_a_failed_pick_up_is_tried_again_in_the_fallback_state_and_learnt_from(f
     second = tt("cps", "order", "--workdir", str(floor), "--object", "o6", "--to", back,
                 timeout=300)  # fmt: skip
     assert second.returncode in (0, 3), second.stderr
-    op2 = json.loads(_tms(floor, "OperationStatus", "op2"))
+    op2 = json.loads(call_tms(floor, "OperationStatus", "op2"))
     if op2["plan"].get("state") is None:  # o6 on the module already: it lies as loaded
         assert op["location"] == "TM_1"
         return

@@ -5,14 +5,13 @@ for an object the store lacks), chained orders, refusals up front, the queue and
 
 from __future__ import annotations
 
-import asyncio
 import json
 import time
 from pathlib import Path
 
 import pytest
 
-from tests.integration.cps._cli import run_main, small_study, tt, two_module_floor
+from tests.integration.cps._cli import call_tms, run_main, small_study, tt, two_module_floor
 
 #: A floor of 8 processes and a dozen orders (~100 s): slow, run by .ci/run on its own.
 pytestmark = pytest.mark.slow
@@ -56,17 +55,10 @@ def floor(tmp_path_factory):
     assert down.returncode == 0, down.stdout + down.stderr
 
 
-def _tms(wd: Path, op: str, *args):
-    from transfertwin.cli._cps_client import call_asset, load_info
-
-    info, creds = load_info(wd)
-    return asyncio.run(call_asset(info, creds, "TMS", op, *args, timeout_s=20))
-
-
 def _wait_finished(wd: Path, op_id: str, timeout_s: float = 120) -> dict:
     t0 = time.monotonic()
     while time.monotonic() - t0 < timeout_s:
-        status = json.loads(_tms(wd, "OperationStatus", op_id))
+        status = json.loads(call_tms(wd, "OperationStatus", op_id))
         if status["state"] == "finished":
             return status
         time.sleep(0.3)
@@ -81,7 +73,7 @@ def test_an_order_by_destination_group_is_auctioned_and_loaded_in_the_twins_best
                    "--to", "out")  # fmt: skip
     assert res.returncode in (0, 3), res.stderr  # 3: delivered or not, it ended
     assert "submitted op1: o1 TU_A -> out" in res.stdout
-    status = json.loads(_tms(floor, "OperationStatus", "op1"))
+    status = json.loads(call_tms(floor, "OperationStatus", "op1"))
     auction = status["auction"]
     assert set(auction["bids"]) == {"TM_1", "TM_2"}  # both idle modules bid
     assert set(auction["bids"]["TM_1"]) == {"TU_C"}  # TU_B holds o2: no candidate
@@ -100,22 +92,22 @@ def test_an_order_by_destination_group_is_auctioned_and_loaded_in_the_twins_best
 
 
 def test_orders_for_one_object_chain_and_what_cannot_start_is_refused(floor, capfd):
-    ledger = json.loads(_tms(floor, "Ledger"))
+    ledger = json.loads(call_tms(floor, "Ledger"))
     if "o1" in ledger["unknown"]:  # lost in the gap by the first test: an operator finds it
         free = "TU_A" if not [o for o, at in ledger["locations"].items() if at == "TU_A"] else (
             "TU_C")  # fmt: skip
         assert run_main(capfd, "cps", "locate", "--workdir", str(floor), "--object", "o1",
                         "--at", free).returncode == 0  # fmt: skip
-    where = json.loads(_tms(floor, "Ledger"))["locations"]["o1"]
-    first = _tms(floor, "OrderTo", "o1", "TU_A" if where != "TU_A" else "TU_C")
-    second = _tms(floor, "OrderTo", "o1", "out")  # while the first runs: it waits
-    queued = json.loads(_tms(floor, "OperationStatus", second))
+    where = json.loads(call_tms(floor, "Ledger"))["locations"]["o1"]
+    first = call_tms(floor, "OrderTo", "o1", "TU_A" if where != "TU_A" else "TU_C")
+    second = call_tms(floor, "OrderTo", "o1", "out")  # while the first runs: it waits
+    queued = json.loads(call_tms(floor, "OperationStatus", second))
     assert queued["after"] == first and queued["source"] is None
     a, b = _wait_finished(floor, first), _wait_finished(floor, second)
     assert b["source"] == a["location"] or b["result"]["status"] != "delivered"
     assert any(f"{first} ended" in what for _, what in b["history"])
     # refused up front, one line, exit 2: an occupied unit, an unknown destination
-    at = json.loads(_tms(floor, "Ledger"))["locations"]["o1"]
+    at = json.loads(call_tms(floor, "Ledger"))["locations"]["o1"]
     if at.startswith("TU_"):
         occupied = run_main(capfd, "cps", "order", "--workdir", str(floor), "--object", "o2",
                             "--to", at)  # fmt: skip
@@ -127,12 +119,12 @@ def test_orders_for_one_object_chain_and_what_cannot_start_is_refused(floor, cap
 
 
 def test_an_object_the_store_lacks_is_predicted_by_the_experiment_manager(floor):
-    ledger = json.loads(_tms(floor, "Ledger"))
+    ledger = json.loads(call_tms(floor, "Ledger"))
     assert "o2" not in ledger["unknown"]
     held = set(ledger["locations"].values())  # capacity 1: to a unit that holds nothing
     free = next(u for u in ("TU_A", "TU_C") if u not in held)
     # 28 states run by the EM first (a minute on a quiet machine, minutes on a loaded one)
-    status = _wait_finished(floor, _tms(floor, "OrderTo", "o2", free), timeout_s=900)
+    status = _wait_finished(floor, call_tms(floor, "OrderTo", "o2", free), timeout_s=900)
     plan = status["plan"]
     assert "prediction" in plan, status["history"]
     # adaptive (the default) with one run a state: its first round is the whole budget
@@ -145,7 +137,7 @@ def test_an_object_the_store_lacks_is_predicted_by_the_experiment_manager(floor)
 
 def test_kpis_count_every_order(floor, capfd):
     k = json.loads(run_main(capfd, "cps", "kpis", "--workdir", str(floor), "--json").stdout)
-    orders = json.loads(_tms(floor, "Orders"))
+    orders = json.loads(call_tms(floor, "Orders"))
     finished = [o for o in orders if o["state"] in ("done", "failed")]
     assert k["policy"] == "predictive" and k["orders"] == len(orders)
     assert k["delivered"] == sum(o["state"] == "done" for o in orders)

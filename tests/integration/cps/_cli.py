@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 __all__ = ["PLANT_SEED", "EarlyFloor", "RunningCps", "call_tms", "early_floor", "early_floors",
-           "run_main", "small_study", "tt", "two_module_floor"]
+           "plant_floor", "run_main", "small_study", "tt", "two_module_floor"]
 
 #: Plant seed of the test run's shared CPS (conftest.py: `plant_cps`).
 PLANT_SEED = 913
@@ -66,6 +66,23 @@ def call_tms(wd: Path, op: str, *args):
 
     info, creds = load_info(wd)
     return asyncio.run(call_asset(info, creds, "TMS", op, *args, timeout_s=20))
+
+
+def plant_floor(base: Path, floor_text: str, *flags: str):
+    """A detached floor of `floor_text` on the emulated plant of seed 7 (`flags` added to
+    `cps up`), as a generator for a module-scoped fixture: yields the work folder, then takes
+    the floor down and checks that every asset stopped over OPC UA (none killed)."""
+    (base / "floor.toml").write_text(floor_text)
+    wd = base / "w"
+    up = tt("cps", "up", "--floor", str(base / "floor.toml"), "--workdir", str(wd), "--detach",
+            "--time-scale", "0", "--plant-seed", "7", "--lease", "10", *flags,
+            "--start-timeout", "150", timeout=200)  # fmt: skip
+    assert up.returncode == 0, up.stderr
+    try:
+        yield wd
+    finally:
+        down = tt("cps", "down", "--workdir", str(wd))
+    assert down.returncode == 0 and "killed" not in down.stdout, down.stdout + down.stderr
 
 
 def small_study(path: Path, obj: str) -> None:

@@ -10,7 +10,7 @@ import json
 
 import pytest
 
-from tests.integration.cps._cli import call_tms, tt, two_module_floor
+from tests.integration.cps._cli import call_tms, plant_floor, tt, two_module_floor
 
 pytestmark = pytest.mark.slow
 
@@ -22,18 +22,7 @@ policy = "nearest-idle"
 
 @pytest.fixture(scope="module")
 def floor(tmp_path_factory):
-    base = tmp_path_factory.mktemp("bullet")
-    (base / "floor.toml").write_text(FLOOR)
-    wd = base / "w"
-    up = tt("cps", "up", "--floor", str(base / "floor.toml"), "--workdir", str(wd), "--detach",
-            "--time-scale", "0", "--plant-seed", "7", "--plant-kind", "bullet", "--lease", "10",
-            "--start-timeout", "150", timeout=200)  # fmt: skip
-    assert up.returncode == 0, up.stderr
-    try:
-        yield wd
-    finally:
-        down = tt("cps", "down", "--workdir", str(wd))
-    assert down.returncode == 0 and "killed" not in down.stdout, down.stdout + down.stderr
+    yield from plant_floor(tmp_path_factory.mktemp("bullet"), FLOOR, "--plant-kind", "bullet")
 
 
 def test_an_order_runs_both_legs_on_the_bullet_plant(floor):

@@ -12,7 +12,7 @@ import json
 
 import pytest
 
-from tests.integration.cps._cli import call_tms, small_study, tt, two_module_floor
+from tests.integration.cps._cli import call_tms, plant_floor, small_study, tt, two_module_floor
 
 #: A floor of 6 processes on the plant and two orders (~90 s): slow, run by .ci/run.
 pytestmark = pytest.mark.slow
@@ -29,18 +29,8 @@ study = "study.sqlite"
 @pytest.fixture(scope="module")
 def floor(tmp_path_factory):
     base = tmp_path_factory.mktemp("hand-over")
-    (base / "floor.toml").write_text(FLOOR)
     small_study(base / "study.sqlite", "o6")  # 12 states, one run each
-    wd = base / "w"
-    up = tt("cps", "up", "--floor", str(base / "floor.toml"), "--workdir", str(wd), "--detach",
-            "--time-scale", "0", "--plant-seed", "7", "--lease", "10",
-            "--start-timeout", "150", timeout=200)  # fmt: skip
-    assert up.returncode == 0, up.stderr
-    try:
-        yield wd
-    finally:
-        down = tt("cps", "down", "--workdir", str(wd))
-    assert down.returncode == 0 and "killed" not in down.stdout, down.stdout + down.stderr
+    yield from plant_floor(base, FLOOR)
 
 
 def test_a_failed_pick_up_is_tried_again_in_the_fallback_state_and_learnt_from(floor):

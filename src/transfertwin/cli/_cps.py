@@ -28,6 +28,7 @@ from transfertwin.cli._cps_floor import (
 )
 from transfertwin.cli._cps_floor import register as register_floor
 from transfertwin.cli._cps_study import register as register_study
+from transfertwin.cli._cps_supervise import register as register_supervise
 
 __all__ = ["register"]
 
@@ -331,4 +332,5 @@ def register(sub: argparse._SubParsersAction) -> None:
     register_floor(csub)
     register_study(csub)
     register_campaign(csub)
+    register_supervise(csub)
     register_ca(csub)

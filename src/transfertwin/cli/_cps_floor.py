@@ -451,7 +451,11 @@ def cmd_down(args: argparse.Namespace) -> int:
     while running() and time.monotonic() < deadline + args.timeout:
         time.sleep(0.2)
     left = running()
-    for pid in set(left.values()):  # what did not stop in time is killed (its state is on disk)
+    for aid in left:  # what did not stop in time is killed (its state is on disk)
+        # its pid file goes first: a process killed as asked is not one that died unasked
+        # (`cps supervise` restarts those)
+        (wd / "assets" / aid / "state" / "pid").unlink(missing_ok=True)
+    for pid in set(left.values()):
         with contextlib.suppress(OSError):
             os.kill(pid, signal.SIGKILL)
     print(f"stopped {len(asked) + len(pids) - len(left)} assets ({len(asked)} over OPC UA, "

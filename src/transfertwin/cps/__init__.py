@@ -27,6 +27,7 @@ if TYPE_CHECKING:
         write_floor_info,
     )
     from transfertwin.cps._local import LocalFloor
+    from transfertwin.cps._supervisor import Supervisor
     from transfertwin.cps.aas import (
         TYPE_PROPERTIES,
         AssetDescriptor,
@@ -107,6 +108,7 @@ __all__ = [
     "PoseObservation",
     "ServerConfig",
     "StationSpec",
+    "Supervisor",
     "asset_node",
     "asset_pids",
     "build_representation",

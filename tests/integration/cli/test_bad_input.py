@@ -94,6 +94,8 @@ BAD: list[tuple[str, list[str]]] = [
     ("export unknown core", ["objects", "export", "o99", "--out", "x.stl"]),
     ("export as obj", ["objects", "export", "o1", "--out", "x.obj"]),
     ("cps status without a cps", ["cps", "status", "--workdir", "nowhere"]),
+    ("cps supervise without a floor", ["cps", "supervise", "--workdir", "nowhere"]),
+    ("cps supervise no restarts", ["cps", "supervise", "--workdir", ".", "--max-restarts", "0"]),
     ("cps up unknown docking", ["cps", "up", "--workdir", "w", "--docking", "teleport"]),
     (
         "cps order without a cps",

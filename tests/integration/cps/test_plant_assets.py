@@ -312,7 +312,8 @@ def test_nothing_the_twin_can_reach_holds_a_hidden_parameter(plant_cps, capfd):
 def test_the_cps_touches_the_plant_only_through_its_public_methods(monkeypatch):
     """Statically: only `cps.roles._plant_unit` names the plant, and there only `stations`
     and `operate` of it; only `cps.hal._local` names the plant's physics (a plant floor's
-    module), and there only `PlantPhysics(seed).system`; at run time: a recording plant
+    module), and there only `PlantPhysics(seed).system` (and `check_camera`, which reads the
+    plant's kind, a setting); at run time: a recording plant
     sees nothing else."""
     from transfertwin.cps.roles import _plant_unit
     from transfertwin.plant import EmulatedPlant, PlantRequest
@@ -324,8 +325,10 @@ def test_the_cps_touches_the_plant_only_through_its_public_methods(monkeypatch):
         assert "_PlantPhysics__" not in text, path
         if path.relative_to(SRC).as_posix() == "cps/hal/_local.py":
             assert "EmulatedPlant" not in text
-            assert "from transfertwin.plant import PlantPhysics\n" in text
             tree = ast.parse(text)
+            assert {a.name for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)
+                    and n.module == "transfertwin.plant" for a in n.names} == {
+                "PlantPhysics", "check_camera"}  # a kind's camera refused: no hidden value
             assert {n.attr for n in ast.walk(tree) if isinstance(n, ast.Attribute)
                     and isinstance(n.value, ast.Name) and n.value.id == "physics"} == {"system"}
         elif path.name != "_plant_unit.py":

@@ -16,10 +16,12 @@ from pathlib import Path
 
 __all__ = ["DIFFERENCES", "counts", "load_runs", "pair", "pooled", "report", "verdicts"]
 
-#: The differences reported: (arm, baseline).
+#: The differences reported: (arm, baseline). The twin alone against learning alone and twin +
+#: learning against the twin alone say what each source is worth without the other.
 DIFFERENCES = (
     ("learning-alone", "nearest-idle"), ("twin-only", "nearest-idle"),
     ("predictive", "nearest-idle"), ("predictive", "learning-alone"),
+    ("twin-only", "learning-alone"), ("predictive", "twin-only"),
     ("calibrated-only", "nearest-idle"), ("calibrated-only", "twin-only"),
     ("calibrated", "learning-alone"), ("calibrated", "predictive"),
 )  # fmt: skip

@@ -52,6 +52,17 @@ def test_cold_start_reports_first_orders_and_first_three(capsys):
     assert "each object's first three orders" in text
 
 
+def test_what_the_twin_and_learning_are_worth_without_each_other_is_reported():
+    per_seed = {31: {"learning-alone": _arm(37, 60, (12, 20), (46, 59)),
+                     "twin-only": _arm(47, 60, (18, 20), (47, 60)),
+                     "predictive": _arm(53, 59, (17, 20), (53, 59))}}  # fmt: skip
+    out = report(per_seed, "cold-start", "bullet", "title")["differences"]
+    d = newcombe_difference(18, 20, 12, 20)
+    assert out["twin-only - learning-alone"]["ci95"] == [d.low, d.high]
+    d = newcombe_difference(53, 59, 47, 60)
+    assert out["predictive - twin-only (first_3)"]["ci95"] == [d.low, d.high]
+
+
 def test_split_runs_pool_and_what_is_not_one_experiment_is_refused(tmp_path):
     a = _run(tmp_path, "a.json", {"31": {"calibrated": _arm(170, 198)}})
     b = _run(tmp_path, "b.json", {"32": {"calibrated": _arm(150, 200)},

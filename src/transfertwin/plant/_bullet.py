@@ -513,7 +513,6 @@ class BulletTransferSystem:
         rot, origin, _, _ = self._frame()
         return np.concatenate([origin, _wxyz(rot)])
 
-
     possessing_unit = VirtualTransferSystem.possessing_unit  # reads only `tu_pose`
 
     def observe(self) -> np.ndarray:

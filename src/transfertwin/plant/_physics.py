@@ -37,7 +37,6 @@ FLOOR_PLANT_KINDS = ("in-class", "mismatch", "bullet")
 CAMERA_FREE_KINDS = ("bullet",)
 
 
-
 def check_camera(kind: str, sensor: str, docking: str) -> None:
     """Refuse (InputError, one line) a floor that needs a depth camera on a plant none can
     render: the operation's ``sensor = "camera"`` or ``--docking navigated`` (which scans the
